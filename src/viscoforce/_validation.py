@@ -1,0 +1,101 @@
+"""Input checks shared by every public entry point.
+
+Each check names the parameter, shows the offending value and states the allowed range, so that
+the message alone tells the user what to change.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from viscoforce.exceptions import ParameterError
+
+
+def _as_real_float(name: str, value: Any) -> float:
+    if isinstance(value, bool):
+        raise ParameterError(f"{name} must be a real number, got {value!r}")
+    try:
+        x = float(value)
+    except (TypeError, ValueError):
+        raise ParameterError(f"{name} must be a real number, got {value!r}") from None
+    return x
+
+
+def require_finite(name: str, value: Any) -> float:
+    """Return ``value`` as a float, raising if it is not a finite real number."""
+    x = _as_real_float(name, value)
+    if not math.isfinite(x):
+        raise ParameterError(f"{name} must be finite, got {value!r}")
+    return x
+
+
+def require_positive(name: str, value: Any) -> float:
+    """Return ``value`` as a float, raising unless it is finite and > 0."""
+    x = require_finite(name, value)
+    if x <= 0:
+        raise ParameterError(f"{name} must be > 0, got {value!r}")
+    return x
+
+
+def require_nonnegative(name: str, value: Any) -> float:
+    """Return ``value`` as a float, raising unless it is finite and >= 0."""
+    x = require_finite(name, value)
+    if x < 0:
+        raise ParameterError(f"{name} must be >= 0, got {value!r}")
+    return x
+
+
+def require_in_range(name: str, value: Any, low: float, high: float, *,
+                     inclusive: tuple[bool, bool] = (True, True)) -> float:
+    """Return ``value`` as a float, raising unless ``low <= value <= high`` (bounds as given)."""
+    x = require_finite(name, value)
+    lo_ok = x >= low if inclusive[0] else x > low
+    hi_ok = x <= high if inclusive[1] else x < high
+    if not (lo_ok and hi_ok):
+        lb = "[" if inclusive[0] else "("
+        rb = "]" if inclusive[1] else ")"
+        raise ParameterError(f"{name} must be in {lb}{low:g}, {high:g}{rb}, got {value!r}")
+    return x
+
+
+def require_int(name: str, value: Any, minimum: int) -> int:
+    """Return ``value`` as an int, raising unless it is an integer >= ``minimum``."""
+    if isinstance(value, bool) or not isinstance(value, int | np.integer):
+        raise ParameterError(f"{name} must be an integer >= {minimum}, got {value!r}")
+    if value < minimum:
+        raise ParameterError(f"{name} must be an integer >= {minimum}, got {value!r}")
+    return int(value)
+
+
+def as_float_1d(name: str, values: ArrayLike, *, min_size: int = 1) -> NDArray[np.float64]:
+    """Return ``values`` as a finite 1-D float64 array with at least ``min_size`` entries."""
+    try:
+        arr = np.asarray(values, dtype=float)
+    except (TypeError, ValueError):
+        raise ParameterError(f"{name} must be a 1-D array of real numbers, got {values!r}") from None
+    arr = np.atleast_1d(arr)
+    if arr.ndim != 1:
+        raise ParameterError(f"{name} must be 1-D, got shape {arr.shape}")
+    if arr.size < min_size:
+        raise ParameterError(f"{name} needs at least {min_size} values, got {arr.size}")
+    if not np.all(np.isfinite(arr)):
+        bad = int(np.flatnonzero(~np.isfinite(arr))[0])
+        raise ParameterError(f"{name} must be finite; entry {bad} is {arr[bad]!r}")
+    return arr
+
+
+def require_increasing(name: str, values: ArrayLike, *, strict: bool = True) -> NDArray[np.float64]:
+    """Return ``values`` as a 1-D float array, raising unless it increases (strictly by default)."""
+    arr = as_float_1d(name, values)
+    d = np.diff(arr)
+    bad = np.flatnonzero(d <= 0) if strict else np.flatnonzero(d < 0)
+    if bad.size:
+        i = int(bad[0])
+        word = "strictly increasing" if strict else "non-decreasing"
+        raise ParameterError(
+            f"{name} must be {word}; entry {i + 1} ({arr[i + 1]!r}) follows {arr[i]!r}")
+    return arr

@@ -1,0 +1,54 @@
+"""Exception hierarchy of viscoforce.
+
+Every error raised on purpose derives from :class:`ViscoforceError`; mix-ins keep the usual
+handlers (``except ValueError``) working.
+"""
+
+from __future__ import annotations
+
+
+class ViscoforceError(Exception):
+    """Base class of every error viscoforce raises on purpose."""
+
+
+class ParameterError(ViscoforceError, ValueError):
+    """A parameter is outside its allowed range (the message names it and the range)."""
+
+
+class ConvergenceError(ViscoforceError, RuntimeError):
+    """An iterative solver did not converge.
+
+    Parameters
+    ----------
+    message : str
+        What failed and a suggested fix.
+    time : float or None
+        Simulation time at which it failed [s] (None for a static solve).
+    iterations : int
+        Iterations performed.
+    residual_norm : float
+        Last residual norm (max-norm of the gap update) [m].
+    """
+
+    def __init__(self, message: str, *, time: float | None = None, iterations: int = 0,
+                 residual_norm: float = float("nan")):
+        super().__init__(message)
+        self.time = time
+        self.iterations = iterations
+        self.residual_norm = residual_norm
+
+
+class GapClosureError(ConvergenceError):
+    """The gap between the surfaces went through zero (the surface law cannot hold it open)."""
+
+
+class StabilityError(ViscoforceError, RuntimeError):
+    """A time stepper became unstable (the message names the step and the fix)."""
+
+
+class SchemaError(ViscoforceError, ValueError):
+    """A dataset misses a variable or carries a wrong unit."""
+
+
+class UnitError(ViscoforceError, ValueError):
+    """A quantity string has an unknown unit or the wrong dimension."""

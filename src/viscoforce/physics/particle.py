@@ -1,0 +1,44 @@
+"""Geometry of the interacting bodies: a sphere (or two spheres) facing a flat."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from viscoforce._typing import FloatArray
+from viscoforce._validation import require_positive
+
+
+@dataclass(frozen=True)
+class Sphere:
+    """Paraboloidal apex of radius R: undeformed gap h0(r) = h0 + r²/2R (paper Eq. 1).
+
+    Parameters
+    ----------
+    radius : float
+        R [m], > 0. For two spheres use the effective radius 1/R = 1/R1 + 1/R2
+        (:meth:`effective`).
+    """
+
+    radius: float = 10e-6
+
+    def __post_init__(self):
+        object.__setattr__(self, "radius", require_positive("radius (R)", self.radius))
+
+    @classmethod
+    def effective(cls, radius_1: float, radius_2: float) -> Sphere:
+        """Two spheres of radii R1, R2 [m] → the equivalent sphere against a flat."""
+        r1 = require_positive("radius_1", radius_1)
+        r2 = require_positive("radius_2", radius_2)
+        return cls(r1 * r2 / (r1 + r2))
+
+    def undeformed_gap(self, position: float, r: ArrayLike) -> FloatArray:
+        """h0(r) = h0 + r²/2R [m] for apex position ``position`` [m] at radii ``r`` [m]."""
+        r = np.asarray(r, dtype=float)
+        return position + r * r / (2.0 * self.radius)
+
+    def radius_at_gap(self, position: float, gap: float) -> float:
+        """Radius [m] where the undeformed gap equals ``gap`` (0 if it is already below)."""
+        return float(np.sqrt(max(2.0 * self.radius * (gap - position), 0.0)))

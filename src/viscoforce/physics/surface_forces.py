@@ -1,0 +1,199 @@
+"""Surface-force laws: pressure p(h) between two parallel half-spaces at gap h (paper Eq. 13).
+
+Every law is a small frozen dataclass implementing :class:`SurfaceForceLaw`: the pressure, its
+derivative (for the Newton Jacobian), the interaction energy per unit area, a decay length and the
+gap beyond which the pressure is negligible (used to size the radial grid). Laws add with ``+``.
+
+Sign convention: p > 0 is repulsion; the gap h must stay > 0 for the soft wall.
+"""
+
+from __future__ import annotations
+
+from abc import ABC, abstractmethod
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from viscoforce._typing import FloatArray
+from viscoforce._validation import require_positive
+from viscoforce.exceptions import ParameterError
+
+
+class SurfaceForceLaw(ABC):
+    """A pressure law p(h) [Pa] of the local gap h [m].
+
+    Subclasses implement :meth:`pressure`, :meth:`pressure_derivative`, :meth:`energy`,
+    :meth:`negligible_gap` and the property :attr:`decay_length`. ``pressure == −d energy / dh``.
+    """
+
+    @abstractmethod
+    def pressure(self, gap: ArrayLike) -> FloatArray:
+        """Pressure p(h) [Pa] at gap ``gap`` [m] (> 0 is repulsive)."""
+
+    @abstractmethod
+    def pressure_derivative(self, gap: ArrayLike) -> FloatArray:
+        """dp/dh [Pa/m] at gap ``gap`` [m]."""
+
+    @abstractmethod
+    def energy(self, gap: ArrayLike) -> FloatArray:
+        """Interaction energy per unit area W(h) [J/m²], zero at infinite gap; p = −dW/dh."""
+
+    @property
+    @abstractmethod
+    def decay_length(self) -> float:
+        """Characteristic decay length of the law [m] (sets the radial grid scale)."""
+
+    @abstractmethod
+    def negligible_gap(self, rtol: float) -> float:
+        """Gap [m] beyond which |p| < rtol × (the law's pressure scale)."""
+
+    def __add__(self, other: SurfaceForceLaw) -> SumOfLaws:
+        if not isinstance(other, SurfaceForceLaw):
+            return NotImplemented
+        left = self.terms if isinstance(self, SumOfLaws) else (self,)
+        right = other.terms if isinstance(other, SumOfLaws) else (other,)
+        return SumOfLaws(left + right)
+
+    def parameters(self) -> dict[str, float]:
+        """Named parameters in SI (for dataset attrs)."""
+        return {k: float(v) for k, v in vars(self).items()}
+
+
+@dataclass(frozen=True)
+class DoubleLayer(SurfaceForceLaw):
+    """Linearised electric double-layer repulsion p = P exp(−h/λ_D).
+
+    Parameters
+    ----------
+    pressure_scale : float
+        P [Pa], > 0 (the paper's 1e7 Pa ≈ 85 mV surface potential).
+    debye_length : float
+        λ_D = 1/κ [m], > 0 (1 nm ≈ 0.1 M monovalent salt).
+    """
+
+    pressure_scale: float = 1e7
+    debye_length: float = 1e-9
+
+    def __post_init__(self):
+        object.__setattr__(self, "pressure_scale",
+                           require_positive("pressure_scale (P)", self.pressure_scale))
+        object.__setattr__(self, "debye_length",
+                           require_positive("debye_length", self.debye_length))
+
+    def pressure(self, gap):
+        """Pressure [Pa] at gap [m]."""
+        return self.pressure_scale * np.exp(-np.asarray(gap, dtype=float) / self.debye_length)
+
+    def pressure_derivative(self, gap):
+        """dp/dh [Pa/m] at gap [m]."""
+        return -self.pressure(gap) / self.debye_length
+
+    def energy(self, gap):
+        """Energy per area [J/m²] at gap [m]."""
+        return self.pressure(gap) * self.debye_length
+
+    @property
+    def decay_length(self) -> float:
+        """The Debye length [m]."""
+        return self.debye_length
+
+    def negligible_gap(self, rtol: float) -> float:
+        """Gap [m] where p = rtol × P."""
+        return self.debye_length * np.log(1.0 / rtol)
+
+
+@dataclass(frozen=True)
+class SoftWall(SurfaceForceLaw):
+    """Short-range soft wall p = P_w (z0/h)^9 (from a 1/r¹² repulsion).
+
+    Parameters
+    ----------
+    wall_pressure : float
+        P_w [Pa], > 0.
+    wall_length : float
+        z0 [m], > 0.
+    """
+
+    wall_pressure: float = 1e7
+    wall_length: float = 0.5e-9
+
+    def __post_init__(self):
+        object.__setattr__(self, "wall_pressure",
+                           require_positive("wall_pressure (Pw)", self.wall_pressure))
+        object.__setattr__(self, "wall_length", require_positive("wall_length (z0)", self.wall_length))
+
+    def _check_gap(self, gap) -> FloatArray:
+        h = np.asarray(gap, dtype=float)
+        if np.any(h <= 0):
+            raise ParameterError(
+                f"gap must be > 0 for the soft wall, got min {float(np.min(h)):g} m")
+        return h
+
+    def pressure(self, gap):
+        """Pressure [Pa] at gap [m]."""
+        return self.wall_pressure * (self.wall_length / self._check_gap(gap)) ** 9
+
+    def pressure_derivative(self, gap):
+        """dp/dh [Pa/m] at gap [m]."""
+        h = self._check_gap(gap)
+        return -9.0 * self.wall_pressure * (self.wall_length / h) ** 9 / h
+
+    def energy(self, gap):
+        """Energy per area [J/m²] at gap [m]."""
+        h = self._check_gap(gap)
+        return self.wall_pressure * self.wall_length * (self.wall_length / h) ** 8 / 8.0
+
+    @property
+    def decay_length(self) -> float:
+        """z0 [m]."""
+        return self.wall_length
+
+    def negligible_gap(self, rtol: float) -> float:
+        """Gap [m] where p = rtol × P_w."""
+        return self.wall_length * rtol ** (-1.0 / 9.0)
+
+
+@dataclass(frozen=True)
+class SumOfLaws(SurfaceForceLaw):
+    """The sum of several laws (build it with ``+``)."""
+
+    terms: tuple[SurfaceForceLaw, ...]
+
+    def __post_init__(self):
+        if not self.terms or not all(isinstance(t, SurfaceForceLaw) for t in self.terms):
+            raise ParameterError("terms must be a non-empty tuple of SurfaceForceLaw")
+
+    def pressure(self, gap):
+        """Pressure [Pa] at gap [m]."""
+        return sum(t.pressure(gap) for t in self.terms)
+
+    def pressure_derivative(self, gap):
+        """dp/dh [Pa/m] at gap [m]."""
+        return sum(t.pressure_derivative(gap) for t in self.terms)
+
+    def energy(self, gap):
+        """Energy per area [J/m²] at gap [m]."""
+        return sum(t.energy(gap) for t in self.terms)
+
+    @property
+    def decay_length(self) -> float:
+        """The longest decay length of the terms [m]."""
+        return max(t.decay_length for t in self.terms)
+
+    def negligible_gap(self, rtol: float) -> float:
+        """The largest negligible gap of the terms [m]."""
+        return max(t.negligible_gap(rtol) for t in self.terms)
+
+    def parameters(self) -> dict[str, float]:
+        """Parameters of all terms (names are unique across the paper's laws)."""
+        out: dict[str, float] = {}
+        for t in self.terms:
+            out.update(t.parameters())
+        return out
+
+
+def paper_pressure_law(pressure_scale: float = 1e7, debye_length: float = 1e-9,
+                       wall_pressure: float = 1e7, wall_length: float = 0.5e-9) -> SumOfLaws:
+    """The paper's Eq. 13: double layer plus soft wall (defaults: the paper's values)."""
+    return DoubleLayer(pressure_scale, debye_length) + SoftWall(wall_pressure, wall_length)

@@ -1,0 +1,132 @@
+"""Damped Newton iteration for one equilibrium of the gap (static or one implicit time level).
+
+Every equilibrium viscoforce solves has the form
+
+    h = b + c · A p(h),                                                     (*)
+
+with h the nodal gaps [m], b a known gap [m] (the undeformed gap minus any remembered deformation),
+c = 2 J [1/Pa] twice an (effective) compliance and A the influence matrix [m] (u = −c A p). The
+static elastic problem is c = 2/E, b = h0 + r²/2R; the implicit viscoelastic step is the same with an
+effective compliance and the memory of the past in b. The Jacobian is I + c·A·|p'(h)|.
+
+Damping: a fraction-to-boundary rule keeps every gap > 0 (a step may shrink a gap by at most a factor
+5) and a backtracking line search on the max-norm of the residual of (*). Convergence: the full Newton
+update is below ``xtol`` (max-norm). Otherwise :class:`ConvergenceError` (or
+:class:`GapClosureError` when the line search cannot keep the gap open) is raised — never NaN.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.linalg
+
+from viscoforce._typing import FloatArray
+from viscoforce.exceptions import ConvergenceError, GapClosureError
+from viscoforce.problem import ContactProblem
+
+#: Smallest factor by which one Newton step may shrink a gap.
+_FRACTION_TO_BOUNDARY = 0.2
+
+
+@dataclass(frozen=True)
+class NewtonResult:
+    """Converged gap and bookkeeping.
+
+    Attributes
+    ----------
+    gap : ndarray
+        Nodal gaps h [m].
+    pressure : ndarray
+        p(h) [Pa].
+    iterations : int
+        Newton iterations used.
+    update_norm : float
+        Max-norm of the last Newton update [m].
+    """
+
+    gap: FloatArray
+    pressure: FloatArray
+    iterations: int
+    update_norm: float
+
+
+def solve_gap(problem: ContactProblem, base: FloatArray, coupling: float, initial: FloatArray, *,
+              xtol: float, max_iter: int = 60, time: float | None = None) -> NewtonResult:
+    """Solve h = base + coupling · A p(h) by damped Newton.
+
+    Parameters
+    ----------
+    problem : ContactProblem
+        Supplies A and p(h).
+    base : ndarray
+        b [m] at the nodes.
+    coupling : float
+        c = 2 J [1/Pa] (2/E for an elastic solve).
+    initial : ndarray
+        Starting gaps [m], all > 0.
+    xtol : float
+        Convergence tolerance on the max-norm of the Newton update [m].
+    max_iter : int
+        Iteration limit.
+    time : float, optional
+        Simulation time for error messages [s].
+
+    Raises
+    ------
+    ConvergenceError
+        No convergence within ``max_iter`` iterations.
+    GapClosureError
+        The line search cannot reduce the residual while keeping the gap open.
+    """
+    law = problem.surface_force
+    a_mat = problem.influence
+    n = base.size
+    where = "" if time is None else f" at t = {time:.6g} s"
+    if np.any(initial <= 0):
+        raise GapClosureError(f"initial gap must be > 0 everywhere{where}", time=time)
+    h = np.array(initial, dtype=float)
+    p = law.pressure(h)
+    res = h - base - coupling * (a_mat @ p)
+    norm = float(np.max(np.abs(res)))
+    step_norm = np.inf
+    jac = np.empty((n, n))
+    for it in range(1, max_iter + 1):
+        np.multiply(a_mat, (-coupling) * law.pressure_derivative(h), out=jac)
+        jac.flat[:: n + 1] += 1.0
+        try:
+            delta = scipy.linalg.solve(jac, -res, overwrite_a=True, check_finite=False)
+        except (scipy.linalg.LinAlgError, ValueError) as exc:
+            raise ConvergenceError(f"singular Newton Jacobian{where}: {exc}", time=time,
+                                   iterations=it, residual_norm=norm) from None
+        step_norm = float(np.max(np.abs(delta)))
+        if not np.isfinite(step_norm):
+            raise ConvergenceError(f"non-finite Newton update{where}", time=time,
+                                   iterations=it, residual_norm=norm)
+        shrink = delta < 0
+        alpha = 1.0
+        if np.any(shrink):
+            alpha = min(1.0, float(np.min((_FRACTION_TO_BOUNDARY - 1.0) * h[shrink]
+                                          / delta[shrink])))
+        while True:
+            h_new = h + alpha * delta
+            p_new = law.pressure(h_new)
+            res_new = h_new - base - coupling * (a_mat @ p_new)
+            norm_new = float(np.max(np.abs(res_new)))
+            if norm_new <= (1.0 - 1e-4 * alpha) * norm or alpha * step_norm <= xtol:
+                break
+            alpha *= 0.5
+            if alpha < 1e-12:
+                raise GapClosureError(
+                    f"Newton line search failed{where}: the residual {norm:.3g} m cannot be "
+                    "reduced while keeping the gap open; the surface force cannot support this "
+                    "position (try a smaller step, a stiffer wall, or a shallower position)",
+                    time=time, iterations=it, residual_norm=norm)
+        h, p, res, norm = h_new, p_new, res_new, norm_new
+        if alpha == 1.0 and step_norm <= xtol:
+            return NewtonResult(h, p, it, step_norm)
+    raise ConvergenceError(
+        f"Newton did not converge in {max_iter} iterations{where} (last update {step_norm:.3g} m, "
+        f"tolerance {xtol:.3g} m); refine the grid or start closer to the solution",
+        time=time, iterations=max_iter, residual_norm=norm)
