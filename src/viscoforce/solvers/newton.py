@@ -28,6 +28,8 @@ from viscoforce.problem import ContactProblem
 
 #: Smallest factor by which one Newton step may shrink a gap.
 _FRACTION_TO_BOUNDARY = 0.2
+#: A gap below this many decay lengths means the surfaces have effectively touched.
+_GAP_FLOOR = 1e-6
 
 
 @dataclass(frozen=True)
@@ -87,6 +89,7 @@ def solve_gap(problem: ContactProblem, base: FloatArray, coupling: float, initia
     if np.any(initial <= 0):
         raise GapClosureError(f"initial gap must be > 0 everywhere{where}", time=time)
     h = np.array(initial, dtype=float)
+    gap_floor = _GAP_FLOOR * law.decay_length
     p = law.pressure(h)
     res = h - base - coupling * (a_mat @ p)
     norm = float(np.max(np.abs(res)))
@@ -124,6 +127,12 @@ def solve_gap(problem: ContactProblem, base: FloatArray, coupling: float, initia
                     "position (try a smaller step, a stiffer wall, or a shallower position)",
                     time=time, iterations=it, residual_norm=norm)
         h, p, res, norm = h_new, p_new, res_new, norm_new
+        if float(np.min(h)) < gap_floor:
+            raise GapClosureError(
+                f"the gap closes{where}: min gap {float(np.min(h)):.3g} m after {it} Newton "
+                "iterations; the surface force cannot hold the surfaces apart at this position "
+                "(add a short-range wall, or use a shallower position or a smaller time step)",
+                time=time, iterations=it, residual_norm=norm)
         if alpha == 1.0 and step_norm <= xtol:
             return NewtonResult(h, p, it, step_norm)
     raise ConvergenceError(

@@ -1,0 +1,738 @@
+"""Prescribed trajectories h0(t) of the sphere's apex: hold, ramp, step, triangle, sinusoid, ...
+
+Every drive is a frozen dataclass that satisfies :class:`viscoforce._typing.SeparationHistory`:
+
+- ``position(t)`` [m] and ``velocity(t)`` [m/s] accept a scalar or an array of times [s] and return
+  a float array of the same shape (a 0-d array for a scalar, so ``float(drive.position(0.1))``
+  works);
+- every drive starts at t = 0 and ends at ``duration`` [s]; it holds its initial position for
+  t < 0 and its final position for t > ``duration``;
+- ``velocity(t)`` is the exact derivative of ``position(t)``; at a kink it is right-sided (the
+  velocity of the piece that starts there) and it is 0 outside [0, duration);
+- ``breakpoints()`` lists the times [s] in [0, duration] where the velocity may jump (always
+  including 0 and ``duration``), so that a time stepper can land on them;
+- ``start_position`` / ``end_position`` [m], ``extent()`` -> (min, max) position over
+  [0, duration] [m] (solvers size the radial grid on the deepest position), and ``describe()``,
+  a one-line summary with units.
+
+Positions follow the package convention: h0 is the undeformed apex separation and may be negative.
+"""
+
+from __future__ import annotations
+
+import math
+from abc import ABC, abstractmethod
+from dataclasses import dataclass, field
+
+import numpy as np
+from numpy.typing import ArrayLike
+from scipy.interpolate import PchipInterpolator
+
+from viscoforce._typing import FloatArray
+from viscoforce._validation import (
+    as_float_1d,
+    require_finite,
+    require_increasing,
+    require_positive,
+)
+from viscoforce.exceptions import ParameterError
+
+__all__ = ["Hold", "Ramp", "Step", "Triangle", "Sinusoid", "Sequence", "MeasuredTrace"]
+
+# Continuity tolerance of Sequence: |start_k - end_{k-1}| <= _ABS_TOL + _REL_TOL * scale [m].
+_ABS_TOL = 1e-15
+_REL_TOL = 1e-9
+
+_PREFIXES = ((1e3, "k"), (1.0, ""), (1e-3, "m"), (1e-6, "µ"), (1e-9, "n"), (1e-12, "p"),
+             (1e-15, "f"))
+
+
+def _si(value: float, unit: str) -> str:
+    """Format ``value`` [unit] with an SI prefix, 4 significant digits and a true minus sign."""
+    if value == 0:
+        return f"0 {unit}"
+    magnitude = abs(value)
+    scale, prefix = _PREFIXES[-1]
+    for s, p in _PREFIXES:
+        if magnitude >= s * (1 - 1e-9):
+            scale, prefix = s, p
+            break
+    text = f"{value / scale:.4g}".replace("-", "\u2212")
+    return f"{text} {prefix}{unit}"
+
+
+def _as_time(t: ArrayLike) -> FloatArray:
+    """Return ``t`` [s] as a float array (0-d for a scalar); raise unless all entries are finite."""
+    try:
+        arr = np.asarray(t, dtype=float)
+    except (TypeError, ValueError):
+        raise ParameterError(f"t must be real times [s], got {t!r}") from None
+    if not np.all(np.isfinite(arr)):
+        raise ParameterError(f"t must be finite, got {t!r}")
+    return arr
+
+
+class _Drive(ABC):
+    """Shared machinery of the drives: holds outside [0, duration] and the right-sided velocity.
+
+    Subclasses are frozen dataclasses that provide ``duration`` [s] (a field or a property),
+    ``start_position`` and ``end_position`` [m], the position and velocity on the active interval,
+    ``breakpoints``, ``extent`` and ``describe``.
+    """
+
+    __slots__ = ()
+
+    @property
+    @abstractmethod
+    def start_position(self) -> float:
+        """Position h0(0) [m]; held for t < 0."""
+
+    @property
+    @abstractmethod
+    def end_position(self) -> float:
+        """Position h0(duration) [m]; held for t > duration."""
+
+    @abstractmethod
+    def _position_active(self, t: FloatArray) -> FloatArray:
+        """Position [m] at 1-D times ``t`` strictly inside (0, duration) [s]."""
+
+    @abstractmethod
+    def _velocity_active(self, t: FloatArray) -> FloatArray:
+        """Right-sided velocity [m/s] at 1-D times ``t`` in [0, duration) [s]."""
+
+    @abstractmethod
+    def breakpoints(self) -> FloatArray:
+        """Return the sorted times [s] in [0, duration] where the velocity may jump (incl. ends)."""
+
+    @abstractmethod
+    def extent(self) -> tuple[float, float]:
+        """Return the smallest and largest position (min, max) [m] over [0, duration]."""
+
+    @abstractmethod
+    def describe(self) -> str:
+        """Return a one-line summary of the drive with units."""
+
+    def position(self, t: ArrayLike) -> FloatArray:
+        """Position h0(t) [m].
+
+        Parameters
+        ----------
+        t : float or array_like
+            Times [s]; the drive holds ``start_position`` for t <= 0 and ``end_position`` for
+            t >= ``duration``.
+
+        Returns
+        -------
+        numpy.ndarray
+            Positions [m], same shape as ``t`` (0-d for a scalar).
+        """
+        tt = _as_time(t)
+        duration = self.duration  # type: ignore[attr-defined]
+        before = tt <= 0.0
+        after = tt >= duration
+        inside = ~(before | after)
+        out = np.empty(tt.shape, dtype=float)
+        out[before] = self.start_position
+        out[after] = self.end_position
+        if np.any(inside):
+            out[inside] = self._position_active(np.atleast_1d(tt[inside]))
+        return out
+
+    def velocity(self, t: ArrayLike) -> FloatArray:
+        """Drive velocity dh0/dt [m/s], right-sided at kinks and 0 outside [0, duration).
+
+        Parameters
+        ----------
+        t : float or array_like
+            Times [s].
+
+        Returns
+        -------
+        numpy.ndarray
+            Velocities [m/s], same shape as ``t`` (0-d for a scalar).
+        """
+        tt = _as_time(t)
+        active = (tt >= 0.0) & (tt < self.duration)  # type: ignore[attr-defined]
+        out = np.zeros(tt.shape, dtype=float)
+        if np.any(active):
+            out[active] = self._velocity_active(np.atleast_1d(tt[active]))
+        return out
+
+
+def _linear_position(start: float, end: float, duration: float, t: FloatArray) -> FloatArray:
+    return start + (end - start) * (t / duration)
+
+
+def _endpoints(duration: float) -> FloatArray:
+    return np.array([0.0, duration])
+
+
+@dataclass(frozen=True)
+class Hold(_Drive):
+    """Hold a constant position.
+
+    Parameters
+    ----------
+    separation : float
+        Position h0 held [m] (may be negative).
+    duration : float
+        How long it is held [s], > 0.
+    """
+
+    separation: float
+    duration: float
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "separation", require_finite("separation", self.separation))
+        object.__setattr__(self, "duration", require_positive("duration", self.duration))
+
+    @property
+    def start_position(self) -> float:
+        """Position at t = 0 [m]."""
+        return self.separation
+
+    @property
+    def end_position(self) -> float:
+        """Position at t = duration [m]."""
+        return self.separation
+
+    def _position_active(self, t: FloatArray) -> FloatArray:
+        return np.full(t.shape, self.separation)
+
+    def _velocity_active(self, t: FloatArray) -> FloatArray:
+        return np.zeros(t.shape)
+
+    def breakpoints(self) -> FloatArray:
+        """Return the kink times [s]: 0 and duration."""
+        return _endpoints(self.duration)
+
+    def extent(self) -> tuple[float, float]:
+        """Return the (min, max) position over [0, duration] [m]: both equal ``separation``."""
+        return (self.separation, self.separation)
+
+    def describe(self) -> str:
+        """Return a one-line summary, e.g. ``"hold −5 nm for 1 ms"``."""
+        return f"hold {_si(self.separation, 'm')} for {_si(self.duration, 's')}"
+
+
+@dataclass(frozen=True)
+class Ramp(_Drive):
+    """Move linearly from ``start`` to ``end`` in ``duration``.
+
+    Parameters
+    ----------
+    start : float
+        Initial position [m].
+    end : float
+        Final position [m].
+    duration : float
+        Duration of the ramp [s], > 0.
+    """
+
+    start: float
+    end: float
+    duration: float
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "start", require_finite("start", self.start))
+        object.__setattr__(self, "end", require_finite("end", self.end))
+        object.__setattr__(self, "duration", require_positive("duration", self.duration))
+
+    @classmethod
+    def from_speed(cls, start: float, end: float, speed: float) -> Ramp:
+        """Build a ramp that moves at constant speed; duration = |end − start| / speed.
+
+        Parameters
+        ----------
+        start : float
+            Initial position [m].
+        end : float
+            Final position [m], different from ``start``.
+        speed : float
+            Speed magnitude [m/s], > 0 (the direction follows from ``start`` and ``end``).
+
+        Returns
+        -------
+        Ramp
+            The ramp.
+        """
+        start = require_finite("start", start)
+        end = require_finite("end", end)
+        speed = require_positive("speed", speed)
+        if start == end:
+            raise ParameterError(
+                f"end must differ from start for a ramp at given speed, got start = end = {start!r}"
+                " (use Hold for a constant position)")
+        duration = abs(end - start) / speed
+        if not (math.isfinite(duration) and duration > 0):
+            raise ParameterError(
+                f"|end - start| / speed must be a finite duration > 0 [s], got {duration!r}")
+        return cls(start, end, duration)
+
+    @property
+    def speed(self) -> float:
+        """Signed velocity (end − start)/duration [m/s]."""
+        return (self.end - self.start) / self.duration
+
+    @property
+    def start_position(self) -> float:
+        """Position at t = 0 [m]."""
+        return self.start
+
+    @property
+    def end_position(self) -> float:
+        """Position at t = duration [m]."""
+        return self.end
+
+    def _position_active(self, t: FloatArray) -> FloatArray:
+        return _linear_position(self.start, self.end, self.duration, t)
+
+    def _velocity_active(self, t: FloatArray) -> FloatArray:
+        return np.full(t.shape, self.speed)
+
+    def breakpoints(self) -> FloatArray:
+        """Return the kink times [s]: 0 and duration."""
+        return _endpoints(self.duration)
+
+    def extent(self) -> tuple[float, float]:
+        """Return the (min, max) position over [0, duration] [m]."""
+        return (min(self.start, self.end), max(self.start, self.end))
+
+    def describe(self) -> str:
+        """Return a one-line summary, e.g. ``"ramp −5 nm → −7 nm in 1 ms (−2 µm/s)"``."""
+        return (f"ramp {_si(self.start, 'm')} \u2192 {_si(self.end, 'm')} in "
+                f"{_si(self.duration, 's')} ({_si(self.speed, 'm/s')})")
+
+
+@dataclass(frozen=True)
+class Step(_Drive):
+    """A fast linear move from ``start`` to ``end`` taking ``rise_time`` (duration = rise_time).
+
+    The paper's Fig. 1 steps take 0.1 ms (the default). A step is a short ramp: the solvers need
+    a finite rise time because the drive velocity enters the rate equation.
+
+    Parameters
+    ----------
+    start : float
+        Initial position [m].
+    end : float
+        Final position [m].
+    rise_time : float
+        Duration of the move [s], > 0 (default 1e-4).
+    """
+
+    start: float
+    end: float
+    rise_time: float = 1e-4
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "start", require_finite("start", self.start))
+        object.__setattr__(self, "end", require_finite("end", self.end))
+        object.__setattr__(self, "rise_time", require_positive("rise_time", self.rise_time))
+
+    @property
+    def duration(self) -> float:
+        """Duration of the drive [s] (= rise_time)."""
+        return self.rise_time
+
+    @property
+    def start_position(self) -> float:
+        """Position at t = 0 [m]."""
+        return self.start
+
+    @property
+    def end_position(self) -> float:
+        """Position at t = rise_time [m]."""
+        return self.end
+
+    def _position_active(self, t: FloatArray) -> FloatArray:
+        return _linear_position(self.start, self.end, self.rise_time, t)
+
+    def _velocity_active(self, t: FloatArray) -> FloatArray:
+        return np.full(t.shape, (self.end - self.start) / self.rise_time)
+
+    def breakpoints(self) -> FloatArray:
+        """Return the kink times [s]: 0 and rise_time."""
+        return _endpoints(self.rise_time)
+
+    def extent(self) -> tuple[float, float]:
+        """Return the (min, max) position over [0, rise_time] [m]."""
+        return (min(self.start, self.end), max(self.start, self.end))
+
+    def describe(self) -> str:
+        """Return a one-line summary, e.g. ``"step −5 nm → −7 nm (rise time 100 µs)"``."""
+        return (f"step {_si(self.start, 'm')} \u2192 {_si(self.end, 'm')} "
+                f"(rise time {_si(self.rise_time, 's')})")
+
+
+@dataclass(frozen=True)
+class Triangle(_Drive):
+    """Go from ``top`` to ``turn`` and back to ``top`` at constant speed magnitude.
+
+    The paper's Figs. 5–8 use ``Triangle(10e-9, -10e-9, speed)`` (load, then unload).
+
+    Parameters
+    ----------
+    top : float
+        Initial and final position [m].
+    turn : float
+        Turning position [m], different from ``top``.
+    speed : float
+        Speed magnitude on both legs [m/s], > 0.
+    """
+
+    top: float
+    turn: float
+    speed: float
+
+    def __post_init__(self) -> None:
+        top = require_finite("top", self.top)
+        turn = require_finite("turn", self.turn)
+        speed = require_positive("speed", self.speed)
+        if top == turn:
+            raise ParameterError(f"turn must differ from top, got top = turn = {top!r}")
+        if not math.isfinite(2 * abs(top - turn) / speed):
+            raise ParameterError(
+                f"speed must give a finite duration 2|top - turn|/speed, got speed = {speed!r}")
+        object.__setattr__(self, "top", top)
+        object.__setattr__(self, "turn", turn)
+        object.__setattr__(self, "speed", speed)
+
+    @property
+    def turning_time(self) -> float:
+        """Time at which the drive reaches ``turn`` [s] (= |top − turn| / speed)."""
+        return abs(self.top - self.turn) / self.speed
+
+    @property
+    def duration(self) -> float:
+        """Duration of the drive [s] (= 2|top − turn| / speed)."""
+        return 2.0 * self.turning_time
+
+    @property
+    def start_position(self) -> float:
+        """Position at t = 0 [m] (= top)."""
+        return self.top
+
+    @property
+    def end_position(self) -> float:
+        """Position at t = duration [m] (= top)."""
+        return self.top
+
+    def _position_active(self, t: FloatArray) -> FloatArray:
+        t_turn = self.turning_time
+        distance_from_turn = np.abs(t - t_turn) / t_turn  # 1 at the ends, 0 at the turn
+        return self.turn + (self.top - self.turn) * distance_from_turn
+
+    def _velocity_active(self, t: FloatArray) -> FloatArray:
+        out_velocity = math.copysign(self.speed, self.turn - self.top)
+        return np.where(t < self.turning_time, out_velocity, -out_velocity)
+
+    def breakpoints(self) -> FloatArray:
+        """Return the kink times [s]: 0, the turning time, and duration."""
+        return np.array([0.0, self.turning_time, self.duration])
+
+    def extent(self) -> tuple[float, float]:
+        """Return the (min, max) position over [0, duration] [m]."""
+        return (min(self.top, self.turn), max(self.top, self.turn))
+
+    def describe(self) -> str:
+        """Return a one-line summary, e.g. ``"triangle 10 nm → −10 nm → 10 nm at 5 µm/s"``."""
+        top = _si(self.top, "m")
+        return (f"triangle {top} \u2192 {_si(self.turn, 'm')} \u2192 {top} at "
+                f"{_si(self.speed, 'm/s')}")
+
+
+@dataclass(frozen=True)
+class Sinusoid(_Drive):
+    """Oscillate as h0(t) = mean + amplitude·sin(ωt) for a whole or fractional number of periods.
+
+    It starts at ``mean`` with velocity amplitude·ω, so t = 0 is a kink relative to a hold before
+    it. Give exactly one of ``periods`` and ``duration``; at least one full period is required.
+
+    Parameters
+    ----------
+    mean : float
+        Mean position h̄0 [m].
+    amplitude : float
+        Drive amplitude η [m], > 0.
+    omega : float
+        Angular frequency ω [rad/s], > 0.
+    periods : float, optional
+        Number of periods (>= 1, need not be an integer); duration = periods·2π/ω.
+    duration : float, optional
+        Duration [s], at least one period 2π/ω; periods = duration·ω/2π.
+    """
+
+    mean: float
+    amplitude: float
+    omega: float
+    periods: float | None = None
+    duration: float | None = None
+
+    def __post_init__(self) -> None:
+        mean = require_finite("mean", self.mean)
+        amplitude = require_positive("amplitude", self.amplitude)
+        omega = require_positive("omega", self.omega)
+        period = 2.0 * math.pi / omega
+        if (self.periods is None) == (self.duration is None):
+            raise ParameterError(
+                "give exactly one of periods and duration, got "
+                f"periods={self.periods!r}, duration={self.duration!r}")
+        if self.periods is not None:
+            periods = require_finite("periods", self.periods)
+            if periods < 1:
+                raise ParameterError(f"periods must be >= 1, got {self.periods!r}")
+            duration = periods * period
+        else:
+            duration = require_positive("duration", self.duration)
+            if duration < period * (1 - 1e-12):
+                raise ParameterError(
+                    f"duration must be >= one period 2π/omega = {period!r} s, "
+                    f"got {self.duration!r}")
+            periods = duration / period
+        if not math.isfinite(duration):
+            raise ParameterError(
+                f"periods·2π/omega must be a finite duration [s], got {duration!r}")
+        object.__setattr__(self, "mean", mean)
+        object.__setattr__(self, "amplitude", amplitude)
+        object.__setattr__(self, "omega", omega)
+        object.__setattr__(self, "periods", periods)
+        object.__setattr__(self, "duration", duration)
+
+    @property
+    def start_position(self) -> float:
+        """Position at t = 0 [m] (= mean)."""
+        return self.mean
+
+    @property
+    def end_position(self) -> float:
+        """Position at t = duration [m]."""
+        return self.mean + self.amplitude * math.sin(self.omega * self.duration)
+
+    def _position_active(self, t: FloatArray) -> FloatArray:
+        return self.mean + self.amplitude * np.sin(self.omega * t)
+
+    def _velocity_active(self, t: FloatArray) -> FloatArray:
+        return self.amplitude * self.omega * np.cos(self.omega * t)
+
+    def breakpoints(self) -> FloatArray:
+        """Return the kink times [s]: 0 and duration (jumps from/to the holds around it)."""
+        return _endpoints(self.duration)
+
+    def extent(self) -> tuple[float, float]:
+        """Return the (min, max) position [m]: mean ∓ amplitude (>= one full period is played)."""
+        return (self.mean - self.amplitude, self.mean + self.amplitude)
+
+    def describe(self) -> str:
+        """Return a one-line summary, e.g. ``"sinusoid −5 nm + 100 pm·sin(ωt), …"``."""
+        return (f"sinusoid {_si(self.mean, 'm')} + {_si(self.amplitude, 'm')}·sin(ωt), "
+                f"ω = {self.omega:.4g} rad/s, {self.periods:.4g} periods "
+                f"({_si(self.duration, 's')})")
+
+
+@dataclass(frozen=True)
+class Sequence(_Drive):
+    """Play drives one after the other; each segment starts where the previous one ended.
+
+    Parameters
+    ----------
+    segments : tuple of drives
+        The drives (``Hold``, ``Ramp``, ``Step``, ``Triangle``, ``Sinusoid``, ``MeasuredTrace``
+        or ``Sequence``), at least one. Segment k must start where segment k−1 ends, within
+        1e-15 m + 1e-9·|position|.
+    """
+
+    segments: tuple[_Drive, ...]
+    _offsets: FloatArray = field(init=False, repr=False, compare=False)
+
+    def __post_init__(self) -> None:
+        try:
+            segments = tuple(self.segments)
+        except TypeError:
+            raise ParameterError(
+                f"segments must be a sequence of drives, got {self.segments!r}") from None
+        if not segments:
+            raise ParameterError("segments must contain at least one drive, got none")
+        for k, seg in enumerate(segments):
+            if not isinstance(seg, _Drive):
+                raise ParameterError(
+                    f"segments[{k}] must be a drive (Hold, Ramp, Step, Triangle, Sinusoid, "
+                    f"MeasuredTrace or Sequence), got {seg!r}")
+        for k in range(1, len(segments)):
+            previous_end = segments[k - 1].end_position
+            start = segments[k].start_position
+            tol = _ABS_TOL + _REL_TOL * max(abs(previous_end), abs(start))
+            if abs(start - previous_end) > tol:
+                raise ParameterError(
+                    f"segments[{k}] must start where segments[{k - 1}] ends "
+                    f"({previous_end!r} m, tolerance {tol:.3g} m), got start {start!r} m")
+        durations = np.array([seg.duration for seg in segments])  # type: ignore[attr-defined]
+        offsets = np.concatenate(([0.0], np.cumsum(durations)))
+        offsets.flags.writeable = False
+        object.__setattr__(self, "segments", segments)
+        object.__setattr__(self, "_offsets", offsets)
+
+    @property
+    def duration(self) -> float:
+        """Total duration [s] (sum of the segment durations)."""
+        return float(self._offsets[-1])
+
+    @property
+    def start_times(self) -> FloatArray:
+        """Time [s] at which each segment starts (read-only array, one per segment)."""
+        return self._offsets[:-1]
+
+    @property
+    def start_position(self) -> float:
+        """Position at t = 0 [m] (start of the first segment)."""
+        return self.segments[0].start_position
+
+    @property
+    def end_position(self) -> float:
+        """Position at t = duration [m] (end of the last segment)."""
+        return self.segments[-1].end_position
+
+    def _segment_index(self, t: FloatArray) -> np.ndarray:
+        # side="right": a time equal to a segment's start belongs to that segment (right-sided)
+        idx = np.searchsorted(self._offsets[:-1], t, side="right") - 1
+        return np.clip(idx, 0, len(self.segments) - 1)
+
+    def _position_active(self, t: FloatArray) -> FloatArray:
+        idx = self._segment_index(t)
+        out = np.empty(t.shape)
+        for k, seg in enumerate(self.segments):
+            mask = idx == k
+            if np.any(mask):
+                out[mask] = seg.position(t[mask] - self._offsets[k])
+        return out
+
+    def _velocity_active(self, t: FloatArray) -> FloatArray:
+        idx = self._segment_index(t)
+        out = np.empty(t.shape)
+        for k, seg in enumerate(self.segments):
+            mask = idx == k
+            if np.any(mask):
+                # keep rounding of t - offset from landing on the segment's end (velocity 0 there)
+                local = np.minimum(t[mask] - self._offsets[k],
+                                   np.nextafter(seg.duration, 0.0))  # type: ignore[attr-defined]
+                out[mask] = seg.velocity(local)
+        return out
+
+    def breakpoints(self) -> FloatArray:
+        """Return the union of the segments' breakpoints shifted by their start times [s], sorted.
+
+        Times closer than 1e-12·duration to the previous one are merged, so that rounding of the
+        shifted times does not create vanishing steps.
+        """
+        times = np.concatenate([seg.breakpoints() + offset
+                                for seg, offset in zip(self.segments, self._offsets[:-1],
+                                                       strict=True)]
+                               + [self._offsets])
+        times = np.unique(np.clip(times, 0.0, self.duration))
+        keep = np.concatenate(([True], np.diff(times) > 1e-12 * self.duration))
+        merged = times[keep]
+        merged[-1] = self.duration
+        return merged
+
+    def extent(self) -> tuple[float, float]:
+        """Return the (min, max) position over [0, duration] [m], over all segments."""
+        lows, highs = zip(*(seg.extent() for seg in self.segments), strict=True)
+        return (min(lows), max(highs))
+
+    def describe(self) -> str:
+        """Return a one-line summary: the segments' descriptions joined by ``"; then "``."""
+        return "; then ".join(seg.describe() for seg in self.segments)
+
+
+@dataclass(frozen=True, eq=False)
+class MeasuredTrace(_Drive):
+    """An arbitrary (e.g. measured) position trace, interpolated between its samples.
+
+    The time axis is shifted to start at 0; the original first time is kept as ``time_offset``.
+    By default the trace is piecewise linear: the velocity is piecewise constant (right-sided at
+    the samples) and every sample time is a breakpoint. With ``smooth=True`` a monotone cubic
+    (PCHIP) interpolant is used instead: C¹, no overshoot beyond the samples, and breakpoints only
+    at 0 and the end. The arrays are stored read-only; equality and hashing are by identity.
+
+    Parameters
+    ----------
+    time : array_like
+        Sample times [s], strictly increasing, at least 2 samples.
+    separation : array_like
+        Positions h0 at those times [m], finite, same length as ``time``.
+    smooth : bool, optional
+        Use a C¹ monotone cubic interpolant instead of piecewise-linear (default False).
+    """
+
+    time: FloatArray
+    separation: FloatArray
+    smooth: bool = False
+    time_offset: float = field(init=False)
+    _interpolant: PchipInterpolator | None = field(init=False, repr=False)
+
+    def __post_init__(self) -> None:
+        time = as_float_1d("time", self.time, min_size=2)
+        time = require_increasing("time", time)
+        separation = as_float_1d("separation", self.separation, min_size=2)
+        if separation.size != time.size:
+            raise ParameterError(
+                f"separation must have the same length as time ({time.size}), "
+                f"got {separation.size}")
+        if not isinstance(self.smooth, bool | np.bool_):
+            raise ParameterError(f"smooth must be True or False, got {self.smooth!r}")
+        offset = float(time[0])
+        shifted = np.array(time - offset, dtype=float)
+        require_increasing("time (after shifting to start at 0)", shifted)
+        separation = np.array(separation, dtype=float)  # own copy: the caller's array stays as is
+        shifted.flags.writeable = False
+        separation.flags.writeable = False
+        interpolant = PchipInterpolator(shifted, separation) if self.smooth else None
+        object.__setattr__(self, "time", shifted)
+        object.__setattr__(self, "separation", separation)
+        object.__setattr__(self, "smooth", bool(self.smooth))
+        object.__setattr__(self, "time_offset", offset)
+        object.__setattr__(self, "_interpolant", interpolant)
+
+    @property
+    def duration(self) -> float:
+        """Duration of the trace [s] (last shifted sample time)."""
+        return float(self.time[-1])
+
+    @property
+    def start_position(self) -> float:
+        """First sample [m]."""
+        return float(self.separation[0])
+
+    @property
+    def end_position(self) -> float:
+        """Last sample [m]."""
+        return float(self.separation[-1])
+
+    def _position_active(self, t: FloatArray) -> FloatArray:
+        if self._interpolant is not None:
+            return np.asarray(self._interpolant(t), dtype=float)
+        return np.interp(t, self.time, self.separation)
+
+    def _velocity_active(self, t: FloatArray) -> FloatArray:
+        if self._interpolant is not None:
+            return np.asarray(self._interpolant(t, 1), dtype=float)
+        slopes = np.diff(self.separation) / np.diff(self.time)
+        idx = np.searchsorted(self.time, t, side="right") - 1
+        return slopes[np.clip(idx, 0, slopes.size - 1)]
+
+    def breakpoints(self) -> FloatArray:
+        """Return all sample times [s] (piecewise linear), or 0 and duration (``smooth=True``)."""
+        if self.smooth:
+            return _endpoints(self.duration)
+        return np.array(self.time)
+
+    def extent(self) -> tuple[float, float]:
+        """Return the (min, max) position over [0, duration] [m]: the extreme samples."""
+        return (float(np.min(self.separation)), float(np.max(self.separation)))
+
+    def describe(self) -> str:
+        """Return a one-line summary, e.g. ``"measured trace: 101 samples over 10 ms, …"``."""
+        low, high = self.extent()
+        kind = "monotone cubic" if self.smooth else "piecewise linear"
+        return (f"measured trace: {self.time.size} samples over {_si(self.duration, 's')}, "
+                f"{_si(low, 'm')} \u2026 {_si(high, 'm')} ({kind})")
