@@ -442,9 +442,8 @@ def svda_ramp_deformation(t: ArrayLike, position: float, speed: float, E0: float
             f"t must be shorter: e^(−κ(position + speed·t)) overflows before max(t)="
             f"{float(tt.max())!r} s (position={position!r} m, speed={speed!r} m/s); Eq. 20 is a "
             f"large-separation approximation")
-    u = (lam * tau_ / e0 - 1.0 / e_inf) * (tt / tau_) * np.exp(exponent) * exprel(
+    return (lam * tau_ / e0 - 1.0 / e_inf) * (tt / tau_) * np.exp(exponent) * exprel(
         -abs(mu - lam) * tt)
-    return u
 
 
 # ── SVDA harmonic response (Eqs. 23–26, corrected Eq. 24) ───────────────────────────────────────
