@@ -1,0 +1,123 @@
+"""Time-stepper contract and the state the steppers advance.
+
+The viscoelastic deformation is written in the canonical creep Prony form of the material
+(:mod:`viscoforce.physics.materials`): with q = A p the elastic response of the current pressure
+(A the influence matrix, u = −2J·A p for an elastic body of compliance J),
+
+    u = −c_g q + Σ_i w_i,          τ_i dw_i/dt = −w_i − c_i q,                         (†)
+
+where c_g = 2/E0 (glassy) and c_i = 2ΔJ_i (mode i). This is the paper's Eqs. 3–12 in internal-
+variable form: for one mode, w = u − u_∞ + … reproduces Eq. 5, and at rest every w_i = −c_i q so
+that u = −(2/E_inf) A p exactly, the static E_inf equilibrium. The w_i (and u) are carried at the
+grid nodes plus one extra entry for the centre r = 0.
+
+Subclass contract (in the spirit of scipy's OdeSolver):
+
+* implement :meth:`TimeStepper.step` ``(state, drive, dt) -> StepOutcome`` that advances ONE step
+  from ``state.time`` to ``state.time + dt``; never loop over time (the only time loop is
+  :func:`viscoforce.solvers.simulate.simulate`);
+* set the class attributes ``name``, ``order`` (local error O(dt^{order+1})) and ``adaptive``
+  (whether ``StepOutcome.error`` is a usable local-error estimate [m]);
+* raise :class:`~viscoforce.exceptions.StabilityError` or
+  :class:`~viscoforce.exceptions.GapClosureError` instead of returning a non-finite state.
+"""
+
+from __future__ import annotations
+
+from abc import ABC, abstractmethod
+from dataclasses import dataclass
+from typing import ClassVar
+
+import numpy as np
+
+from viscoforce._typing import FloatArray, SeparationHistory
+from viscoforce.problem import ContactProblem
+from viscoforce.solvers.static import equilibrium_gap
+
+
+@dataclass(frozen=True)
+class State:
+    """Everything a stepper needs to continue from time ``time``.
+
+    Attributes
+    ----------
+    time : float
+        t [s].
+    position : float
+        h0(t) [m].
+    gap : ndarray, shape (N,)
+        Nodal gaps h [m].
+    pressure : ndarray, shape (N,)
+        p(h) [Pa].
+    response : ndarray, shape (N + 1,)
+        q = A p at the nodes and (last entry) at r = 0 [m·Pa].
+    memory : ndarray, shape (n_modes, N + 1)
+        Internal deformations w_i of (†) [m].
+    deformation : ndarray, shape (N + 1,)
+        u at the nodes and at r = 0 [m].
+    """
+
+    time: float
+    position: float
+    gap: FloatArray
+    pressure: FloatArray
+    response: FloatArray
+    memory: FloatArray
+    deformation: FloatArray
+
+    @property
+    def u_center(self) -> float:
+        """Central deformation u(0) [m]."""
+        return float(self.deformation[-1])
+
+
+@dataclass(frozen=True)
+class StepOutcome:
+    """Result of one step: the new state, a local error estimate [m] and Newton iterations."""
+
+    state: State
+    error: float
+    iterations: int
+
+
+class TimeStepper(ABC):
+    """One-step method for (†); see the module docstring for the subclass contract.
+
+    Parameters
+    ----------
+    problem : ContactProblem
+        System, material and grid.
+    """
+
+    name: ClassVar[str]
+    order: ClassVar[int]
+    adaptive: ClassVar[bool]
+
+    def __init__(self, problem: ContactProblem):
+        self.problem = problem
+        prony = problem.material.prony()
+        self.c_glassy = 2.0 * prony.glassy_compliance
+        self.c_modes = 2.0 * np.asarray(prony.delta_compliances, dtype=float)
+        self.taus = np.asarray(prony.taus, dtype=float)
+        self.influence_aug = np.vstack([problem.influence, problem.center_row[None, :]])
+        self.xtol = 1e-6 * problem.surface_force.decay_length
+
+    def response(self, pressure: FloatArray) -> FloatArray:
+        """q = A p at the nodes and the centre [m·Pa]."""
+        return self.influence_aug @ pressure
+
+    def relaxed_state(self, time: float, position: float) -> State:
+        """Static E_inf equilibrium at ``position`` [m]: every mode at rest."""
+        e_inf = self.problem.material.relaxed_modulus
+        sol = equilibrium_gap(self.problem, position, e_inf)
+        q = self.response(sol.pressure)
+        memory = -self.c_modes[:, None] * q[None, :]
+        deformation = -(2.0 / e_inf) * q
+        return State(time, position, sol.gap, sol.pressure, q, memory, deformation)
+
+    def reset_history(self) -> None:
+        """Forget multi-step history (called at drive kinks); one-step methods need nothing."""
+
+    @abstractmethod
+    def step(self, state: State, drive: SeparationHistory, dt: float) -> StepOutcome:
+        """Advance ``state`` by ``dt`` [s] along ``drive``."""

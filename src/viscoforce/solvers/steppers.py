@@ -1,0 +1,207 @@
+"""Concrete time steppers for the viscoelastic dynamics (see :mod:`viscoforce.solvers.base`).
+
+* :class:`ExponentialTrapezoidal` (``"exponential"``, the default): the memory equations
+  τ_i dw_i/dt = −w_i − c_i q are integrated EXACTLY for a forcing q(t) that varies linearly over the
+  step, and the instantaneous part is implicit: the new gap solves the static-like equation
+  h = b + c_eff·A p(h) by Newton (the same solver as the statics). Second order, unconditionally
+  stable, exact for stiff modes (dt ≫ τ_i gives w_i = −c_i q) and therefore exactly the static E_inf
+  equilibrium at rest, for any number of modes. Its local error is estimated from the second
+  difference of q, which drives the adaptive step control in :func:`~viscoforce.solvers.simulate.simulate`.
+* :class:`ExponentialEuler` (``"exponential-euler"``): the same with a forcing held at its new value
+  (first order, L-stable); kept to measure orders against.
+* :class:`ExplicitEuler` (``"euler"``): the paper's scheme — solve the linear integral equation for
+  u̇ at the current state (Eqs. 5, 7, 12) and step u += dt·u̇. First order and only conditionally
+  stable: dt·(E0/E_inf)/τ < 2 in contact. Kept for comparison. Multi-mode: the last mode's memory is
+  recomputed from u at every step (w_n = u + c_g q − Σ_{i<n} w_i), so that the modes cannot drift
+  away from u and the relaxed state is the static E_inf equilibrium (stepping each mode of Eq. 12
+  independently lets that error accumulate).
+"""
+
+from __future__ import annotations
+
+from typing import ClassVar
+
+import numpy as np
+import scipy.linalg
+
+from viscoforce._typing import FloatArray, SeparationHistory
+from viscoforce.exceptions import GapClosureError, StabilityError
+from viscoforce.solvers.base import State, StepOutcome, TimeStepper
+from viscoforce.solvers.newton import solve_gap
+
+
+def _phi(x: FloatArray) -> FloatArray:
+    """φ(x) = (1 − e^{−x})/x, accurate for small x."""
+    return np.where(x > 1e-300, -np.expm1(-x) / np.where(x > 1e-300, x, 1.0), 1.0)
+
+
+def _psi(x: FloatArray) -> FloatArray:
+    """ψ(x) = ∫₀^x e^{−(x−y)} y (x − y) dy = x − 2 + (x + 2) e^{−x} (≈ x³/6 for small x)."""
+    small = x < 1e-2
+    xs = np.where(small, x, 0.0)
+    series = xs**3 / 6.0 - xs**4 / 12.0 + xs**5 / 40.0
+    big = np.where(small, 1.0, x)
+    return np.where(small, series, big - 2.0 + (big + 2.0) * np.exp(-big))
+
+
+class _Exponential(TimeStepper):
+    """Exponential integrators of (†) with an implicit instantaneous response.
+
+    Subclasses set :meth:`weights`: the new memory is
+    w_i ← e^{−x_i} w_i − c_i (a_i q_new + b_i q_old), x_i = dt/τ_i.
+    """
+
+    adaptive: ClassVar[bool] = True
+
+    def __init__(self, problem):
+        super().__init__(problem)
+        self._parents: list[tuple[State, State]] = []
+
+    @staticmethod
+    def weights(x: FloatArray) -> tuple[FloatArray, FloatArray]:
+        """(a, b): weights of the new and old forcing for decay x = dt/τ."""
+        raise NotImplementedError
+
+    def reset_history(self) -> None:
+        """Forget the previous step (used for the predictor and the error estimate)."""
+        self._parents = []
+
+    def _parent(self, state: State) -> State | None:
+        for child, parent in self._parents:
+            if child is state:
+                return parent
+        return None
+
+    def error_estimate(self, parent: State | None, state: State, q_new: FloatArray,
+                       dt: float, x: FloatArray) -> float:
+        """Local error [m] of the memory update from the curvature of the forcing q(t)."""
+        if self.c_modes.size == 0:
+            return 0.0
+        if parent is None or self.order == 1:
+            # distance between the held-forcing and the linear-forcing updates: the first-order
+            # error (an upper bound for the second-order method right after a start or kink)
+            gap = np.abs(_phi(x) - np.exp(-x))
+            return float(np.max(np.abs(q_new - state.response)) * np.sum(self.c_modes * gap))
+        dt_prev = state.time - parent.time
+        curvature = 2.0 * ((q_new - state.response) / dt
+                           - (state.response - parent.response) / dt_prev) / (dt + dt_prev)
+        return float(0.5 * np.max(np.abs(curvature))
+                     * np.sum(self.c_modes * self.taus**2 * _psi(x)))
+
+    def step(self, state: State, drive: SeparationHistory, dt: float) -> StepOutcome:
+        """One implicit exponential step of length ``dt`` [s]."""
+        problem = self.problem
+        n = problem.grid.size
+        t_new = state.time + dt
+        position = float(drive.position(t_new))
+        x = dt / self.taus
+        decay = np.exp(-x)
+        a, b = self.weights(x)
+        c_eff = self.c_glassy + float(np.sum(self.c_modes * a))
+        carry = (decay[:, None] * state.memory
+                 - (self.c_modes * b)[:, None] * state.response[None, :]).sum(axis=0)
+        base = problem.undeformed_gap(position) - carry[:n]
+        parent = self._parent(state)
+        initial = state.gap
+        if parent is not None:
+            slope = (state.gap - parent.gap) * (dt / (state.time - parent.time))
+            initial = np.maximum(state.gap + slope, 0.5 * state.gap)
+        sol = solve_gap(problem, base, c_eff, initial, xtol=self.xtol, time=t_new)
+        q_new = self.response(sol.pressure)
+        memory = (decay[:, None] * state.memory
+                  - (self.c_modes * a)[:, None] * q_new[None, :]
+                  - (self.c_modes * b)[:, None] * state.response[None, :])
+        deformation = -self.c_glassy * q_new + memory.sum(axis=0)
+        new = State(t_new, position, sol.gap, sol.pressure, q_new, memory, deformation)
+        error = self.error_estimate(parent, state, q_new, dt, x)
+        self._parents = [(state, parent), (new, state)] if parent is not None else [(new, state)]
+        return StepOutcome(new, error, sol.iterations)
+
+
+class ExponentialTrapezoidal(_Exponential):
+    """Second-order exponential integrator (forcing linear over the step); the default."""
+
+    name: ClassVar[str] = "exponential"
+    order: ClassVar[int] = 2
+
+    @staticmethod
+    def weights(x):
+        """a = 1 − φ(x), b = φ(x) − e^{−x}."""
+        phi = _phi(x)
+        return 1.0 - phi, phi - np.exp(-x)
+
+
+class ExponentialEuler(_Exponential):
+    """First-order exponential integrator (forcing held at its new value)."""
+
+    name: ClassVar[str] = "exponential-euler"
+    order: ClassVar[int] = 1
+
+    @staticmethod
+    def weights(x):
+        """a = 1 − e^{−x}, b = 0."""
+        return -np.expm1(-x), np.zeros_like(x)
+
+
+class ExplicitEuler(TimeStepper):
+    """The paper's explicit Euler on Eq. 5 / Eq. 12 (conditionally stable, first order)."""
+
+    name: ClassVar[str] = "euler"
+    order: ClassVar[int] = 1
+    adaptive: ClassVar[bool] = False
+
+    def stability_limit(self, state: State) -> float:
+        """Largest stable dt [s] at ``state`` (a bound from the row-sum norm of A|p'|)."""
+        if self.taus.size == 0:
+            return np.inf
+        dpdh = np.abs(self.problem.surface_force.pressure_derivative(state.gap))
+        mu = float(np.max(np.abs(self.problem.influence) @ dpdh))
+        ratio = 1.0 + float(np.sum(self.c_modes)) * mu / (1.0 + self.c_glassy * mu)
+        return 2.0 * float(np.min(self.taus)) / ratio
+
+    def step(self, state: State, drive: SeparationHistory, dt: float) -> StepOutcome:
+        """One explicit step of length ``dt`` [s]."""
+        problem = self.problem
+        n = problem.grid.size
+        limit = self.stability_limit(state)
+        if dt > limit:
+            raise StabilityError(
+                f"explicit Euler is unstable at t = {state.time:.6g} s: dt = {dt:.3g} s exceeds "
+                f"the stability limit {limit:.3g} s (≈ 2τ·E_inf/E0 in contact); use dt < "
+                f"{limit:.3g} s or the default method 'exponential'")
+        velocity = float(drive.velocity(state.time))
+        stiff = np.abs(problem.surface_force.pressure_derivative(state.gap))
+        q = state.response
+        memory = state.memory.copy()
+        if memory.shape[0]:
+            memory[-1] = (state.deformation + self.c_glassy * q
+                          - memory[:-1].sum(axis=0))
+        memory_rate = -(memory + self.c_modes[:, None] * q[None, :]) / self.taus[:, None]
+        forcing = memory_rate.sum(axis=0)
+        coupled = self.c_glassy * self.influence_aug * stiff[None, :]
+        jac = coupled[:n].copy()
+        jac.flat[:: n + 1] += 1.0
+        rate = np.empty(n + 1)
+        rate[:n] = scipy.linalg.solve(jac, coupled[:n] @ np.full(n, velocity) + forcing[:n],
+                                      check_finite=False)
+        rate[n] = coupled[n] @ (velocity - rate[:n]) + forcing[n]
+        deformation = state.deformation + dt * rate
+        t_new = state.time + dt
+        position = float(drive.position(t_new))
+        gap = problem.undeformed_gap(position) - deformation[:n]
+        if np.any(gap <= 0) or not np.all(np.isfinite(gap)):
+            raise GapClosureError(
+                f"explicit Euler drove the gap through zero at t = {t_new:.6g} s "
+                f"(dt = {dt:.3g} s); use a smaller dt or the default method 'exponential'",
+                time=t_new)
+        pressure = problem.surface_force.pressure(gap)
+        new = State(t_new, position, gap, pressure, self.response(pressure),
+                    memory + dt * memory_rate, deformation)
+        return StepOutcome(new, 0.0, 1)
+
+
+#: Registry of the built-in steppers (users may also pass a TimeStepper subclass).
+METHODS: dict[str, type[TimeStepper]] = {
+    cls.name: cls for cls in (ExponentialTrapezoidal, ExponentialEuler, ExplicitEuler)
+}
+DEFAULT_METHOD = ExponentialTrapezoidal.name
