@@ -64,3 +64,74 @@ def test_python_dash_m_entry_point():
                            "1e9", "--json"], capture_output=True, text=True, timeout=120)
     assert proc.returncode == 0, proc.stderr
     assert json.loads(proc.stdout)["u_center"] == pytest.approx(-0.46e-9, abs=0.005e-9)
+
+
+def test_simulate_triangle_json_contract(capsys):
+    out = run_json(capsys, ["simulate", "--drive", "triangle", "--from", "10nm", "--to", "-5nm",
+                            "--speed", "5um/s", "--t-end", "6ms", "--samples", "31", "--json"])
+    for key in ("time", "position", "force", "u_center", "contact_radius", "settings"):
+        assert key in out
+    assert len(out["time"]) == 31 and out["time"][-1] == pytest.approx(6e-3)
+    assert min(out["position"]) == pytest.approx(-5e-9)
+    assert out["settings"]["method"] == "exponential" and out["settings"]["tau"] == 1e-3
+
+
+@pytest.mark.parametrize("argv", [
+    ["--drive", "step", "--from", "-5nm", "--to", "-7nm", "--t-end", "5ms"],
+    ["--drive", "ramp", "--from", "5nm", "--to", "-2nm", "--speed", "5um/s", "--E", "1e9"],
+    ["--drive", "sine", "--h0", "2nm", "--eta", "0.1nm", "--omega", "1kHz", "--periods", "2"],
+    ["--drive", "step", "--from=-5nm", "--to=-3nm", "--method", "euler", "--t-end", "2ms"],
+])
+def test_simulate_drives(capsys, argv):
+    out = run_json(capsys, ["simulate", *argv, "--samples", "11", "--json"])
+    assert all(f > 0 for f in out["force"])
+
+
+def test_simulate_trace_and_prony_files_and_netcdf(capsys, tmp_path):
+    trace = tmp_path / "trace.csv"
+    trace.write_text("time (ms),position (nm)\n0,5\n1,-3\n2,5\n")
+    prony = tmp_path / "prony.csv"
+    prony.write_text("modulus (GPa),tau (ms)\n10,0.2\n4,1\n1,\n")
+    nc = tmp_path / "run.nc"
+    out = run_json(capsys, ["simulate", "--drive", "trace", "--trace", str(trace), "--prony",
+                            str(prony), "--samples", "9", "--out", str(nc), "--json"])
+    assert out["settings"]["material"] == "PronySeries"
+    assert out["time"][-1] == pytest.approx(2e-3 + 5e-3)  # drive end + 5 tau_max
+    with xr.open_dataset(nc, engine="scipy") as ds:
+        assert ds.force.attrs["units"] == "N"
+
+
+@pytest.mark.parametrize(("argv", "message"), [
+    (["simulate", "--drive", "ramp", "--from", "5nm"], "--drive ramp needs --to"),
+    (["simulate", "--drive", "triangle", "--from", "10nm", "--to", "-5nm", "--speed", "5um/s",
+      "--E", "1e9", "--tau", "1ms"], "give one material"),
+    (["simulate", "--drive", "sine", "--h0", "2nm", "--eta", "0.1nm"], "needs --omega"),
+    (["simulate", "--drive", "trace", "--trace", "/nonexistent.csv"], "file not found"),
+    (["simulate", "--drive", "triangle", "--from", "10nm", "--to", "-10nm", "--speed", "5um/s",
+      "--method", "euler", "--dt", "0.5ms", "--samples", "2"], "unstable"),
+    (["simulate", "--drive", "step", "--from", "-5nm", "--to", "-7nm", "--E0", "1e9",
+      "--E-inf", "1e10"], "E0 must be > E_inf"),
+])
+def test_simulate_user_errors(capsys, argv, message):
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert message in err and "Traceback" not in err
+
+
+def test_trace_reader_errors(tmp_path):
+    from viscoforce.exceptions import UnitError
+    from viscoforce.io.tables import read_trace
+
+    p = tmp_path / "t.csv"
+    p.write_text("time,position (nm)\n0,1\n1,2\n")
+    with pytest.raises(UnitError, match="has no unit"):
+        read_trace(p)
+    p.write_text("time (s),position (nm)\n0,1\n1,\"2,5\"\n")
+    with pytest.raises(ValueError, match="decimal commas"):
+        read_trace(p)
+    p.write_text("time (s),height (nm)\n0,1\n")
+    with pytest.raises(ValueError, match="no column 'position"):
+        read_trace(p)
+    p.write_text("")
+    with pytest.raises(ValueError, match="not a readable CSV"):
+        read_trace(p)

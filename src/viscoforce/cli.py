@@ -15,15 +15,27 @@ from collections.abc import Callable, Sequence
 
 from viscoforce import __version__
 from viscoforce.exceptions import ViscoforceError
-from viscoforce.physics.materials import Elastic, ViscoelasticMaterial
+from viscoforce.experiments.drives import MeasuredTrace, Ramp, Sinusoid, Step, Triangle
+from viscoforce.io.tables import read_prony_moduli, read_trace
+from viscoforce.physics.materials import (
+    Elastic,
+    PronySeries,
+    StandardLinearSolid,
+    ViscoelasticMaterial,
+)
 from viscoforce.physics.particle import Sphere
 from viscoforce.physics.surface_forces import SurfaceForceLaw, paper_pressure_law
 from viscoforce.problem import ContactProblem
+from viscoforce.solvers.simulate import default_end_time, simulate
 from viscoforce.solvers.static import static_equilibrium
+from viscoforce.solvers.steppers import DEFAULT_METHOD, METHODS
 from viscoforce.units import format_quantity, normalize_negative_args, quantity_type
 
 _LENGTH = quantity_type("length")
 _PRESSURE = quantity_type("pressure")
+_TIME = quantity_type("time")
+_SPEED = quantity_type("speed")
+_OMEGA = quantity_type("angular_frequency")
 
 
 class UsageError(ViscoforceError, ValueError):
@@ -54,6 +66,36 @@ def _add_numerics_flags(p: argparse.ArgumentParser) -> None:
                    help="mean radial node spacing (default from sqrt(2R/kappa))")
     g.add_argument("--outer-radius", type=_LENGTH, default=None, metavar="LENGTH",
                    help="outer radius of the grid (default: where the force is negligible)")
+
+
+def _add_material_flags(p: argparse.ArgumentParser) -> None:
+    g = p.add_argument_group("material (default: the paper's E0=1e10Pa, E_inf=1e9Pa, tau=1ms)")
+    g.add_argument("--E", type=_PRESSURE, default=None, metavar="PRESSURE",
+                   help="purely elastic modulus (paper convention 2/E = sum (1-nu^2)/E_i)")
+    g.add_argument("--E0", type=_PRESSURE, default=None, metavar="PRESSURE",
+                   help="instantaneous modulus of the standard linear solid")
+    g.add_argument("--E-inf", type=_PRESSURE, default=None, metavar="PRESSURE",
+                   help="relaxed modulus of the standard linear solid")
+    g.add_argument("--tau", type=_TIME, default=None, metavar="TIME",
+                   help="creep time tau of Eq. 3 (decay time of C(t), not the stress-relaxation time)")
+    g.add_argument("--prony", default=None, metavar="FILE.csv",
+                   help="n-mode Prony series: CSV 'modulus (Pa),tau (s)', rows E_0..E_inf, "
+                        "last tau empty")
+
+
+def _material(args: argparse.Namespace) -> ViscoelasticMaterial:
+    sls = (args.E0, args.E_inf, args.tau)
+    given = [name for name, v in (("--E", args.E), ("--prony", args.prony)) if v is not None]
+    if any(v is not None for v in sls):
+        given.append("--E0/--E-inf/--tau")
+    if len(given) > 1:
+        raise UsageError(f"give one material: {' or '.join(given)} were all given")
+    if args.E is not None:
+        return Elastic(args.E)
+    if args.prony is not None:
+        return PronySeries.from_moduli(*read_prony_moduli(args.prony))
+    e0, e_inf, tau = (d if v is None else v for v, d in zip(sls, (1e10, 1e9, 1e-3), strict=True))
+    return StandardLinearSolid(E0=e0, E_inf=e_inf, tau=tau)
 
 
 def _law(args: argparse.Namespace) -> SurfaceForceLaw:
@@ -104,6 +146,73 @@ def _cmd_static(args: argparse.Namespace) -> int:
     return 0
 
 
+def _drive(args: argparse.Namespace):
+    kind = args.drive
+
+    def need(*names):
+        missing = [f"--{n.replace('_', '-').rstrip('-')}" for n in names
+                   if getattr(args, n) is None]
+        if missing:
+            raise UsageError(f"--drive {kind} needs {', '.join(missing)}")
+
+    if kind in ("step", "ramp"):
+        need("from_", "to")
+        if kind == "step":
+            return Step(args.from_, args.to, 1e-4 if args.duration is None else args.duration)
+        if args.duration is not None:
+            return Ramp(args.from_, args.to, args.duration)
+        need("speed")
+        return Ramp.from_speed(args.from_, args.to, args.speed)
+    if kind == "triangle":
+        need("from_", "to", "speed")
+        return Triangle(args.from_, args.to, args.speed)
+    if kind == "sine":
+        need("h0", "eta", "omega")
+        return Sinusoid(args.h0, args.eta, args.omega, periods=args.periods)
+    need("trace")
+    time, position = read_trace(args.trace)
+    return MeasuredTrace(time, position)
+
+
+def _cmd_simulate(args: argparse.Namespace) -> int:
+    import numpy as np
+
+    drive = _drive(args)
+    material = _material(args)
+    problem = _problem(args, material, float(drive.extent()[0]))
+    t_end = default_end_time(problem, drive) if args.t_end is None else args.t_end
+    t_eval = np.linspace(0.0, t_end, args.samples)
+    ds = simulate(problem, drive, t_end=t_end, t_eval=t_eval, method=args.method, dt=args.dt,
+                  tol=args.tol, profiles=args.profiles, progress=args.progress)
+    if args.out:
+        ds.to_netcdf(args.out, engine="scipy")
+    settings = {k: (v.item() if hasattr(v, "item") else v) for k, v in ds.attrs.items()}
+    if args.json:
+        print(json.dumps({
+            "time": ds.time.values.tolist(),
+            "position": ds.position.values.tolist(),
+            "force": ds.force.values.tolist(),
+            "u_center": ds.u_center.values.tolist(),
+            "contact_radius": ds.contact_radius.values.tolist(),
+            "settings": settings,
+        }))
+    else:
+        print(f"{settings['drive']}; {type(material).__name__}; method {settings['method']}: "
+              f"{settings['steps']} steps ({settings['rejected_steps']} rejected), "
+              f"{settings['newton_iterations']} Newton iterations")
+        i = int(np.argmax(ds.force.values))
+        _print_table([
+            ("peak force", float(ds.force[i]), "force"),
+            ("at position", float(ds.position[i]), "length"),
+            ("final force", float(ds.force[-1]), "force"),
+            ("final u(0)", float(ds.u_center[-1]), "length"),
+            ("max contact radius", float(ds.contact_radius.max()), "length"),
+        ])
+        if args.out:
+            print(f"wrote {args.out}")
+    return 0
+
+
 def _build_parser() -> tuple[argparse.ArgumentParser, set[str], set[str]]:
     parser = argparse.ArgumentParser(
         prog="viscoforce",
@@ -126,7 +235,44 @@ def _build_parser() -> tuple[argparse.ArgumentParser, set[str], set[str]]:
     _add_numerics_flags(st)
     st.set_defaults(func=_cmd_static)
 
-    value_options = {a for action in (*parser._actions, *st._actions)
+    si = sub.add_parser("simulate", help="viscoelastic response along a drive h0(t)")
+    si.add_argument("--drive", required=True, choices=["step", "ramp", "triangle", "sine", "trace"])
+    si.add_argument("--from", dest="from_", type=_LENGTH, default=None, metavar="LENGTH",
+                    help="start position (step, ramp) or top (triangle)")
+    si.add_argument("--to", type=_LENGTH, default=None, metavar="LENGTH",
+                    help="end position (step, ramp) or turning point (triangle)")
+    si.add_argument("--duration", type=_TIME, default=None, metavar="TIME",
+                    help="ramp duration, or step rise time (default 0.1ms)")
+    si.add_argument("--speed", type=_SPEED, default=None, metavar="SPEED",
+                    help="drive speed (ramp, triangle), e.g. 5um/s")
+    si.add_argument("--h0", type=_LENGTH, default=None, metavar="LENGTH", help="sine mean position")
+    si.add_argument("--eta", type=_LENGTH, default=None, metavar="LENGTH", help="sine amplitude")
+    si.add_argument("--omega", type=_OMEGA, default=None, metavar="FREQ",
+                    help="sine angular frequency (rad/s, or e.g. 100Hz)")
+    si.add_argument("--periods", type=float, default=10.0, help="sine periods (default 10)")
+    si.add_argument("--trace", default=None, metavar="FILE.csv",
+                    help="measured trace: CSV with 'time (s)' and 'position (nm)' columns")
+    si.add_argument("--t-end", type=_TIME, default=None, metavar="TIME",
+                    help="total simulated time (default: drive end plus 5 tau)")
+    si.add_argument("--samples", type=int, default=401, help="output samples (default 401)")
+    si.add_argument("--profiles", type=int, default=0, metavar="K",
+                    help="store h(r), u(r), p(r) every K-th sample in --out")
+    si.add_argument("--method", default=DEFAULT_METHOD, choices=sorted(METHODS),
+                    help=f"time stepper (default {DEFAULT_METHOD})")
+    si.add_argument("--dt", type=_TIME, default=None, metavar="TIME",
+                    help="fixed time step (default: adaptive; euler: 0.1 tau E_inf/E0)")
+    si.add_argument("--tol", type=_LENGTH, default=None, metavar="LENGTH",
+                    help="local error tolerance of adaptive steps (default 1e-5 debye lengths)")
+    si.add_argument("--out", default=None, metavar="FILE.nc", help="write the dataset (netCDF)")
+    si.add_argument("--progress", action=argparse.BooleanOptionalAction, default=None,
+                    help="progress bar (default: when stderr is a terminal)")
+    si.add_argument("--json", action="store_true", help="print one JSON object (SI units)")
+    _add_material_flags(si)
+    _add_system_flags(si)
+    _add_numerics_flags(si)
+    si.set_defaults(func=_cmd_simulate)
+
+    value_options = {a for action in (*parser._actions, *st._actions, *si._actions)
                      for a in action.option_strings if a.startswith("--") and action.nargs is None
                      and action.type is not None}
     return parser, value_options, set()

@@ -1,0 +1,1 @@
+"""Reading files into SI arrays (conversions happen here, at the boundary)."""
