@@ -213,6 +213,75 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
     return 0
 
 
+def _choose_spectrum_method(args: argparse.Namespace, problem: ContactProblem) -> tuple[str, str]:
+    """The cheapest adequate method for the requested spectrum, with the reason."""
+    kappa_eta = args.eta / problem.surface_force.decay_length
+    if kappa_eta <= 0.05:
+        return "linear", (f"kappa*eta = {kappa_eta:.3g} <= 0.05: the nonlinear correction to the "
+                          f"stiffness is O((kappa*eta)^2) ~ {kappa_eta ** 2:.1e}, so the exact "
+                          "small-amplitude frequency-domain solve is used")
+    return "time-domain", (f"kappa*eta = {kappa_eta:.3g} > 0.05: the response is not linear "
+                           "enough, so each frequency is simulated to steady state and "
+                           "demodulated")
+
+
+def _cmd_spectrum(args: argparse.Namespace) -> int:
+    import numpy as np
+
+    from viscoforce.experiments.spectroscopy import SPECTRUM_METHODS
+
+    if (args.omega is None) == (args.omega_range is None):
+        raise UsageError("give either --omega W [W ...] or --omega-range LO HI N")
+    if args.omega is not None:
+        omega = np.array(args.omega, dtype=float)
+    else:
+        lo, hi, n = args.omega_range
+        n_points = int(n)
+        if n_points != n or n_points < 1 or not 0 < lo < hi:
+            raise UsageError(
+                f"--omega-range needs 0 < LO < HI and an integer N >= 1, got {lo:g} {hi:g} {n:g}")
+        omega = np.geomspace(lo, hi, n_points)
+    material = _material(args)
+    problem = _problem(args, material, args.h0 - args.eta)
+    method, explanation = args.method, ""
+    if method == "auto":
+        method, explanation = _choose_spectrum_method(args, problem)
+    kwargs = {}
+    if method == "time-domain":
+        kwargs = {"n_jobs": args.jobs, "progress": args.progress, "periods": args.periods}
+    ds = SPECTRUM_METHODS[method](problem, args.h0, args.eta, omega, **kwargs)
+    if args.out:
+        ds.to_netcdf(args.out, engine="scipy")
+    if args.plot:
+        from viscoforce.plotting import bode_plot
+
+        handle = bode_plot(ds)
+        handle.figure.savefig(args.plot, dpi=120, bbox_inches="tight")
+    result = {
+        "omega": ds.omega.values.tolist(),
+        "amplitude": ds.amplitude.values.tolist(),
+        "stiffness": ds.stiffness.values.tolist(),
+        "phase_deg": ds.phase.values.tolist(),
+        "mean_force": ds.mean_force.values.tolist(),
+        "method": method,
+    }
+    if explanation:
+        result["explanation"] = explanation
+    if args.json:
+        print(json.dumps(result))
+        return 0
+    if explanation:
+        print(f"method {method}: {explanation}")
+    print(f"{'omega [rad/s]':>14} {'stiffness [N/m]':>16} {'amplitude a':>12} {'phase [deg]':>12}"
+          f" {'mean force [N]':>15}")
+    for row in zip(result["omega"], result["stiffness"], result["amplitude"],
+                   result["phase_deg"], result["mean_force"], strict=True):
+        print(f"{row[0]:14.5g} {row[1]:16.6g} {row[2]:12.6g} {row[3]:12.4f} {row[4]:15.6g}")
+    if args.plot:
+        print(f"wrote {args.plot}")
+    return 0
+
+
 def _build_parser() -> tuple[argparse.ArgumentParser, set[str], set[str]]:
     parser = argparse.ArgumentParser(
         prog="viscoforce",
@@ -272,10 +341,36 @@ def _build_parser() -> tuple[argparse.ArgumentParser, set[str], set[str]]:
     _add_numerics_flags(si)
     si.set_defaults(func=_cmd_simulate)
 
-    value_options = {a for action in (*parser._actions, *st._actions, *si._actions)
+    sp = sub.add_parser("spectrum", help="force spectroscopy: stiffness and phase vs omega")
+    sp.add_argument("--h0", type=_LENGTH, required=True, metavar="LENGTH", help="mean position")
+    sp.add_argument("--eta", type=_LENGTH, required=True, metavar="LENGTH",
+                    help="drive amplitude eta")
+    sp.add_argument("--omega", type=_OMEGA, nargs="+", default=None, metavar="FREQ",
+                    help="angular frequencies (rad/s, or with Hz/kHz)")
+    sp.add_argument("--omega-range", type=_OMEGA, nargs=3, default=None,
+                    metavar=("LO", "HI", "N"), help="N log-spaced frequencies from LO to HI")
+    sp.add_argument("--method", default="linear",
+                    choices=["linear", "time-domain", "svda", "auto"],
+                    help="exact frequency-domain (default), time-domain simulation + lock-in, "
+                         "SVDA closed form, or auto (cheapest adequate)")
+    sp.add_argument("--periods", type=int, default=4,
+                    help="time-domain: demodulated periods after settling (default 4)")
+    sp.add_argument("--jobs", type=int, default=1, help="time-domain: worker processes")
+    sp.add_argument("--progress", action=argparse.BooleanOptionalAction, default=None,
+                    help="progress bar (default: when stderr is a terminal)")
+    sp.add_argument("--out", default=None, metavar="FILE.nc", help="write the spectrum (netCDF)")
+    sp.add_argument("--plot", default=None, metavar="FILE.png", help="write a Bode plot")
+    sp.add_argument("--json", action="store_true", help="print one JSON object (SI units)")
+    _add_material_flags(sp)
+    _add_system_flags(sp)
+    _add_numerics_flags(sp)
+    sp.set_defaults(func=_cmd_spectrum)
+
+    value_options = {a for action in (*parser._actions, *st._actions, *si._actions,
+                                      *sp._actions)
                      for a in action.option_strings if a.startswith("--") and action.nargs is None
                      and action.type is not None}
-    return parser, value_options, set()
+    return parser, value_options, {"--omega", "--omega-range"}
 
 
 def main(argv: Sequence[str] | None = None) -> int:

@@ -13,7 +13,7 @@ This module is the discretisation only; which grid the physics needs is chosen b
 from __future__ import annotations
 
 from dataclasses import dataclass
-from functools import cached_property
+from functools import cached_property, lru_cache
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -23,6 +23,7 @@ from viscoforce._validation import require_int, require_positive
 from viscoforce.exceptions import ParameterError
 
 
+@lru_cache(maxsize=64)
 def gauss_legendre_unit(order: int) -> tuple[FloatArray, FloatArray]:
     """Gauss–Legendre nodes and weights on [0, 1].
 
@@ -37,7 +38,10 @@ def gauss_legendre_unit(order: int) -> tuple[FloatArray, FloatArray]:
         Nodes in (0, 1) ascending and their weights (summing to 1).
     """
     x, w = np.polynomial.legendre.leggauss(order)
-    return 0.5 * (x + 1.0), 0.5 * w
+    nodes, weights = 0.5 * (x + 1.0), 0.5 * w
+    nodes.flags.writeable = False
+    weights.flags.writeable = False
+    return nodes, weights
 
 
 def barycentric_weights(nodes: FloatArray) -> FloatArray:
