@@ -103,7 +103,6 @@ def test_prony_two_modes_limits_and_shape():
     (lambda: prony_creep_compliance(0.0, 1e-10, [1e-10, 1e-10], [1e-3]), "same length"),
     (lambda: prony_creep_compliance(0.0, 1e-10, [-1e-10], [1e-3]), "delta_compliances must be"),
     (lambda: prony_complex_compliance(0.0, 1e-10, [1e-10], [0.0]), "taus must be > 0"),
-    (lambda: prony_complex_compliance(0.0, 1e-10, [], []), "at least 1"),
 ])
 def test_material_raises(call, match):
     with pytest.raises(ParameterError, match=match):
@@ -403,3 +402,8 @@ def test_fig3_numbers():
 def test_harmonic_raises(call, match):
     with pytest.raises(ParameterError, match=match):
         call()
+
+
+def test_prony_with_no_modes_is_elastic():
+    assert prony_complex_compliance(5.0, 1e-10, [], []) == pytest.approx(1e-10)
+    assert prony_creep_compliance(5.0, 1e-10, [], []) == pytest.approx(1e-10)

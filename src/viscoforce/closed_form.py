@@ -179,8 +179,8 @@ def sls_complex_compliance(omega: ArrayLike, E0: float, E_inf: float, tau: float
 def _prony_data(glassy_compliance: float, delta_compliances: ArrayLike,
                 taus: ArrayLike) -> tuple[float, FloatArray, FloatArray]:
     jg = require_positive("glassy_compliance", glassy_compliance)
-    dj = as_float_1d("delta_compliances", delta_compliances)
-    tt = as_float_1d("taus", taus)
+    dj = as_float_1d("delta_compliances", delta_compliances, min_size=0)
+    tt = as_float_1d("taus", taus, min_size=0)
     if dj.size != tt.size:
         raise ParameterError(
             f"delta_compliances and taus must have the same length, got {dj.size} and {tt.size}")

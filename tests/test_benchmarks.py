@@ -1,0 +1,89 @@
+"""Smoke tests of the benchmark scripts in benchmarks/ (their --quick modes; no timing asserted)."""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+REPO = Path(__file__).resolve().parents[1]
+BENCH = REPO / "benchmarks"
+
+# documented in benchmarks/README.md, section bench_static.py
+STATIC_TOP_KEYS = {"schema", "created", "quick", "machine", "target", "settings", "build",
+                   "default_grid", "sweep", "summary", "files"}
+STATIC_ROW_KEYS = {"E", "h0", "nodes", "n_panels", "order", "newton_iterations", "force",
+                   "force_refined", "rel_error_refined", "force_peer", "rel_error_peer",
+                   "time_public_s", "time_public_cpu_s", "time_newton_s"}
+STATIC_SWEEP_KEYS = {"case", "E", "h0", "order", "spacing_factor", "nodes", "status",
+                     "time_public_s", "time_newton_s", "rel_error", "is_default"}
+STATIC_SUMMARY_KEYS = {"worst_time_public_s", "worst_time_newton_s", "worst_rel_error_refined",
+                       "worst_rel_error_peer", "passed", "verdict"}
+
+
+def run_script(name: str, *args: str) -> subprocess.CompletedProcess:
+    env = dict(os.environ, MPLBACKEND="Agg")
+    env["PYTHONPATH"] = os.pathsep.join(filter(None, [str(REPO / "src"), env.get("PYTHONPATH")]))
+    return subprocess.run([sys.executable, str(BENCH / name), *args], capture_output=True,
+                          text=True, env=env, timeout=300, check=False)
+
+
+@pytest.fixture(scope="module")
+def static_quick(tmp_path_factory):
+    out = tmp_path_factory.mktemp("bench_static")
+    proc = run_script("bench_static.py", "--quick", "--out", str(out))
+    assert proc.returncode == 0, proc.stderr
+    return out, proc.stdout
+
+
+def test_bench_static_quick_writes_documented_json(static_quick):
+    out, stdout = static_quick
+    report = json.loads((out / "static_benchmark.json").read_text())
+    assert set(report) == STATIC_TOP_KEYS
+    assert report["schema"] == "viscoforce.bench_static/1"
+    assert report["quick"] is True
+    assert report["machine"]["blas_threads"] == [1]  # BLAS pinned to one thread
+    assert report["target"]["time_per_solve_s"] == 5e-3
+    assert report["target"]["relative_error"] == 1e-4
+    rows = report["default_grid"]
+    assert len(rows) == 16  # 2 moduli × 8 positions
+    assert {(r["E"], round(r["h0"] * 1e9)) for r in rows} == {
+        (e, h) for e in (1e9, 1e10) for h in (-10, -7, -5, -3, 0, 2, 5, 10)}
+    for row in rows:
+        assert STATIC_ROW_KEYS <= set(row)
+        assert 0 < row["time_newton_s"] < row["time_public_s"]
+        assert row["newton_iterations"] >= 1
+    assert len(report["build"]) == 8
+    assert STATIC_SUMMARY_KEYS <= set(report["summary"])
+    assert report["summary"]["verdict"] in {"PASS", "FAIL"}
+    assert f"-> {report['summary']['verdict']}" in stdout
+    assert (out / "static_speed_accuracy.png").stat().st_size > 10_000
+    assert (out / "static_speed_accuracy.csv").read_text().startswith("case,")
+
+
+def test_bench_static_default_grid_is_accurate(static_quick):
+    # deterministic part of the benchmark: the default grid's load agrees with a 4x-refined grid to
+    # far better than the 1e-4 target, and with the independent FFT peer to its stated ~1e-4
+    out, _ = static_quick
+    report = json.loads((out / "static_benchmark.json").read_text())
+    for row in report["default_grid"]:
+        assert row["rel_error_refined"] < 1e-5, row
+        if row["force_peer"] is not None:
+            assert math.isclose(row["force"], row["force_peer"], rel_tol=1e-4), row
+    sweep = report["sweep"]
+    assert {r["order"] for r in sweep} == {4, 8}
+    assert sum(r["is_default"] for r in sweep) == 2  # one default point per sweep case
+    for r in sweep:
+        assert STATIC_SWEEP_KEYS <= set(r)
+        assert r["status"] == "ok"
+
+
+def test_bench_static_rejects_nonpositive_repeats(tmp_path):
+    proc = run_script("bench_static.py", "--quick", "--repeats", "0", "--out", str(tmp_path))
+    assert proc.returncode == 2
+    assert "--repeats must be >= 1" in proc.stderr
