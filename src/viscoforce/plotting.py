@@ -29,6 +29,7 @@ if TYPE_CHECKING:
     import xarray as xr
     from matplotlib.artist import Artist
     from matplotlib.axes import Axes
+    from matplotlib.colorbar import Colorbar
     from matplotlib.figure import Figure
 
 __all__ = [
@@ -73,13 +74,14 @@ class PlotHandle:
         The figure holding the axes.
     axes : tuple of matplotlib.axes.Axes
         The axes drawn on (one, or two for the two-panel :func:`profile_plot`).
-    lines : tuple of matplotlib.artist.Artist
-        The artists drawn, in drawing order (trajectory branches first, then reference curves).
+    lines : tuple of matplotlib.artist.Artist or matplotlib.colorbar.Colorbar
+        What was drawn, in drawing order: trajectory branches first, then reference curves (and,
+        for :func:`profile_plot`, the colour bar last).
     """
 
     figure: Figure
     axes: tuple[Axes, ...]
-    lines: tuple[Artist, ...]
+    lines: tuple[Artist | Colorbar, ...]
 
     @property
     def ax(self) -> Axes:

@@ -19,7 +19,7 @@ from viscoforce.exceptions import ParameterError
 from viscoforce.physics.materials import ViscoelasticMaterial
 from viscoforce.physics.particle import Sphere
 from viscoforce.physics.surface_forces import SurfaceForceLaw
-from viscoforce.radial_grid import RadialGrid
+from viscoforce.radial_grid import RadialGrid, barycentric_weights, gauss_legendre_unit
 
 #: Relative pressure below which the surface force is treated as zero when sizing the grid.
 NEGLIGIBLE_PRESSURE_RTOL = 1e-10
@@ -171,7 +171,8 @@ class ContactProblem:
 def contact_radius(grid: RadialGrid, gap: ArrayLike, gap_center: float, threshold: float) -> float:
     """Largest radius [m] where the gap is below ``threshold`` [m] (0 if nowhere).
 
-    Uses the panel interpolant of the nodal gaps and a bracketing root search.
+    The crossing is located on the panel's Lagrange interpolant of the nodal gaps (barycentric
+    form, bracketing root search), so it is as accurate as the discretisation.
     """
     from scipy.optimize import brentq
 
@@ -181,18 +182,35 @@ def contact_radius(grid: RadialGrid, gap: ArrayLike, gap_center: float, threshol
     if below.size == 0:
         if gap_center >= threshold:
             return 0.0
-        lo, hi = 0.0, float(grid.r[0])
+        i = -1
     else:
         i = int(below[-1])
         if i == gap.size - 1:
             raise ParameterError(
                 "the contact zone reaches the outer radius of the grid; enlarge outer_radius")
-        lo, hi = float(grid.r[i]), float(grid.r[i + 1])
+    lo = 0.0 if i < 0 else float(grid.r[i])
+    hi = float(grid.r[i + 1])
+    k = (i + 1) // grid.order  # the crossing lies in the panel of node i + 1 or at its left edge
+    nodes, _ = gauss_legendre_unit(grid.order)
+    bary = barycentric_weights(nodes)
+    values = gap[k * grid.order:(k + 1) * grid.order]
+    width = grid.panel_width
 
-    def f(x):
-        return float(grid.interpolate(gap, x)[0]) - threshold
+    def f(r):
+        d = r / width - k - nodes
+        if np.any(d == 0.0):
+            return float(values[np.flatnonzero(d == 0.0)[0]]) - threshold
+        t = bary / d
+        return float(t @ values / t.sum()) - threshold
 
-    if f(lo) * f(hi) > 0:  # interpolant not bracketing: fall back to linear interpolation
-        g_lo, g_hi = (gap_center if lo == 0.0 else f(lo) + threshold), f(hi) + threshold
-        return lo + (threshold - g_lo) * (hi - lo) / (g_hi - g_lo)
-    return float(brentq(f, lo, hi, xtol=1e-6 * grid.spacing))
+    f_lo = gap_center - threshold if i < 0 else f(lo)
+    if i >= 0 and lo < k * width:  # node i sits in the previous panel: start at the panel edge
+        lo, f_lo = k * width, f(k * width)
+    f_hi = f(hi)
+    if f_lo * f_hi > 0:  # interpolant not bracketing (rare): linear interpolation of the nodes
+        g_lo = gap_center if i < 0 else gap[i]
+        lo = 0.0 if i < 0 else float(grid.r[i])
+        return lo + (threshold - g_lo) * (hi - lo) / (gap[i + 1] - g_lo)
+    if f_lo == 0.0:
+        return lo
+    return float(brentq(f, lo, hi, xtol=1e-9 * grid.spacing))

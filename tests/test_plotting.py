@@ -1,0 +1,320 @@
+"""Trajectory plots (viscoforce.plotting) and the script notebooks/paper_figures.py."""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import os
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+import viscoforce as vf
+from viscoforce.exceptions import ParameterError, SchemaError
+from viscoforce.experiments import Ramp, Triangle
+from viscoforce.plotting import (
+    PlotHandle,
+    _branches,
+    contact_radius_plot,
+    force_time_plot,
+    hysteresis_plot,
+    profile_plot,
+)
+from viscoforce.solvers.simulate import simulate
+
+from .conftest import REPO
+
+NM, UN, MS = 1e-9, 1e-6, 1e-3
+
+
+def _problem(deepest):
+    return vf.ContactProblem.create(
+        sphere=vf.Sphere(10e-6), surface_force=vf.paper_pressure_law(),
+        material=vf.StandardLinearSolid(E0=1e10, E_inf=1e9, tau=1e-3), deepest_position=deepest)
+
+
+@pytest.fixture(scope="module")
+def trajectory():
+    """A short triangle 3 → −3 → 3 nm at 20 µm/s, 31 outputs, a profile every 5th output."""
+    drive = Triangle(top=3e-9, turn=-3e-9, speed=20e-6)
+    return simulate(_problem(drive.extent()[0]), drive, t_end=drive.duration,
+                    t_eval=np.linspace(0.0, drive.duration, 31), profiles=5, progress=False)
+
+
+@pytest.fixture
+def axes():
+    import matplotlib.pyplot as plt
+
+    return plt.subplots()[1]
+
+
+def _turn(ds):
+    return int(np.argmin(ds.position.values))
+
+
+# ── the handle and the import ───────────────────────────────────────────────────────────────────
+
+
+def test_import_does_not_load_matplotlib():
+    code = ("import sys, viscoforce.plotting; "
+            "sys.exit(1 if 'matplotlib' in sys.modules else 0)")
+    assert subprocess.run([sys.executable, "-c", code], check=False).returncode == 0
+
+
+def test_handle_is_frozen(trajectory):
+    handle = hysteresis_plot(trajectory)
+    assert isinstance(handle, PlotHandle)
+    assert handle.ax is handle.axes[0]
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        handle.lines = ()  # type: ignore[misc]
+
+
+# ── hysteresis_plot ─────────────────────────────────────────────────────────────────────────────
+
+
+def test_hysteresis_branches_carry_the_data(trajectory):
+    handle = hysteresis_plot(trajectory, label="run")
+    ax = handle.ax
+    assert ax.get_xlabel() == "position $h_0$ [nm]"
+    assert ax.get_ylabel() == "force $F$ [µN]"
+    loading, unloading = handle.lines
+    k = _turn(trajectory)
+    position = trajectory.position.values
+    force = trajectory.force.values
+    # exact: the plot only rescales (1e9, 1e6) — tolerance is float rounding
+    np.testing.assert_allclose(loading.get_xdata(), position[: k + 1] / NM, rtol=1e-12)
+    np.testing.assert_allclose(loading.get_ydata(), force[: k + 1] / UN, rtol=1e-12)
+    np.testing.assert_allclose(unloading.get_xdata(), position[k:] / NM, rtol=1e-12)
+    assert loading.get_linestyle() == "-" and unloading.get_linestyle() == "--"
+    assert loading.get_color() == unloading.get_color()
+    assert loading.get_label() == "run" and unloading.get_label() == "_nolegend_"
+    assert np.all(np.diff(loading.get_xdata()) < 0) and np.all(np.diff(unloading.get_xdata()) > 0)
+
+
+def test_hysteresis_force_unit_and_given_axes(trajectory, axes):
+    handle = hysteresis_plot(trajectory, ax=axes, force_unit="nN",
+                             line_kw={"color": "red", "linewidth": 3})
+    assert handle.ax is axes and handle.figure is axes.figure
+    assert axes.get_ylabel() == "force $F$ [nN]"
+    np.testing.assert_allclose(handle.lines[0].get_ydata()[0], trajectory.force.values[0] / NM,
+                               rtol=1e-12)
+    assert all(line.get_color() == "red" and line.get_linewidth() == 3 for line in handle.lines)
+
+
+def test_hysteresis_statics_and_rigid(trajectory):
+    h = np.array([3e-9, 0.0, -3e-9])
+    statics = {"E_inf": (h, [1e-8, 2e-7, 5e-7]), "E0": (h, [1e-8, 4e-7, 9e-7])}
+    fmax = max(float(trajectory.force.max()), 9e-7)
+    rigid_h = np.array([3e-9, 1e-9, 0.1e-9, 0.01e-9, 0.0])
+    rigid_f = np.array([1e-8, 1e-7, 0.5 * fmax, 10 * fmax, np.inf])
+    handle = hysteresis_plot(trajectory, statics=statics, rigid=(rigid_h, rigid_f))
+    branches, s1, s2, rigid = handle.lines[:2], handle.lines[2], handle.lines[3], handle.lines[4]
+    assert len(handle.lines) == 5 and len(branches) == 2
+    assert (s1.get_marker(), s2.get_marker()) == ("^", "x")
+    assert s1.get_label() == "E_inf" and s1.get_linestyle() == "None"
+    np.testing.assert_allclose(s2.get_ydata(), [1e-2, 0.4, 0.9], rtol=1e-12)
+    # inf and the point above 1.2 × the largest force are dropped
+    np.testing.assert_allclose(rigid.get_xdata(), [3.0, 1.0, 0.1], rtol=1e-12)
+    assert rigid.get_label() == "rigid" and rigid.get_linewidth() == 2.5
+
+
+def test_hysteresis_log_axis(trajectory):
+    handle = hysteresis_plot(trajectory, log=True)
+    assert handle.ax.get_yscale() == "log"
+
+
+@pytest.mark.parametrize(("kwargs", "match"), [
+    ({"force_unit": "kN"}, "force_unit must be one of"),
+    ({"ax": "not axes"}, "ax must be a matplotlib Axes"),
+    ({"line_kw": {"linestyle": ":"}}, r"line_kw must not set \['linestyle'\]"),
+    ({"statics": [1, 2]}, "statics must be a mapping"),
+    ({"statics": {"a": (np.zeros(3), np.zeros(2))}}, "same length, got 3 and 2"),
+    ({"statics": {"a": (np.zeros(2), [1.0, np.inf])}}, r"statics\['a'\] values must be finite"),
+    ({"statics": {"a": (np.zeros(2), ["x", "y"])}}, "values must be real numbers"),
+    ({"statics": {"a": 5.0}}, r"statics\['a'\] must be a pair"),
+    ({"rigid": (np.zeros(2), [1.0, np.nan])}, "rigid values must not be NaN"),
+    ({"rigid": ([np.nan, 1.0], [1.0, 1.0])}, "rigid positions must be finite"),
+])
+def test_hysteresis_rejects_bad_input(trajectory, kwargs, match):
+    with pytest.raises(ParameterError, match=match):
+        hysteresis_plot(trajectory, **kwargs)
+
+
+def test_trajectory_must_be_a_dataset_with_the_variables(trajectory):
+    with pytest.raises(ParameterError, match="trajectory must be the xarray.Dataset"):
+        hysteresis_plot({"position": [0, 1], "force": [0, 1]})
+    with pytest.raises(SchemaError, match=r"missing \['force'\]"):
+        hysteresis_plot(trajectory.drop_vars("force"))
+    with pytest.raises(SchemaError, match="at least 2 output times, got 1"):
+        hysteresis_plot(trajectory.isel(time=[0]))
+
+
+# ── branch splitting ────────────────────────────────────────────────────────────────────────────
+
+
+@pytest.mark.parametrize(("position", "expected"), [
+    ([3, 2, 1, 2, 3], [(0, 2, True), (2, 4, False)]),
+    ([3, 3, 2, 2, 3], [(0, 3, True), (3, 4, False)]),       # holds join the move they interrupt
+    ([1, 2, 2, 1], [(0, 2, False), (2, 3, True)]),           # retraction first
+    ([5, 5, 5], [(0, 2, True)]),                            # never moves: one loading run
+    ([3, 1, 3, 1], [(0, 1, True), (1, 2, False), (2, 3, True)]),
+])
+def test_branches(position, expected):
+    assert _branches(np.asarray(position, dtype=float)) == expected
+
+
+# ── contact_radius_plot ─────────────────────────────────────────────────────────────────────────
+
+
+def test_contact_radius_plot(trajectory):
+    assert float(trajectory.contact_radius.max()) > 0  # the fixture reaches contact
+    h = np.array([0.0, -3e-9])
+    handle = contact_radius_plot(trajectory, statics={"static": (h, [50e-9, 150e-9])},
+                                 label="20 µm/s")
+    ax = handle.ax
+    assert ax.get_xlabel() == "position $h_0$ [nm]"
+    assert ax.get_ylabel() == "contact radius $a$ [nm]"
+    k = _turn(trajectory)
+    np.testing.assert_allclose(handle.lines[0].get_ydata(),
+                               trajectory.contact_radius.values[: k + 1] / NM, rtol=1e-12)
+    np.testing.assert_allclose(handle.lines[2].get_ydata(), [50.0, 150.0], rtol=1e-12)
+    um = contact_radius_plot(trajectory, radius_unit="um")
+    assert um.ax.get_ylabel() == "contact radius $a$ [µm]"
+    with pytest.raises(ParameterError, match="radius_unit must be one of"):
+        contact_radius_plot(trajectory, radius_unit="mm")
+    with pytest.raises(SchemaError, match=r"missing \['contact_radius'\]"):
+        contact_radius_plot(trajectory.drop_vars("contact_radius"))
+
+
+# ── profile_plot ────────────────────────────────────────────────────────────────────────────────
+
+
+def test_profile_plot_two_panels(trajectory):
+    handle = profile_plot(trajectory, r_max=300e-9, gap_max=8e-9)
+    load, unload = handle.axes
+    assert load.get_title() == "loading (approach)"
+    assert unload.get_title() == "unloading (retraction)"
+    assert load.get_xlabel() == "radius $r$ [nm]" and load.get_ylabel() == "local gap $h(r)$ [nm]"
+    np.testing.assert_allclose(load.get_xlim(), (0.0, 300.0), rtol=1e-12, atol=1e-12)
+    np.testing.assert_allclose(load.get_ylim(), (0.0, 8.0), rtol=1e-12, atol=1e-12)
+    times = trajectory.profile_time.values
+    t_turn = float(trajectory.time.values[_turn(trajectory)])
+    n_load = int(np.sum(times <= t_turn))
+    n_unload = int(np.sum(times >= t_turn))
+    assert len(load.lines) == n_load and len(unload.lines) == n_unload
+    assert len(handle.lines) == n_load + n_unload + 1  # + the colour bar
+    assert handle.lines[-1].ax.get_ylabel() == "position $h_0$ [nm]"
+    first = handle.lines[0]
+    r = trajectory.r.values
+    np.testing.assert_allclose(first.get_xdata(), r[r <= 300e-9] / NM, rtol=1e-12)
+    np.testing.assert_allclose(first.get_ydata(), trajectory.gap.values[0, r <= 300e-9] / NM,
+                               rtol=1e-12)
+
+
+def test_profile_plot_single_and_pair(trajectory, axes):
+    import matplotlib.pyplot as plt
+
+    one = profile_plot(trajectory, ax=axes)
+    assert one.axes == (axes,)
+    styles = {line.get_linestyle() for line in axes.lines}
+    assert styles == {"-", "--"}
+    pair = plt.subplots(1, 2)[1]
+    two = profile_plot(trajectory, ax=list(pair), radius_unit="um")
+    assert two.axes == (pair[0], pair[1]) and pair[1].get_xlabel() == "radius $r$ [µm]"
+
+
+@pytest.mark.parametrize(("kwargs", "error", "match"), [
+    ({"ax": (1, 2, 3)}, ParameterError, "ax must be None, one matplotlib Axes or a pair"),
+    ({"r_max": -1.0}, ParameterError, "r_max must be > 0"),
+    ({"gap_max": 0.0}, ParameterError, "gap_max must be > 0"),
+    ({"cmap": "no-such-map"}, ParameterError, "cmap must be a matplotlib colormap"),
+    ({"radius_unit": "km"}, ParameterError, "radius_unit must be one of"),
+])
+def test_profile_plot_rejects_bad_input(trajectory, kwargs, error, match):
+    with pytest.raises(error, match=match):
+        profile_plot(trajectory, **kwargs)
+
+
+def test_profile_plot_needs_profiles(trajectory):
+    with pytest.raises(SchemaError, match=r"profiles=N"):
+        profile_plot(trajectory.drop_vars(["gap", "deformation", "pressure", "profile_time"]))
+
+
+# ── force_time_plot ─────────────────────────────────────────────────────────────────────────────
+
+
+def test_force_time_plot(trajectory):
+    handle = force_time_plot(trajectory, label="F", t_start=0.1e-3)
+    (line,) = handle.lines
+    assert handle.ax.get_xlabel() == "time $t$ [ms]"
+    assert handle.ax.get_ylabel() == "force $F$ [µN]"
+    np.testing.assert_allclose(line.get_xdata(), (trajectory.time.values - 0.1e-3) / MS,
+                               rtol=1e-12, atol=1e-12)
+    assert line.get_label() == "F" and handle.ax.get_yscale() == "linear"
+
+
+def test_force_time_plot_log_difference(trajectory):
+    force = trajectory.force.values
+    reference = float(force[5])
+    handle = force_time_plot(trajectory, log=True, reference=reference, force_unit="nN",
+                             time_unit="us")
+    (line,) = handle.lines
+    assert handle.ax.get_yscale() == "log"
+    assert handle.ax.get_ylabel() == "$|F - F^*|$ [nN]"
+    assert handle.ax.get_xlabel() == "time $t$ [µs]"
+    y = np.asarray(line.get_ydata(), dtype=float)
+    assert np.isnan(y[5])  # |F − F*| = 0 cannot be drawn on a log axis
+    keep = np.arange(y.size) != 5
+    np.testing.assert_allclose(y[keep], np.abs(force - reference)[keep] / NM, rtol=1e-12)
+    linear = force_time_plot(trajectory, reference=reference)
+    assert linear.ax.get_ylabel() == "$F - F^*$ [µN]"
+    assert np.nanmin(linear.lines[0].get_ydata()) < 0
+
+
+@pytest.mark.parametrize(("kwargs", "match"), [
+    ({"time_unit": "h"}, "time_unit must be one of"),
+    ({"reference": np.inf}, "reference must be finite"),
+    ({"t_start": "soon"}, "t_start must be a real number"),
+    ({"line_kw": {"label": "x"}}, r"line_kw must not set \['label'\]"),
+])
+def test_force_time_plot_rejects_bad_input(trajectory, kwargs, match):
+    with pytest.raises(ParameterError, match=match):
+        force_time_plot(trajectory, **kwargs)
+
+
+def test_force_time_plot_of_a_ramp():
+    """A hold-free ramp is a single loading branch; its force rises monotonically."""
+    drive = Ramp.from_speed(5e-9, 2e-9, 50e-6)
+    ds = simulate(_problem(2e-9), drive, t_end=drive.duration,
+                  t_eval=np.linspace(0.0, drive.duration, 11), progress=False)
+    handle = hysteresis_plot(ds)
+    assert len(handle.lines) == 1 and handle.lines[0].get_linestyle() == "-"
+    assert np.all(np.diff(force_time_plot(ds).lines[0].get_ydata()) > 0)
+
+
+# ── notebooks/paper_figures.py ──────────────────────────────────────────────────────────────────
+
+
+def test_paper_figures_quick(tmp_path):
+    script = REPO / "notebooks" / "paper_figures.py"
+    env = {**os.environ, "MPLBACKEND": "Agg"}
+    done = subprocess.run([sys.executable, str(script), "--quick", "--out", str(tmp_path)],
+                          capture_output=True, text=True, env=env, timeout=120, check=False)
+    assert done.returncode == 0, done.stderr
+    for name in ("fig1", "fig2", "fig5", "fig6", "fig7", "fig8"):
+        png = (tmp_path / f"{name}.png").read_bytes()
+        assert png[:8] == b"\x89PNG\r\n\x1a\n" and len(png) > 20_000
+    results = json.loads((tmp_path / "figures.json").read_text())
+    assert results["parameters"]["quick"] is True
+    relaxed = {round(r["end_position_m"] / 1e-9): r["relaxed_load_N"]
+               for r in results["fig1"]["runs"]}
+    # paper Fig. 1: F* = 1.59 and 0.66 µN (3 digits quoted: tolerance half a unit in the last)
+    assert relaxed[-7] == pytest.approx(1.59e-6, abs=0.005e-6)
+    assert relaxed[-3] == pytest.approx(0.66e-6, abs=0.005e-6)
+    peaks = [r["peak_force_N"] for r in results["fig5"]["runs"]]
+    assert peaks == sorted(peaks)  # faster drives give larger peak forces (paper Fig. 5)
+    works = [r["hysteresis_work_J"] for r in results["fig8"]["runs"]]
+    assert all(w > 0 for w in works)
+    assert "Fig.1 tau=1 ms" in done.stdout
