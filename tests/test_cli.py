@@ -135,3 +135,42 @@ def test_trace_reader_errors(tmp_path):
     p.write_text("")
     with pytest.raises(ValueError, match="not a readable CSV"):
         read_trace(p)
+
+
+def test_spectrum_json_contract_and_plot(capsys, tmp_path):
+    png = tmp_path / "bode.png"
+    out = run_json(capsys, ["spectrum", "--h0", "2nm", "--eta", "0.1nm", "--omega-range", "10",
+                            "1e5", "7", "--json", "--plot", str(png)])
+    for key in ("omega", "amplitude", "stiffness", "phase_deg", "mean_force", "method"):
+        assert key in out
+    assert out["method"] == "linear" and len(out["omega"]) == 7
+    assert max(out["phase_deg"]) == pytest.approx(7.0, abs=0.6)
+    assert out["mean_force"][0] == pytest.approx(61.0e-9, abs=0.05e-9)
+    assert png.stat().st_size > 10_000
+
+
+def test_spectrum_methods_and_auto(capsys):
+    svda = run_json(capsys, ["spectrum", "--h0", "2nm", "--eta", "0.1nm", "--omega", "1kHz",
+                             "--method", "svda", "--json"])
+    assert svda["method"] == "svda"
+    auto = run_json(capsys, ["spectrum", "--h0", "2nm", "--eta", "0.01nm", "--omega", "100",
+                             "1000", "--method", "auto", "--json"])
+    assert auto["method"] == "linear" and "kappa*eta" in auto["explanation"]
+    td = run_json(capsys, ["spectrum", "--h0", "2nm", "--eta", "0.01nm", "--omega", "1000",
+                           "--method", "time-domain", "--periods", "2", "--json"])
+    lin = run_json(capsys, ["spectrum", "--h0", "2nm", "--eta", "0.01nm", "--omega", "1000",
+                            "--json"])
+    assert td["stiffness"][0] == pytest.approx(lin["stiffness"][0], rel=1e-3)
+
+
+@pytest.mark.parametrize(("argv", "message"), [
+    (["spectrum", "--h0", "2nm", "--eta", "0.1nm"], "give either --omega"),
+    (["spectrum", "--h0", "2nm", "--eta", "0.1nm", "--omega-range", "100", "10", "5"],
+     "0 < LO < HI"),
+    (["spectrum", "--h0", "2nm", "--eta", "0.1nm", "--omega", "-5"], "omega must be >= 0"),
+    (["spectrum", "--h0", "2nm", "--eta", "-1nm", "--omega", "5"], "eta must be > 0"),
+])
+def test_spectrum_user_errors(capsys, argv, message):
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert message in err and "Traceback" not in err

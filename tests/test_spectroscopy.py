@@ -178,3 +178,33 @@ def test_spectroscopy_bad_inputs(make_problem):
     prony = vf.PronySeries.from_moduli([1e10, 3e9, 1e9], [1e-4, 1e-3])
     with pytest.raises(vf.ParameterError, match="single-relaxation-time"):
         svda_spectrum(make_problem(prony, 2e-9), 2e-9, 1e-10, [1.0])
+
+
+def test_bode_plot_overlays_methods_with_error_bars(make_problem):
+    from viscoforce.plotting import bode_plot
+
+    problem = make_problem(SLS, 2e-9)
+    w = np.geomspace(10, 1e5, 12)
+    lin = linear_response(problem, 2e-9, 0.1e-9, w)
+    data = lin.copy()
+    data["phase_stderr"] = xr.full_like(lin.phase, 0.2)
+    handle = bode_plot({"exact": lin, "svda": svda_spectrum(problem, 2e-9, 0.1e-9, w),
+                        "data": data}, frequency_unit="Hz", magnitude="amplitude")
+    mag, phase = handle.axes
+    assert mag.get_xscale() == "log" and "Hz" in phase.get_xlabel()
+    assert "deg" in phase.get_ylabel() and "amplitude" in mag.get_ylabel()
+    assert len(handle.lines) == 6
+    x = mag.lines[0].get_xdata()
+    np.testing.assert_allclose(x, w / (2 * np.pi))
+    with pytest.raises(vf.ParameterError, match="magnitude must be"):
+        bode_plot(lin, magnitude="power")
+    with pytest.raises(SchemaError, match="has no 'phase'"):
+        bode_plot(lin.drop_vars("phase"))
+
+
+def test_sweep_in_parallel_equals_serial(make_problem):
+    problem = make_problem(SLS, 1.9e-9)
+    w = np.array([1e3, 3e3])
+    serial = sweep(problem, 2e-9, 0.1e-9, w, periods=2, settle=2e-3)
+    parallel = sweep(problem, 2e-9, 0.1e-9, w, periods=2, settle=2e-3, n_jobs=2)
+    np.testing.assert_allclose(parallel.phase, serial.phase, rtol=1e-12)

@@ -38,6 +38,7 @@ __all__ = [
     "contact_radius_plot",
     "profile_plot",
     "force_time_plot",
+    "bode_plot",
 ]
 
 ForceUnit = Literal["N", "mN", "uN", "nN", "pN"]
@@ -523,8 +524,90 @@ def force_time_plot(trajectory: xr.Dataset, *, ax: Axes | None = None, log: bool
 
 
 # ── frequency-domain plots ──────────────────────────────────────────────────────────────────────
-# bode_plot(spectrum, fit=None, *, ax=None, frequency_unit="Hz", phase_unit="deg") -> BodePlot
-# goes here (STYLE §1.7): amplitude and phase against a log ω axis, ω kept in rad/s inside.
-# Reuse _new_or_given_axes, _unit and PlotHandle (BodePlot may subclass it with
-# axes = (magnitude, phase)).
 
+FrequencyUnit = Literal["rad/s", "Hz"]
+Magnitude = Literal["stiffness", "amplitude"]
+_MAGNITUDE_LABELS = {"stiffness": "stiffness $|F_1|/\\eta$ [N/m]",
+                     "amplitude": "relative amplitude $a = |F_1|/\\bar F$"}
+
+
+def bode_plot(spectra: xr.Dataset | Mapping[str, xr.Dataset] | Sequence[xr.Dataset], *,
+              ax: Sequence[Axes] | None = None, magnitude: Magnitude = "stiffness",
+              frequency_unit: FrequencyUnit = "rad/s", markers: bool | None = None,
+              title: str | None = None) -> PlotHandle:
+    """Bode plot: magnitude and phase χ against a log frequency axis (data, methods, fits).
+
+    Parameters
+    ----------
+    spectra : Dataset, mapping label → Dataset, or sequence of Datasets
+        Spectra over ``omega`` [rad/s] with ``stiffness`` or ``amplitude`` and ``phase`` [degree]
+        (:mod:`viscoforce.schema`). Several are overlaid; a sequence is labelled by each
+        dataset's ``method`` attribute. ``<name>_stderr`` variables become error bars.
+    ax : pair of Axes, optional
+        (magnitude, phase) axes to draw on; default a new two-row figure.
+    magnitude : {"stiffness", "amplitude"}
+        Upper panel: |F1|/η [N/m] or a = |F1|/F̄.
+    frequency_unit : {"rad/s", "Hz"}
+        Display unit of the frequency axis (ω stays in rad/s inside).
+    markers : bool, optional
+        Draw markers (default: for spectra with ≤ 30 points, as measured data usually are).
+    title : str, optional
+        Figure title.
+
+    Returns
+    -------
+    PlotHandle
+        ``axes = (magnitude_axes, phase_axes)``.
+    """
+    import matplotlib.pyplot as plt
+
+    if magnitude not in _MAGNITUDE_LABELS:
+        raise ParameterError(f"magnitude must be 'stiffness' or 'amplitude', got {magnitude!r}")
+    if frequency_unit not in ("rad/s", "Hz"):
+        raise ParameterError(f"frequency_unit must be 'rad/s' or 'Hz', got {frequency_unit!r}")
+    if hasattr(spectra, "data_vars"):  # a Dataset (itself a Mapping, so test it first)
+        items = [(str(spectra.attrs.get("method", "spectrum")), spectra)]
+    elif isinstance(spectra, Mapping):
+        items = list(spectra.items())
+    else:
+        items = [(str(ds.attrs.get("method", f"spectrum {i + 1}")), ds)
+                 for i, ds in enumerate(spectra)]
+    if not items:
+        raise ParameterError("spectra must contain at least one spectrum")
+    if ax is None:
+        figure, axes = plt.subplots(2, 1, sharex=True, figsize=(6.4, 5.6), layout="constrained")
+    else:
+        if len(ax) != 2:
+            raise ParameterError("ax must be a pair (magnitude axes, phase axes)")
+        axes = tuple(ax)
+        figure = axes[0].figure
+    scale = 1.0 if frequency_unit == "rad/s" else 1.0 / (2.0 * np.pi)
+    drawn = []
+    for label, ds in items:
+        for name in ("omega", magnitude, "phase"):
+            if name not in ds.variables:
+                raise SchemaError(f"bode_plot: spectrum {label!r} has no '{name}'")
+        x = np.asarray(ds["omega"].values, dtype=float) * scale
+        show_markers = markers if markers is not None else x.size <= 30
+        style = {"marker": "o", "markersize": 4} if show_markers else {}
+        for panel, name in ((axes[0], magnitude), (axes[1], "phase")):
+            y = np.asarray(ds[name].values, dtype=float)
+            err = ds.get(f"{name}_stderr")
+            if err is not None:
+                art = panel.errorbar(x, y, yerr=np.asarray(err.values, dtype=float), label=label,
+                                     capsize=2, linestyle="none" if show_markers else "-",
+                                     **style)
+            else:
+                (art,) = panel.plot(x, y, label=label, **style)
+            drawn.append(art)
+    axes[0].set_xscale("log")
+    axes[0].set_ylabel(_MAGNITUDE_LABELS[magnitude])
+    axes[1].set_ylabel("phase $\\chi$ [deg] (force leads compression)")
+    sym = "$\\omega$ [rad/s]" if frequency_unit == "rad/s" else "$f = \\omega/2\\pi$ [Hz]"
+    axes[1].set_xlabel(f"frequency {sym}")
+    axes[0].legend(fontsize="small")
+    for a in axes:
+        a.grid(True, which="both", alpha=0.3)
+    if title:
+        figure.suptitle(title)
+    return PlotHandle(figure, tuple(axes), tuple(drawn))
