@@ -186,6 +186,12 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
                   tol=args.tol, profiles=args.profiles, progress=args.progress)
     if args.out:
         ds.to_netcdf(args.out, engine="scipy")
+    if args.plot:
+        from viscoforce.plotting import hysteresis_plot
+
+        handle = hysteresis_plot(ds, label=f"{type(material).__name__}")
+        handle.ax.set_title(str(ds.attrs["drive"]), fontsize="small")
+        handle.figure.savefig(args.plot, dpi=120, bbox_inches="tight")
     settings = {k: (v.item() if hasattr(v, "item") else v) for k, v in ds.attrs.items()}
     if args.json:
         print(json.dumps({
@@ -208,8 +214,9 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
             ("final u(0)", float(ds.u_center[-1]), "length"),
             ("max contact radius", float(ds.contact_radius.max()), "length"),
         ])
-        if args.out:
-            print(f"wrote {args.out}")
+        for path in (args.out, args.plot):
+            if path:
+                print(f"wrote {path}")
     return 0
 
 
@@ -333,6 +340,8 @@ def _build_parser() -> tuple[argparse.ArgumentParser, set[str], set[str]]:
     si.add_argument("--tol", type=_LENGTH, default=None, metavar="LENGTH",
                     help="local error tolerance of adaptive steps (default 1e-5 debye lengths)")
     si.add_argument("--out", default=None, metavar="FILE.nc", help="write the dataset (netCDF)")
+    si.add_argument("--plot", default=None, metavar="FILE.png",
+                    help="write the force-position (hysteresis) plot")
     si.add_argument("--progress", action=argparse.BooleanOptionalAction, default=None,
                     help="progress bar (default: when stderr is a terminal)")
     si.add_argument("--json", action="store_true", help="print one JSON object (SI units)")
