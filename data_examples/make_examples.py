@@ -1,6 +1,6 @@
 """Regenerate the bundled example files (deterministic: fixed seed).
 
-    python data_examples/make_examples.py
+python data_examples/make_examples.py
 """
 
 from __future__ import annotations
@@ -13,8 +13,11 @@ HERE = Path(__file__).resolve().parent
 
 
 def approach_retract_trace(path: Path) -> None:
-    """A piezo position trace like an AFM force-curve export: 10 → −8 → 10 nm at 2 µm/s,
-    sampled at 25 kHz, with 5 pm rms sensor noise (seed 7) and a 0.2 ms dwell at the turn."""
+    """Write a piezo position trace like an AFM force-curve export.
+
+    10 → −8 → 10 nm at 2 µm/s, sampled at 25 kHz, with 5 pm rms sensor noise (seed 7) and a
+    0.2 ms dwell at the turn.
+    """
     rng = np.random.default_rng(7)
     speed, top, turn, dwell, rate = 2e-6, 10e-9, -8e-9, 0.2e-3, 25e3
     t_ramp = (top - turn) / speed

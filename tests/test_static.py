@@ -8,8 +8,8 @@ import pytest
 import xarray as xr
 
 import viscoforce as vf
-from viscoforce.solvers.newton import solve_gap
 from tests.conftest import REFERENCE_DIR
+from viscoforce.solvers.newton import solve_gap
 
 PAPER_STATIC = [  # (h0 [m], load [N] as printed, absolute tolerance = half the last printed digit)
     (-7e-9, 1.59e-6, 0.005e-6),

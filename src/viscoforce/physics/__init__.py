@@ -1,0 +1,1 @@
+"""Physics: surface-force laws, materials and geometry."""

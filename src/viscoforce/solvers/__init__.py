@@ -1,0 +1,1 @@
+"""Numerics: Newton equilibria, time steppers and the time loop."""

@@ -103,7 +103,7 @@ class TimeStepper(ABC):
         self.xtol = 1e-6 * problem.surface_force.decay_length
 
     def response(self, pressure: FloatArray) -> FloatArray:
-        """q = A p at the nodes and the centre [m·Pa]."""
+        """Q = A p at the nodes and the centre [m·Pa]."""
         return self.influence_aug @ pressure
 
     def relaxed_state(self, time: float, position: float) -> State:
@@ -115,7 +115,7 @@ class TimeStepper(ABC):
         deformation = -(2.0 / e_inf) * q
         return State(time, position, sol.gap, sol.pressure, q, memory, deformation)
 
-    def reset_history(self) -> None:
+    def reset_history(self) -> None:  # noqa: B027 - optional hook with a no-op default
         """Forget multi-step history (called at drive kinks); one-step methods need nothing."""
 
     @abstractmethod

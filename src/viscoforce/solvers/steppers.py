@@ -126,7 +126,7 @@ class ExponentialTrapezoidal(_Exponential):
 
     @staticmethod
     def weights(x):
-        """a = 1 − φ(x), b = φ(x) − e^{−x}."""
+        """A = 1 − φ(x), b = φ(x) − e^{−x}."""
         phi = _phi(x)
         return 1.0 - phi, phi - np.exp(-x)
 
@@ -139,7 +139,7 @@ class ExponentialEuler(_Exponential):
 
     @staticmethod
     def weights(x):
-        """a = 1 − e^{−x}, b = 0."""
+        """A = 1 − e^{−x}, b = 0."""
         return -np.expm1(-x), np.zeros_like(x)
 
 

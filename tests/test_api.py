@@ -1,0 +1,51 @@
+"""Public API hygiene: names, docstrings, README snippet, import layers."""
+
+from __future__ import annotations
+
+import inspect
+import re
+import shutil
+import subprocess
+import sys
+
+import pytest
+
+import viscoforce as vf
+from tests.conftest import REPO
+
+
+def test_public_names_have_numpydoc_docstrings():
+    for name in vf.__all__:
+        if name.startswith("__"):
+            continue
+        obj = getattr(vf, name)
+        assert inspect.getdoc(obj), f"{name} has no docstring"
+
+
+def test_public_function_parameters_are_documented():
+    for func in (vf.static_equilibrium, vf.default_grid):
+        doc = inspect.getdoc(func)
+        for param in inspect.signature(func).parameters:
+            assert re.search(rf"\b{param}\b", doc), f"{func.__name__}: '{param}' undocumented"
+
+
+def test_import_has_no_side_effects_on_threads_or_matplotlib():
+    code = ("import os, sys; import viscoforce, viscoforce.plotting; "
+            "assert 'matplotlib' not in sys.modules; "
+            "assert 'OPENBLAS_NUM_THREADS' not in os.environ")
+    env = {k: v for k, v in __import__("os").environ.items() if not k.endswith("NUM_THREADS")}
+    subprocess.run([sys.executable, "-c", code], check=True, env=env, timeout=120)
+
+
+def test_readme_python_snippet_runs():
+    text = (REPO / "README.md").read_text()
+    block = re.search(r"```python\n(.*?)```", text, re.S).group(1)
+    namespace: dict = {}
+    exec(compile(block, "README.md", "exec"), namespace)  # noqa: S102 - our own README
+    assert float(namespace["static"].force) == pytest.approx(1.08e-6, abs=5e-9)
+
+
+@pytest.mark.skipif(shutil.which("lint-imports") is None, reason="import-linter not installed")
+def test_import_layers_hold():
+    proc = subprocess.run(["lint-imports"], cwd=REPO, capture_output=True, text=True, timeout=120)
+    assert proc.returncode == 0, proc.stdout[-2000:]
