@@ -180,7 +180,7 @@ def test_dataset_units_profiles_and_netcdf(make_problem, tmp_path):
 
 
 def test_explicit_euler_above_its_limit_raises_with_the_fix(make_problem):
-    with pytest.raises(vf.StabilityError, match=r"unstable at t = .* use dt <"):
+    with pytest.raises(vf.StabilityError, match=r"step \d+: explicit Euler is unstable at t = .* use dt <"):
         loop(make_problem, 5e-6, n=3, method="euler", dt=5e-4)
 
 

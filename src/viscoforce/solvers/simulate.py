@@ -15,13 +15,8 @@ import numpy as np
 import xarray as xr
 
 from viscoforce._typing import FloatArray, SeparationHistory
-from viscoforce._validation import (
-    require_increasing,
-    require_int,
-    require_nonnegative,
-    require_positive,
-)
-from viscoforce.exceptions import ConvergenceError, GapClosureError, ParameterError
+from viscoforce._validation import require_increasing, require_int, require_positive
+from viscoforce.exceptions import ConvergenceError, GapClosureError, ParameterError, StabilityError
 from viscoforce.problem import ContactProblem, contact_radius
 from viscoforce.solvers.base import State, TimeStepper
 from viscoforce.solvers.steppers import DEFAULT_METHOD, METHODS
@@ -157,6 +152,8 @@ def simulate(problem: ContactProblem, drive: SeparationHistory, *, t_end: float 
                     h = 0.5 * remaining
                 try:
                     outcome = stepper.step(state, drive, h)
+                except StabilityError as exc:
+                    raise StabilityError(f"step {steps + 1}: {exc}") from None
                 except (ConvergenceError, GapClosureError) as exc:
                     if fixed or h < 1e-9 * max_step:
                         raise type(exc)(
@@ -256,4 +253,4 @@ def _describe(drive: SeparationHistory) -> str:
     return describe() if callable(describe) else type(drive).__name__
 
 
-__all__ = ["simulate", "default_end_time", "DEFAULT_TOL", "require_nonnegative"]
+__all__ = ["simulate", "default_end_time", "DEFAULT_TOL"]
