@@ -33,7 +33,12 @@ from viscoforce._validation import (
     require_nonnegative,
     require_positive,
 )
-from viscoforce.closed_form import derjaguin_force, svda_static_deformation
+from viscoforce.closed_form import (
+    _sls_moduli,
+    _surface,
+    derjaguin_force,
+    svda_static_deformation,
+)
 from viscoforce.exceptions import ConvergenceError, ParameterError
 
 __all__ = ["SVDATrajectory", "solve_svda", "SVDAHarmonicSimulation",
@@ -120,17 +125,6 @@ class _SVDARates:
         return np.array([[(d_numerator * (1.0 + f) - numerator * f) / (1.0 + f) ** 2]])
 
 
-def _check_material(E0: float, E_inf: float, tau: float) -> tuple[float, float, float]:
-    e0 = require_positive("E0", E0)
-    e_inf = require_positive("E_inf", E_inf)
-    tau_ = require_positive("tau", tau)
-    if e0 < e_inf:
-        raise ParameterError(
-            f"E0 (instantaneous modulus) must be >= E_inf (relaxed modulus) [Pa], got "
-            f"E0={E0!r} < E_inf={E_inf!r}")
-    return e0, e_inf, tau_
-
-
 def _check_solver(method: str, rtol: float, atol: float | None,
                   debye_length: float) -> tuple[float, float]:
     if method not in METHODS:
@@ -195,11 +189,9 @@ def solve_svda(drive: SeparationHistory, *, E0: float, E_inf: float, tau: float,
         raise ParameterError(
             f"drive must provide position(t), velocity(t), duration and breakpoints() "
             f"(SeparationHistory), got {type(drive).__name__}")
-    e0, e_inf, tau_ = _check_material(E0, E_inf, tau)
-    r = require_positive("radius", radius)
-    p = require_positive("pressure", pressure)
-    lam = require_positive("debye_length", debye_length)
-    kappa = 1.0 / lam
+    e0, e_inf, tau_ = _sls_moduli(E0, E_inf, tau)
+    r, p, kappa = _surface(radius, pressure, debye_length)
+    lam = float(debye_length)
     times = require_increasing("t_eval", t_eval)
     if times[0] < 0:
         raise ParameterError(f"t_eval must start at >= 0 s, got t_eval[0]={times[0]!r}")
@@ -360,7 +352,7 @@ def svda_harmonic_response_ode(omega: float, *, position: float, eta: float, E0:
     w = require_positive("omega", omega)
     h_mean = require_finite("position", position)
     eta_ = require_positive("eta", eta)
-    _, _, tau_ = _check_material(E0, E_inf, tau)
+    _, _, tau_ = _sls_moduli(E0, E_inf, tau)
     n_periods = require_int("periods", periods, 1)
     n_samples = require_int("samples_per_period", samples_per_period, 8)
     settle = 20.0 * tau_ if settle_time is None else require_nonnegative("settle_time",

@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import math
 from abc import ABC, abstractmethod
+from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -159,12 +160,45 @@ class _Drive(ABC):
         return out
 
 
-def _linear_position(start: float, end: float, duration: float, t: FloatArray) -> FloatArray:
-    return start + (end - start) * (t / duration)
-
-
 def _endpoints(duration: float) -> FloatArray:
     return np.array([0.0, duration])
+
+
+class _LinearMove(_Drive):
+    """Constant-velocity move from ``start`` to ``end`` over ``duration``: Ramp and Step.
+
+    Subclasses are frozen dataclasses with ``start`` and ``end`` [m] fields and a ``duration`` [s]
+    (a field or a property).
+    """
+
+    __slots__ = ()
+    start: float
+    end: float
+    duration: float
+
+    @property
+    def start_position(self) -> float:
+        """Position at t = 0 [m]."""
+        return self.start
+
+    @property
+    def end_position(self) -> float:
+        """Position at t = duration [m]."""
+        return self.end
+
+    def _position_active(self, t: FloatArray) -> FloatArray:
+        return self.start + (self.end - self.start) * (t / self.duration)
+
+    def _velocity_active(self, t: FloatArray) -> FloatArray:
+        return np.full(t.shape, (self.end - self.start) / self.duration)
+
+    def breakpoints(self) -> FloatArray:
+        """Return the kink times [s]: 0 and duration."""
+        return _endpoints(self.duration)
+
+    def extent(self) -> tuple[float, float]:
+        """Return the (min, max) position over [0, duration] [m]."""
+        return (min(self.start, self.end), max(self.start, self.end))
 
 
 @dataclass(frozen=True)
@@ -216,7 +250,7 @@ class Hold(_Drive):
 
 
 @dataclass(frozen=True)
-class Ramp(_Drive):
+class Ramp(_LinearMove):
     """Move linearly from ``start`` to ``end`` in ``duration``.
 
     Parameters
@@ -274,30 +308,6 @@ class Ramp(_Drive):
         """Signed velocity (end − start)/duration [m/s]."""
         return (self.end - self.start) / self.duration
 
-    @property
-    def start_position(self) -> float:
-        """Position at t = 0 [m]."""
-        return self.start
-
-    @property
-    def end_position(self) -> float:
-        """Position at t = duration [m]."""
-        return self.end
-
-    def _position_active(self, t: FloatArray) -> FloatArray:
-        return _linear_position(self.start, self.end, self.duration, t)
-
-    def _velocity_active(self, t: FloatArray) -> FloatArray:
-        return np.full(t.shape, self.speed)
-
-    def breakpoints(self) -> FloatArray:
-        """Return the kink times [s]: 0 and duration."""
-        return _endpoints(self.duration)
-
-    def extent(self) -> tuple[float, float]:
-        """Return the (min, max) position over [0, duration] [m]."""
-        return (min(self.start, self.end), max(self.start, self.end))
-
     def describe(self) -> str:
         """Return a one-line summary, e.g. ``"ramp −5 nm → −7 nm in 1 ms (−2 µm/s)"``."""
         return (f"ramp {_si(self.start, 'm')} \u2192 {_si(self.end, 'm')} in "
@@ -305,7 +315,7 @@ class Ramp(_Drive):
 
 
 @dataclass(frozen=True)
-class Step(_Drive):
+class Step(_LinearMove):
     """A fast linear move from ``start`` to ``end`` taking ``rise_time`` (duration = rise_time).
 
     The paper's Fig. 1 steps take 0.1 ms (the default). A step is a short ramp: the solvers need
@@ -334,30 +344,6 @@ class Step(_Drive):
     def duration(self) -> float:
         """Duration of the drive [s] (= rise_time)."""
         return self.rise_time
-
-    @property
-    def start_position(self) -> float:
-        """Position at t = 0 [m]."""
-        return self.start
-
-    @property
-    def end_position(self) -> float:
-        """Position at t = rise_time [m]."""
-        return self.end
-
-    def _position_active(self, t: FloatArray) -> FloatArray:
-        return _linear_position(self.start, self.end, self.rise_time, t)
-
-    def _velocity_active(self, t: FloatArray) -> FloatArray:
-        return np.full(t.shape, (self.end - self.start) / self.rise_time)
-
-    def breakpoints(self) -> FloatArray:
-        """Return the kink times [s]: 0 and rise_time."""
-        return _endpoints(self.rise_time)
-
-    def extent(self) -> tuple[float, float]:
-        """Return the (min, max) position over [0, rise_time] [m]."""
-        return (min(self.start, self.end), max(self.start, self.end))
 
     def describe(self) -> str:
         """Return a one-line summary, e.g. ``"step −5 nm → −7 nm (rise time 100 µs)"``."""
@@ -597,26 +583,27 @@ class Sequence(_Drive):
         idx = np.searchsorted(self._offsets[:-1], t, side="right") - 1
         return np.clip(idx, 0, len(self.segments) - 1)
 
-    def _position_active(self, t: FloatArray) -> FloatArray:
+    def _per_segment(self, t: FloatArray,
+                     evaluate: Callable[[_Drive, FloatArray], FloatArray]) -> FloatArray:
+        """Return ``evaluate(segment, local time [s])`` at each of the 1-D times ``t`` [s]."""
         idx = self._segment_index(t)
         out = np.empty(t.shape)
         for k, seg in enumerate(self.segments):
             mask = idx == k
             if np.any(mask):
-                out[mask] = seg.position(t[mask] - self._offsets[k])
+                out[mask] = evaluate(seg, t[mask] - self._offsets[k])
         return out
 
+    def _position_active(self, t: FloatArray) -> FloatArray:
+        return self._per_segment(t, lambda seg, local: seg.position(local))
+
     def _velocity_active(self, t: FloatArray) -> FloatArray:
-        idx = self._segment_index(t)
-        out = np.empty(t.shape)
-        for k, seg in enumerate(self.segments):
-            mask = idx == k
-            if np.any(mask):
-                # keep rounding of t - offset from landing on the segment's end (velocity 0 there)
-                local = np.minimum(t[mask] - self._offsets[k],
-                                   np.nextafter(seg.duration, 0.0))  # type: ignore[attr-defined]
-                out[mask] = seg.velocity(local)
-        return out
+        def velocity(seg: _Drive, local: FloatArray) -> FloatArray:
+            # keep rounding of t - offset from landing on the segment's end (velocity 0 there)
+            end = np.nextafter(seg.duration, 0.0)  # type: ignore[attr-defined]
+            return seg.velocity(np.minimum(local, end))
+
+        return self._per_segment(t, velocity)
 
     def breakpoints(self) -> FloatArray:
         """Return the union of the segments' breakpoints shifted by their start times [s], sorted.
