@@ -41,14 +41,15 @@ DEFAULT_SWEEP_TOL = 1e-5
 
 def _one_frequency(problem: ContactProblem, position: float, eta: float, omega: float,
                    periods: int, settle: float, samples: int, tol: float,
-                   method: str) -> tuple[complex, float, int]:
+                   method: str, steps_per_period: int | None) -> tuple[complex, float, int]:
     period = 2.0 * math.pi / omega
     n_settle = math.ceil(settle / period - 1e-9)
     drive = Sinusoid(position, eta, omega, periods=float(n_settle + periods))
     t0 = n_settle * period
     t_eval = t0 + period * np.arange(periods * samples + 1) / samples
+    dt = None if steps_per_period is None else period / steps_per_period
     ds = simulate(problem, drive, t_end=drive.duration, t_eval=t_eval, tol=tol, method=method,
-                  progress=False)
+                  dt=dt, progress=False)
     force, time = ds.force.values, ds.time.values
     first = complex(demodulate(force, time, omega))
     mean = float(np.real(demodulate(force, time, omega, harmonic=0)))
@@ -58,7 +59,8 @@ def _one_frequency(problem: ContactProblem, position: float, eta: float, omega: 
 
 def sweep(problem: ContactProblem, position: float, eta: float, omega: ArrayLike, *,
           periods: int = 4, settle: float | None = None, samples_per_period: int = 64,
-          tol: float | None = None, method: str = "exponential", n_jobs: int = 1,
+          tol: float | None = None, method: str = "exponential",
+          steps_per_period: int | None = None, n_jobs: int = 1,
           progress: bool | None = None) -> xr.Dataset:
     """Time-domain force spectroscopy: simulate each ω to steady state and demodulate.
 
@@ -83,6 +85,10 @@ def sweep(problem: ContactProblem, position: float, eta: float, omega: ArrayLike
         Local error tolerance of the stepper [m]; default 1e-5·η.
     method : str
         Time stepper (see :func:`~viscoforce.solvers.simulate.simulate`).
+    steps_per_period : int, optional
+        Fixed time step of period/``steps_per_period`` (default: adaptive, or explicit Euler's
+        default step); steps also land on every output, so a step coarser than
+        period/``samples_per_period`` needs a matching ``samples_per_period``.
     n_jobs : int
         Worker processes for the frequencies (1: serial).
     progress : bool, optional
@@ -107,9 +113,11 @@ def sweep(problem: ContactProblem, position: float, eta: float, omega: ArrayLike
     if settle < 0:
         raise ParameterError(f"settle must be >= 0 s, got {settle!r}")
     tol = DEFAULT_SWEEP_TOL * eta if tol is None else require_positive("tol", tol)
+    if steps_per_period is not None:
+        steps_per_period = require_int("steps_per_period", steps_per_period, 1)
     problem.check_covers(position - eta)
-    args = [(problem, position, eta, float(w), periods, settle, samples, tol, method)
-            for w in omega]
+    args = [(problem, position, eta, float(w), periods, settle, samples, tol, method,
+             steps_per_period) for w in omega]
     show = sys.stderr.isatty() if progress is None else progress
     if n_jobs > 1 and len(omega) > 1:
         with ProcessPoolExecutor(max_workers=n_jobs) as pool:
@@ -123,6 +131,7 @@ def sweep(problem: ContactProblem, position: float, eta: float, omega: ArrayLike
     attrs.update({"method": "time-domain", "position": float(position), "eta": eta,
                   "periods": periods, "settle": settle, "samples_per_period": samples,
                   "tol": tol, "stepper": method,
+                  "steps_per_period": 0 if steps_per_period is None else steps_per_period,
                   "phase_convention": "force leads compression, degrees"})
     ds = make_spectrum(omega, k, mean, eta, attrs=attrs)
     ds["steps"] = xr.DataArray(np.array([r[2] for r in results]), dims="omega",
