@@ -150,8 +150,8 @@ def _curve(name: str, curve: Any, *, finite_y: bool = True) -> tuple[FloatArray,
     try:
         x_raw, y_raw = curve
     except (TypeError, ValueError):
-        raise ParameterError(f"{name} must be a pair (positions [m], values), got {curve!r}") \
-            from None
+        raise ParameterError(
+            f"{name} must be a pair (positions [m], values), got {curve!r}") from None
     x = as_float_1d(f"{name} positions", x_raw)
     try:
         y = np.atleast_1d(np.asarray(y_raw, dtype=float))
