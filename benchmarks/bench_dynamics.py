@@ -22,19 +22,12 @@ BLAS is pinned to one thread. Run ``python benchmarks/bench_dynamics.py [--quick
 
 from __future__ import annotations
 
-import argparse
 import cProfile
-import csv
-import gc
-import json
 import math
 import os
-import platform
 import pstats
-import statistics
 import sys
 import time
-from datetime import datetime, timezone
 from pathlib import Path
 
 import matplotlib
@@ -43,14 +36,27 @@ matplotlib.use("Agg")
 
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
-import scipy  # noqa: E402
-from threadpoolctl import threadpool_info, threadpool_limits  # noqa: E402
+from threadpoolctl import threadpool_limits  # noqa: E402
 
 import viscoforce as vf  # noqa: E402
 from viscoforce.exceptions import ViscoforceError  # noqa: E402
 from viscoforce.experiments import Triangle  # noqa: E402
 from viscoforce.solvers.simulate import DEFAULT_TOL, simulate  # noqa: E402
 from viscoforce.solvers.steppers import DEFAULT_METHOD, METHODS  # noqa: E402
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))  # benchmarks/_common.py, from any cwd
+from _common import (  # noqa: E402
+    fmt,
+    machine_facts,
+    parse_args,
+    pf,
+    print_machine,
+    report_head,
+    run_end,
+    timed,
+    write_csv,
+    write_json,
+)
 
 # the paper's Fig. 5 system and loop
 RADIUS = 10e-6  # sphere radius [m]
@@ -100,31 +106,10 @@ def run_loop(problem, drive, t_eval, method: str, *, tol=None, dt=None, max_step
                     dt=dt, max_step=max_step, progress=False)
 
 
-def timed(fn, repeats: int, extend_cheap: bool) -> tuple[object, dict]:
-    """Run ``fn`` ``repeats`` times (2·repeats + 1 if a run is cheap and ``extend_cheap``), gc off.
-
-    Returns the first result (runs are deterministic) and the wall/CPU statistics [s].
-    """
-    wall, cpu, result = [], [], None
-    gc_was_on = gc.isenabled()
-    gc.disable()
-    try:
-        n = repeats
-        while len(wall) < n:
-            c0, t0 = time.process_time(), time.perf_counter()
-            out = fn()
-            t1, c1 = time.perf_counter(), time.process_time()
-            wall.append(t1 - t0)
-            cpu.append(c1 - c0)
-            if result is None:
-                result = out
-                if extend_cheap and wall[0] < CHEAP_RUN:
-                    n = 2 * repeats + 1
-    finally:
-        if gc_was_on:
-            gc.enable()
-    return result, {"time_median_s": statistics.median(wall), "time_min_s": min(wall),
-                    "cpu_median_s": statistics.median(cpu), "repeats": len(wall)}
+def timed_run(fn, repeats: int, extend_cheap: bool) -> tuple[object, dict]:
+    """Time ``fn`` (see ``_common.timed``): 2·repeats + 1 runs if a run is cheap and ``extend_cheap``."""
+    return timed(fn, repeats, cheap_below=CHEAP_RUN if extend_cheap else None,
+                 cheap_repeats=2 * repeats + 1)
 
 
 def force_error(force: np.ndarray, ref_force: np.ndarray) -> float:
@@ -152,52 +137,6 @@ def time_at_error(points: list[tuple[float, float]], target: float) -> tuple[flo
         return math.nan, "n/a"
     s = math.log(target / e1) / math.log(e2 / e1)
     return math.exp(math.log(t1) + s * math.log(t2 / t1)), "extrapolated"
-
-
-def clean(obj):
-    """JSON-safe copy: NaN/inf → None, numpy scalars → Python."""
-    if isinstance(obj, dict):
-        return {k: clean(v) for k, v in obj.items()}
-    if isinstance(obj, list | tuple):
-        return [clean(v) for v in obj]
-    if isinstance(obj, np.generic):
-        obj = obj.item()
-    if isinstance(obj, float) and not math.isfinite(obj):
-        return None
-    return obj
-
-
-def load_average() -> list[float] | None:
-    try:
-        return [round(x, 2) for x in os.getloadavg()]
-    except (AttributeError, OSError):
-        return None
-
-
-def cpu_model() -> str:
-    try:
-        for line in Path("/proc/cpuinfo").read_text().splitlines():
-            if line.startswith("model name"):
-                return line.split(":", 1)[1].strip()
-    except OSError:
-        pass
-    return platform.processor() or platform.machine()
-
-
-def machine_facts() -> dict:
-    blas = [{"internal_api": d.get("internal_api"), "version": d.get("version"),
-             "num_threads": d.get("num_threads"), "threading_layer": d.get("threading_layer"),
-             "architecture": d.get("architecture"), "library": Path(d.get("filepath", "")).name}
-            for d in threadpool_info() if d.get("user_api") == "blas"]
-    return {"python": platform.python_version(), "implementation": platform.python_implementation(),
-            "platform": platform.platform(), "cpu": cpu_model(), "cpu_count": os.cpu_count(),
-            "numpy": np.__version__, "scipy": scipy.__version__, "viscoforce": vf.__version__,
-            "blas": blas, "blas_threads": sorted({b["num_threads"] for b in blas}),
-            "loadavg_start": load_average()}
-
-
-def fmt(x: float, spec: str = "9.2e") -> str:
-    return "n/a".rjust(int(spec.split(".")[0])) if not math.isfinite(x) else format(x, spec)
 
 
 # ── parts 1–2: reference and sweep ───────────────────────────────────────────────────────────────
@@ -243,8 +182,8 @@ def sweep(problem, drive, ref: dict, tols, dts, repeats: int, extend: bool) -> l
                    "is_default": bool(method == DEFAULT_METHOD and mode == "tol"
                                       and value == default_tol)}
             try:
-                ds, stats = timed(lambda m=method, k=kw: run_loop(problem, drive, t_eval, m, **k),
-                                  repeats, extend)
+                ds, stats = timed_run(
+                    lambda m=method, k=kw: run_loop(problem, drive, t_eval, m, **k), repeats, extend)
                 row.update({"status": "ok", **stats, "steps": int(ds.attrs["steps"]),
                             "rejected_steps": int(ds.attrs["rejected_steps"]),
                             "newton_iterations": int(ds.attrs["newton_iterations"]),
@@ -304,8 +243,8 @@ def outputs_effect(problem, drive, ref: dict, repeats: int, extend: bool) -> lis
     rows = []
     for n, ref_force in ((N_OUTPUTS, ref["force"]), (N_OUTPUTS_DENSE, ref["force_dense"])):
         t_eval = output_times(drive, n)
-        ds, stats = timed(lambda te=t_eval: run_loop(problem, drive, te, DEFAULT_METHOD), repeats,
-                          extend)
+        ds, stats = timed_run(lambda te=t_eval: run_loop(problem, drive, te, DEFAULT_METHOD),
+                              repeats, extend)
         rows.append({"outputs": n, **stats, "steps": int(ds.attrs["steps"]),
                      "rejected_steps": int(ds.attrs["rejected_steps"]),
                      "newton_iterations": int(ds.attrs["newton_iterations"]),
@@ -425,14 +364,6 @@ def print_row(r: dict) -> None:
           f"{r['newton_iterations']:6d} {fmt(r['max_force_error'])}{mark}", flush=True)
 
 
-def write_csv(rows: list[dict], path: Path) -> None:
-    keys = list(dict.fromkeys(k for r in rows for k in r))
-    with path.open("w", newline="") as fh:
-        writer = csv.DictWriter(fh, fieldnames=keys)
-        writer.writeheader()
-        writer.writerows(rows)
-
-
 def summarise(default_row: dict, eq: dict) -> dict:
     time_ok = default_row["time_median_s"] <= TARGET_TIME
     error_ok = default_row["max_force_error"] <= TARGET_ERROR
@@ -444,26 +375,15 @@ def summarise(default_row: dict, eq: dict) -> dict:
             "default_cpu_s": default_row["cpu_median_s"],
             "default_error": default_row["max_force_error"], "default_steps": default_row["steps"],
             "speedup_vs_euler": speedup, "time_passed": time_ok, "error_passed": error_ok,
-            "speedup_passed": speed_ok, "passed": ok, "verdict": "PASS" if ok else "FAIL"}
-
-
-def pf(flag: bool) -> str:
-    return "PASS" if flag else "FAIL"
+            "speedup_passed": speed_ok, "passed": ok, "verdict": pf(ok)}
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--quick", action="store_true",
-                        help="smoke run (< 15 s): looser reference, two sweep points per line, "
-                             "one sample per point")
-    parser.add_argument("--out", type=Path, default=Path(__file__).resolve().parent / "out",
-                        help="output folder (default: benchmarks/out next to this script)")
-    parser.add_argument("--repeats", type=int, default=None,
-                        help="timed runs per point (default 3, 1 with --quick); runs faster than "
-                             f"{CHEAP_RUN:g} s get 2*repeats+1")
-    args = parser.parse_args(argv)
-    if args.repeats is not None and args.repeats < 1:
-        parser.error("--repeats must be >= 1")
+    args = parse_args(argv, doc=__doc__,
+                      quick_help="smoke run (< 15 s): looser reference, two sweep points per "
+                                 "line, one sample per point",
+                      repeats_help="timed runs per point (default 3, 1 with --quick); runs faster "
+                                   f"than {CHEAP_RUN:g} s get 2*repeats+1")
     repeats = args.repeats or (1 if args.quick else 3)
     extend = not args.quick  # cheap points get 2·repeats + 1 runs (not in a smoke run)
     tols, dts = (QUICK_TOLS, QUICK_DTS) if args.quick else (TOLS, DTS)
@@ -474,12 +394,7 @@ def main(argv: list[str] | None = None) -> int:
         machine = machine_facts()
         print(f"viscoforce {machine['viscoforce']} dynamics benchmark"
               f"{' (quick)' if args.quick else ''}: Fig. 5 loop")
-        print(f"python {machine['python']} ({machine['implementation']}), numpy "
-              f"{machine['numpy']}, scipy {machine['scipy']}, CPU {machine['cpu']}, "
-              f"os.cpu_count() = {machine['cpu_count']}, {machine['platform']}")
-        for b in machine["blas"]:
-            print(f"BLAS: {b['internal_api']} {b['version']} ({b['library']}, "
-                  f"{b['architecture']}), num_threads = {b['num_threads']}")
+        print_machine(machine)
         extra = f" ({2 * repeats + 1} if a run takes < {CHEAP_RUN:g} s)" if extend else ""
         print(f"timing: median of {repeats} run(s) per point{extra}, gc off, "
               f"time.perf_counter; load average {machine['loadavg_start']}")
@@ -536,15 +451,11 @@ def main(argv: list[str] | None = None) -> int:
     plot(rows, eq, png)
     write_csv(rows, sweep_csv)
     summary = summarise(default_row, eq)
-    summary["wall_time_s"] = time.perf_counter() - t_start
-    summary["loadavg_end"] = load_average()
+    summary.update(run_end(t_start))
     ref_json = {k: v for k, v in ref.items() if k not in ("force", "force_dense")}
     ref_json["force"] = ref["force"].tolist()
     report = {
-        "schema": SCHEMA,
-        "created": datetime.now(timezone.utc).isoformat(timespec="seconds"),
-        "quick": args.quick,
-        "machine": machine,
+        **report_head(SCHEMA, args.quick, machine),
         "target": {"time_s": TARGET_TIME, "max_force_error": TARGET_ERROR,
                    "speedup_vs_euler": TARGET_SPEEDUP,
                    "error_definition": "max |F - F_ref| / max F_ref over the output times",
@@ -567,7 +478,7 @@ def main(argv: list[str] | None = None) -> int:
         "summary": summary,
         "files": {"png": str(png), "sweep_csv": str(sweep_csv), "json": str(json_path)},
     }
-    json_path.write_text(json.dumps(clean(report), indent=2, allow_nan=False) + "\n")
+    write_json(report, json_path)
     print(f"\nwrote {json_path}, {sweep_csv}, {png}")
     print(f"SUMMARY: default ({DEFAULT_METHOD}, tol = {summary['default_tol']:.0e} m, "
           f"{N_OUTPUTS} outputs): time {summary['default_time_s']:.3f} s "

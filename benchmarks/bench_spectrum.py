@@ -27,18 +27,10 @@ BLAS is pinned to one thread. Run ``python benchmarks/bench_spectrum.py [--quick
 
 from __future__ import annotations
 
-import argparse
-import csv
-import gc
-import json
 import math
-import os
-import platform
 import statistics
 import sys
 import time
-from collections.abc import Callable
-from datetime import datetime, timezone
 from pathlib import Path
 
 import matplotlib
@@ -47,9 +39,8 @@ matplotlib.use("Agg")
 
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
-import scipy  # noqa: E402
 from scipy.optimize import minimize_scalar  # noqa: E402
-from threadpoolctl import threadpool_info, threadpool_limits  # noqa: E402
+from threadpoolctl import threadpool_limits  # noqa: E402
 
 import viscoforce as vf  # noqa: E402
 from viscoforce.exceptions import ViscoforceError  # noqa: E402
@@ -59,10 +50,24 @@ from viscoforce.experiments.linear_response import (  # noqa: E402
     linear_response,
 )
 from viscoforce.experiments.spectroscopy import DEFAULT_SETTLE_TAUS, sweep  # noqa: E402
-from viscoforce.kernel import _node_matrix_unit  # noqa: E402
 from viscoforce.lockin import demodulate  # noqa: E402
 from viscoforce.problem import DEFAULT_ORDER, DEFAULT_PANEL_WIDTH, interaction_length  # noqa: E402
 from viscoforce.solvers.simulate import EULER_DEFAULT_FRACTION, simulate  # noqa: E402
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))  # benchmarks/_common.py, from any cwd
+from _common import (  # noqa: E402
+    cold_build,
+    fmt,
+    machine_facts,
+    parse_args,
+    pf,
+    print_machine,
+    report_head,
+    run_end,
+    timed,
+    write_csv,
+    write_json,
+)
 
 # the paper's system
 RADIUS = 10e-6  # sphere radius [m]
@@ -128,42 +133,6 @@ def make_problem(scene: str, grid_spacing: float | None = None) -> vf.ContactPro
                                     grid_spacing=grid_spacing)
 
 
-def cold_build(problem: vf.ContactProblem) -> float:
-    """Time [s] to build the influence matrix and centre row from an empty kernel cache."""
-    _node_matrix_unit.cache_clear()
-    t0 = time.perf_counter()
-    _ = problem.influence
-    _ = problem.center_row
-    return time.perf_counter() - t0
-
-
-def timed(fn: Callable[[], object], repeats: int, cheap: float | None = None) -> tuple[object, dict]:
-    """Run ``fn`` ``repeats`` times (3 if ``cheap`` is given and the first run is faster), gc off.
-
-    Returns the first result (runs are deterministic) and the wall/CPU statistics [s].
-    """
-    wall, cpu, result = [], [], None
-    gc_was_on = gc.isenabled()
-    gc.disable()
-    try:
-        n = repeats
-        while len(wall) < n:
-            c0, t0 = time.process_time(), time.perf_counter()
-            out = fn()
-            t1, c1 = time.perf_counter(), time.process_time()
-            wall.append(t1 - t0)
-            cpu.append(c1 - c0)
-            if result is None:
-                result = out
-                if cheap is not None and wall[0] < cheap:
-                    n = max(n, 3)
-    finally:
-        if gc_was_on:
-            gc.enable()
-    return result, {"time_median_s": statistics.median(wall), "time_min_s": min(wall),
-                    "cpu_median_s": statistics.median(cpu), "repeats": len(wall)}
-
-
 def kstar(ds, i: int = 0) -> complex:
     """k* [N/m] of a Spectrum dataset at index ``i``: stiffness·e^{iχ}."""
     return complex(ds.stiffness.values[i] * np.exp(1j * np.radians(ds.phase.values[i])))
@@ -178,68 +147,6 @@ def errors(k: complex | np.ndarray, k_ref: complex | np.ndarray) -> dict:
     return {"rel_stiffness_error": float(np.max(rel)),
             "phase_error_deg": float(dphase.flat[np.argmax(np.abs(dphase))]),
             "complex_rel_error": float(np.max(comp))}
-
-
-def clean(obj):
-    """JSON-safe copy: NaN/inf → None, numpy scalars → Python."""
-    if isinstance(obj, dict):
-        return {k: clean(v) for k, v in obj.items()}
-    if isinstance(obj, list | tuple):
-        return [clean(v) for v in obj]
-    if isinstance(obj, np.ndarray):
-        return clean(obj.tolist())
-    if isinstance(obj, np.generic):
-        obj = obj.item()
-    if isinstance(obj, float) and not math.isfinite(obj):
-        return None
-    return obj
-
-
-def load_average() -> list[float] | None:
-    try:
-        return [round(x, 2) for x in os.getloadavg()]
-    except (AttributeError, OSError):
-        return None
-
-
-def cpu_model() -> str:
-    try:
-        for line in Path("/proc/cpuinfo").read_text().splitlines():
-            if line.startswith("model name"):
-                return line.split(":", 1)[1].strip()
-    except OSError:
-        pass
-    return platform.processor() or platform.machine()
-
-
-def machine_facts() -> dict:
-    blas = [{"internal_api": d.get("internal_api"), "version": d.get("version"),
-             "num_threads": d.get("num_threads"), "threading_layer": d.get("threading_layer"),
-             "architecture": d.get("architecture"), "library": Path(d.get("filepath", "")).name}
-            for d in threadpool_info() if d.get("user_api") == "blas"]
-    return {"python": platform.python_version(), "implementation": platform.python_implementation(),
-            "platform": platform.platform(), "cpu": cpu_model(), "cpu_count": os.cpu_count(),
-            "numpy": np.__version__, "scipy": scipy.__version__, "viscoforce": vf.__version__,
-            "blas": blas, "blas_threads": sorted({b["num_threads"] for b in blas}),
-            "loadavg_start": load_average()}
-
-
-def fmt(x: float, spec: str = "9.2e") -> str:
-    width = spec.split(".")[0]
-    return ("n/a".rjust(int(width)) if width else "n/a") if not math.isfinite(x) else format(x,
-                                                                                            spec)
-
-
-def pf(flag: bool) -> str:
-    return "PASS" if flag else "FAIL"
-
-
-def write_csv(rows: list[dict], path: Path) -> None:
-    keys = list(dict.fromkeys(k for r in rows for k in r))
-    with path.open("w", newline="") as fh:
-        writer = csv.DictWriter(fh, fieldnames=keys)
-        writer.writeheader()
-        writer.writerows(rows)
 
 
 # ── part 1: the linear method ────────────────────────────────────────────────────────────────────
@@ -353,7 +260,7 @@ def td_point(problem, scene: str, omega: float, n: int, method: str, mode: str,
     row = {"scene": scene, "h0": h0, "eta": eta, "omega": omega, "method": method, "mode": mode,
            "n_per_period": n, "dt": dt}
     try:
-        (k, mean, steps), stats = timed(run, 1, CHEAP_RUN if timing else None)
+        (k, mean, steps), stats = timed(run, 1, cheap_below=CHEAP_RUN if timing else None)
     except ViscoforceError as exc:  # a failed point is data, not a crash
         row.update({"status": f"failed: {type(exc).__name__}", "message": str(exc),
                     "time_median_s": math.nan, "time_min_s": math.nan, "cpu_median_s": math.nan,
@@ -721,19 +628,13 @@ def summarise(lin_rows: list[dict], td_rows: list[dict], peak: dict) -> dict:
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--quick", action="store_true",
-                        help="smoke run (< 20 s): grid factors 2 and 1, one frequency, fewer "
-                             "steps per period, no convergence checks, a short peak search")
-    parser.add_argument("--out", type=Path, default=Path(__file__).resolve().parent / "out",
-                        help="output folder (default: benchmarks/out next to this script)")
-    parser.add_argument("--repeats", type=int, default=None,
-                        help=f"timed linear spectra per grid (default {LINEAR_REPEATS}, "
-                             f"{QUICK_LINEAR_REPEATS} with --quick; at least 10); time-domain "
-                             f"points run once, 3 times if a run takes < {CHEAP_RUN:g} s")
-    args = parser.parse_args(argv)
-    if args.repeats is not None and args.repeats < 10:
-        parser.error("--repeats must be >= 10")
+    args = parse_args(argv, doc=__doc__, min_repeats=10,
+                      quick_help="smoke run (< 20 s): grid factors 2 and 1, one frequency, fewer "
+                                 "steps per period, no convergence checks, a short peak search",
+                      repeats_help=f"timed linear spectra per grid (default {LINEAR_REPEATS}, "
+                                   f"{QUICK_LINEAR_REPEATS} with --quick; at least 10); "
+                                   "time-domain points run once, 3 times if a run takes < "
+                                   f"{CHEAP_RUN:g} s")
     quick = args.quick
     repeats = args.repeats or (QUICK_LINEAR_REPEATS if quick else LINEAR_REPEATS)
     factors = QUICK_GRID_FACTORS if quick else GRID_FACTORS
@@ -747,12 +648,7 @@ def main(argv: list[str] | None = None) -> int:
         machine = machine_facts()
         print(f"viscoforce {machine['viscoforce']} spectrum benchmark"
               f"{' (quick)' if quick else ''}")
-        print(f"python {machine['python']} ({machine['implementation']}), numpy "
-              f"{machine['numpy']}, scipy {machine['scipy']}, CPU {machine['cpu']}, "
-              f"os.cpu_count() = {machine['cpu_count']}, {machine['platform']}")
-        for b in machine["blas"]:
-            print(f"BLAS: {b['internal_api']} {b['version']} ({b['library']}, "
-                  f"{b['architecture']}), num_threads = {b['num_threads']}")
+        print_machine(machine)
         print(f"system: R = {RADIUS:g} m, E0 = {E0:g} Pa, E_inf = {E_INF:g} Pa, tau = {TAU:g} s; "
               + "; ".join(f"{s}: h0 = {h0 * 1e9:g} nm, eta = {eta * 1e9:g} nm"
                           for s, (h0, eta) in SCENES.items())
@@ -813,13 +709,9 @@ def main(argv: list[str] | None = None) -> int:
     write_csv(lin_rows, lin_csv)
     write_csv(td_rows, td_csv)
     summary = summarise(lin_rows, td_rows, peak)
-    summary["wall_time_s"] = time.perf_counter() - t_start
-    summary["loadavg_end"] = load_average()
+    summary.update(run_end(t_start))
     report = {
-        "schema": SCHEMA,
-        "created": datetime.now(timezone.utc).isoformat(timespec="seconds"),
-        "quick": quick,
-        "machine": machine,
+        **report_head(SCHEMA, quick, machine),
         "target": {"time_s": TARGET_TIME, "error": TARGET_ERROR, "n_omega": N_OMEGA,
                    "error_definition": "max over omega of |k* - k*_ref| / |k*_ref| against the "
                                        "grid with spacing / 4 (bounds the relative stiffness "
@@ -845,7 +737,7 @@ def main(argv: list[str] | None = None) -> int:
         "files": {"png": str(png), "linear_csv": str(lin_csv), "time_domain_csv": str(td_csv),
                   "json": str(json_path)},
     }
-    json_path.write_text(json.dumps(clean(report), indent=2, allow_nan=False) + "\n")
+    write_json(report, json_path)
     print(f"\nwrote {json_path}, {lin_csv}, {td_csv}, {png}")
     s = summary
     print(f"SUMMARY: linear method, {N_OMEGA} frequencies, default grid: worst time "

@@ -20,19 +20,13 @@ BLAS is pinned to one thread. Run ``python benchmarks/bench_static.py [--quick] 
 
 from __future__ import annotations
 
-import argparse
 import csv
-import gc
-import json
 import math
-import os
-import platform
 import statistics
 import sys
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from datetime import datetime, timezone
 from pathlib import Path
 
 import matplotlib
@@ -41,13 +35,27 @@ matplotlib.use("Agg")
 
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
-import scipy  # noqa: E402
-from threadpoolctl import threadpool_info, threadpool_limits  # noqa: E402
+from threadpoolctl import threadpool_limits  # noqa: E402
 
 import viscoforce as vf  # noqa: E402
 from viscoforce.exceptions import ViscoforceError  # noqa: E402
 from viscoforce.kernel import _node_matrix_unit  # noqa: E402
 from viscoforce.solvers.static import equilibrium_gap  # noqa: E402
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))  # benchmarks/_common.py, from any cwd
+from _common import (  # noqa: E402
+    cold_build,
+    fmt,
+    gc_paused,
+    machine_facts,
+    parse_args,
+    pf,
+    print_machine,
+    report_head,
+    run_end,
+    write_csv,
+    write_json,
+)
 
 RADIUS = 10e-6  # sphere radius [m]
 MODULI = (1e9, 1e10)  # E [Pa], paper convention
@@ -114,22 +122,10 @@ def run_rounds(timers: list[Timed], repeats: int) -> None:
     Interleaving spreads each timer's samples over the whole run, so a burst of load from another
     process on this small machine spoils one sample of many timers, not many samples of one.
     """
-    gc_was_on = gc.isenabled()
-    gc.disable()
-    try:
+    with gc_paused():
         for _ in range(repeats):
             for timer in timers:
                 timer.sample()
-    finally:
-        if gc_was_on:
-            gc.enable()
-
-
-def median_time(fn: Callable[[], object], repeats: int, warmup: int) -> dict[str, float]:
-    """Timing statistics of one callable (see :class:`Timed`)."""
-    timer = Timed.prepare(fn, warmup)
-    run_rounds([timer], repeats)
-    return timer.stats()
 
 
 def make_problem(h0: float, modulus: float, *, grid_spacing: float | None = None,
@@ -137,15 +133,6 @@ def make_problem(h0: float, modulus: float, *, grid_spacing: float | None = None
     return vf.ContactProblem.create(sphere=vf.Sphere(RADIUS), surface_force=vf.paper_pressure_law(),
                                     material=vf.Elastic(modulus), deepest_position=h0,
                                     grid_spacing=grid_spacing, order=order)
-
-
-def cold_build(problem: vf.ContactProblem) -> float:
-    """Time [s] to build the influence matrix and centre row from an empty kernel cache."""
-    _node_matrix_unit.cache_clear()
-    t0 = time.perf_counter()
-    _ = problem.influence
-    _ = problem.center_row
-    return time.perf_counter() - t0
 
 
 def rel_err(value: float, reference: float) -> float:
@@ -162,39 +149,6 @@ def load_peer(path: Path) -> dict[tuple[float, int], float]:
             key = (float(row["E (Pa)"]), round(float(row["h0 (m)"]) * 1e12))
             out[key] = float(row["force (N)"])
     return out
-
-
-def clean(obj):
-    """JSON-safe copy: NaN/inf → None, numpy scalars → Python."""
-    if isinstance(obj, dict):
-        return {k: clean(v) for k, v in obj.items()}
-    if isinstance(obj, list | tuple):
-        return [clean(v) for v in obj]
-    if isinstance(obj, np.generic):
-        obj = obj.item()
-    if isinstance(obj, float) and not math.isfinite(obj):
-        return None
-    return obj
-
-
-def load_average() -> list[float] | None:
-    """1, 5 and 15 min load averages (None where the OS has none)."""
-    try:
-        return [round(x, 2) for x in os.getloadavg()]
-    except (AttributeError, OSError):
-        return None
-
-
-def machine_facts() -> dict:
-    blas = [{"internal_api": d.get("internal_api"), "version": d.get("version"),
-             "num_threads": d.get("num_threads"), "threading_layer": d.get("threading_layer"),
-             "architecture": d.get("architecture"), "library": Path(d.get("filepath", "")).name}
-            for d in threadpool_info() if d.get("user_api") == "blas"]
-    return {"python": platform.python_version(), "implementation": platform.python_implementation(),
-            "platform": platform.platform(), "processor": platform.machine(),
-            "cpu_count": os.cpu_count(), "numpy": np.__version__, "scipy": scipy.__version__,
-            "viscoforce": vf.__version__, "blas": blas, "loadavg_start": load_average(),
-            "blas_threads": sorted({b["num_threads"] for b in blas})}
 
 
 # ── part 1: default grid ─────────────────────────────────────────────────────────────────────────
@@ -350,10 +304,6 @@ def plot_sweep(rows: list[dict], path: Path) -> None:
 
 # ── reporting ────────────────────────────────────────────────────────────────────────────────────
 
-def fmt_e(x: float) -> str:
-    return "      n/a" if not math.isfinite(x) else f"{x:9.2e}"
-
-
 def print_default(builds: list[dict], rows: list[dict]) -> None:
     print("\nOne-off kernel build per default grid (cached per (n_panels, order); not in a solve):")
     print(f"{'h0 [nm]':>8} {'panels':>6} {'nodes':>5} {'build [ms]':>10} {'1st call [ms]':>13}")
@@ -372,8 +322,8 @@ def print_default(builds: list[dict], rows: list[dict]) -> None:
         print(f"{r['E']:7.0e} {r['h0'] * 1e9:7.0f} {r['nodes']:5d} {r['newton_iterations']:5d} "
               f"{1e3 * r['time_public_s']:11.3f} {1e3 * r['time_public_cpu_s']:10.3f} "
               f"{1e3 * r['time_newton_s']:11.3f} "
-              f"{r['force']:12.5e} {fmt_e(r['rel_error_refined']):>11} "
-              f"{fmt_e(r['rel_error_peer']):>9}")
+              f"{r['force']:12.5e} {fmt(r['rel_error_refined']):>11} "
+              f"{fmt(r['rel_error_peer']):>9}")
 
 
 def print_sweep(rows: list[dict]) -> None:
@@ -389,7 +339,7 @@ def print_sweep(rows: list[dict]) -> None:
             continue
         print(f"{r['case']:>22} {r['order']:5d} {r['spacing_factor']:6g} {r['nodes']:5d} "
               f"{r['newton_iterations']:5d} {1e3 * r['time_public_s']:11.3f} "
-              f"{1e3 * r['time_newton_s']:11.3f} {fmt_e(r['rel_error'])}")
+              f"{1e3 * r['time_newton_s']:11.3f} {fmt(r['rel_error'])}")
 
 
 def summarise(rows: list[dict]) -> dict:
@@ -402,29 +352,14 @@ def summarise(rows: list[dict]) -> dict:
             "worst_time_public_cpu_s": max(r["time_public_cpu_s"] for r in rows),
             "worst_rel_error_refined": worst_e,
             "worst_rel_error_peer": max(peer) if peer else math.nan,
-            "n_peer_rows": len(peer), "passed": ok, "verdict": "PASS" if ok else "FAIL"}
-
-
-def write_csv(rows: list[dict], path: Path) -> None:
-    keys = list(dict.fromkeys(k for r in rows for k in r))
-    with path.open("w", newline="") as fh:
-        writer = csv.DictWriter(fh, fieldnames=keys)
-        writer.writeheader()
-        writer.writerows(rows)
+            "n_peer_rows": len(peer), "passed": ok, "verdict": pf(ok)}
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--quick", action="store_true",
-                        help="few-second smoke run: fewer repeats and sweep points")
-    parser.add_argument("--out", type=Path, default=Path(__file__).resolve().parent / "out",
-                        help="output folder (default: benchmarks/out next to this script)")
-    parser.add_argument("--repeats", type=int, default=None,
-                        help="timed samples per default-grid measurement (default 50; 5 with "
-                             "--quick); the sweep takes 20 (5 with --quick)")
-    args = parser.parse_args(argv)
-    if args.repeats is not None and args.repeats < 1:
-        parser.error("--repeats must be >= 1")
+    args = parse_args(argv, doc=__doc__,
+                      quick_help="few-second smoke run: fewer repeats and sweep points",
+                      repeats_help="timed samples per default-grid measurement (default 50; 5 "
+                                   "with --quick); the sweep takes 20 (5 with --quick)")
     repeats = args.repeats or (5 if args.quick else 50)
     sweep_repeats = min(repeats, 5 if args.quick else 20)
     warmup = 1 if args.quick else 3
@@ -434,15 +369,10 @@ def main(argv: list[str] | None = None) -> int:
     t_start = time.perf_counter()
 
     with threadpool_limits(limits=1):
-        machine = machine_facts()
+        machine = machine_facts(cpu_model_name=False)
         print(f"viscoforce {machine['viscoforce']} static-solve benchmark"
               f"{' (quick)' if args.quick else ''}")
-        print(f"python {machine['python']} ({machine['implementation']}), numpy "
-              f"{machine['numpy']}, scipy {machine['scipy']}, os.cpu_count() = "
-              f"{machine['cpu_count']}, {machine['platform']}")
-        for b in machine["blas"]:
-            print(f"BLAS: {b['internal_api']} {b['version']} ({b['library']}), "
-                  f"num_threads = {b['num_threads']}")
+        print_machine(machine)
         print(f"timing: median of {repeats} samples (default grid, interleaved rounds; sweep "
               f"{sweep_repeats}) after {warmup} warm-up call(s), gc off, time.perf_counter; "
               f"load average {machine['loadavg_start']}")
@@ -463,13 +393,9 @@ def main(argv: list[str] | None = None) -> int:
     plot_sweep(sweep_rows, png)
     write_csv(sweep_rows, sweep_csv)
     summary = summarise(default_rows)
-    summary["wall_time_s"] = time.perf_counter() - t_start
-    summary["loadavg_end"] = load_average()
+    summary.update(run_end(t_start))
     report = {
-        "schema": SCHEMA,
-        "created": datetime.now(timezone.utc).isoformat(timespec="seconds"),
-        "quick": args.quick,
-        "machine": machine,
+        **report_head(SCHEMA, args.quick, machine),
         "target": {"time_per_solve_s": TARGET_TIME, "relative_error": TARGET_ERROR,
                    "time_measured_on": "static_equilibrium (full public call)",
                    "error_measured_against": f"same position, grid spacing / {REFINE}"},
@@ -487,7 +413,7 @@ def main(argv: list[str] | None = None) -> int:
         "summary": summary,
         "files": {"png": str(png), "sweep_csv": str(sweep_csv), "json": str(json_path)},
     }
-    json_path.write_text(json.dumps(clean(report), indent=2, allow_nan=False) + "\n")
+    write_json(report, json_path)
     print(f"\nwrote {json_path}, {sweep_csv}, {png}")
     peer_txt = (f"; worst deviation from FFT peer {summary['worst_rel_error_peer']:.2e} "
                 f"({summary['n_peer_rows']} rows)" if summary["n_peer_rows"] else "")
