@@ -174,3 +174,13 @@ def test_spectrum_user_errors(capsys, argv, message):
     assert main(argv) == 2
     err = capsys.readouterr().err
     assert message in err and "Traceback" not in err
+
+
+def test_cli_guards_and_linear_note(capsys):
+    assert main(["simulate", "--drive", "step", "--from", "-5nm", "--to", "-7nm",
+                 "--samples", "1"]) == 2
+    assert "--samples must be an integer >= 2" in capsys.readouterr().err
+    assert main(["static", "--h0", "-5", "--E", "1e9"]) == 2
+    assert "forget a unit" in capsys.readouterr().err
+    out = run_json(capsys, ["spectrum", "--h0=-5nm", "--eta", "1nm", "--omega", "1000", "--json"])
+    assert "time-domain" in out["note"]

@@ -205,3 +205,29 @@ def test_bad_arguments(make_problem):
         simulate(problem, drive, dt=-1.0)
     with pytest.raises(vf.ParameterError, match="too small for position"):
         simulate(problem, Triangle(10e-9, -9e-9, 5e-6))
+
+
+def test_initial_state_and_step_size_validation(make_problem):
+    from viscoforce.solvers.steppers import ExponentialTrapezoidal
+
+    problem = make_problem(SLS, -5e-9)
+    drive = Ramp(-2e-9, -5e-9, 1e-3)
+    good = ExponentialTrapezoidal(problem).relaxed_state(0.0, -2e-9)
+    ds = simulate(problem, drive, t_end=1e-3, t_eval=[0.0, 1e-3], initial_state=good)
+    assert np.isfinite(ds.force).all()
+    with pytest.raises(vf.ParameterError, match="differs from the drive's start"):
+        simulate(problem, Ramp(-3e-9, -5e-9, 1e-3), initial_state=good)
+    other = ExponentialTrapezoidal(make_problem(SLS, -9e-9)).relaxed_state(0.0, -2e-9)
+    with pytest.raises(vf.ParameterError, match="another grid or material"):
+        simulate(problem, drive, initial_state=other)
+    with pytest.raises(vf.ParameterError, match="max_step must be >="):
+        simulate(problem, drive, max_step=1e-21)
+    with pytest.raises(vf.ParameterError, match="dt must be >="):
+        simulate(problem, drive, dt=1e-30)
+
+
+def test_grid_guards(make_problem):
+    with pytest.raises(vf.ParameterError, match="did you forget a unit"):
+        make_problem(vf.Elastic(1e9), -5.0)
+    with pytest.raises(vf.ParameterError, match="nodes"):
+        make_problem(vf.Elastic(1e9), -5e-9, grid_spacing=1e-12)

@@ -222,3 +222,43 @@ def test_fig4_explicit_euler_coarse_steps_overestimate_the_phase(make_problem):
     exact = sweep(problem, -5e-9, 1e-9, w, periods=2)
     assert float(coarse.phase[0]) == pytest.approx(52.9, abs=0.5)
     assert float(exact.phase[0]) == pytest.approx(35.8, abs=0.3)
+
+
+class _Attraction(vf.physics.surface_forces.SurfaceForceLaw):
+    """p = −A e^{−h/λ}: an attractive term (a pluggable law written by a user)."""
+
+    def __init__(self, amplitude, length):
+        self.amplitude, self.length = amplitude, length
+
+    def pressure(self, gap):
+        return -self.amplitude * np.exp(-np.asarray(gap, dtype=float) / self.length)
+
+    def pressure_derivative(self, gap):
+        return -self.pressure(gap) / self.length
+
+    def energy(self, gap):
+        return self.pressure(gap) * self.length
+
+    @property
+    def decay_length(self):
+        return self.length
+
+    def negligible_gap(self, rtol):
+        return self.length * np.log(1.0 / rtol)
+
+
+def test_linear_response_with_an_attractive_term_matches_the_time_domain():
+    """p′ > 0 where the attraction dominates: the linearisation must use −p′, not |p′|."""
+    law = vf.paper_pressure_law() + _Attraction(2e6, 2e-9)
+    problem = vf.ContactProblem.create(sphere=vf.Sphere(10e-6), surface_force=law, material=SLS,
+                                       deepest_position=5.4e-9)
+    w = [1e3]
+    lin = linear_response(problem, 5.5e-9, 0.01e-9, w)
+    td = sweep(problem, 5.5e-9, 0.01e-9, w, periods=2)
+    np.testing.assert_allclose(td.stiffness, lin.stiffness, rtol=2e-3)
+    np.testing.assert_allclose(td.phase, lin.phase, atol=0.05)
+
+
+def test_svda_spectrum_refuses_contact(make_problem):
+    with pytest.raises(vf.ParameterError, match="holds before contact only"):
+        svda_spectrum(make_problem(SLS, -6e-9), -5e-9, 1e-9, [1e3])

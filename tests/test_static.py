@@ -155,3 +155,13 @@ def test_gap_that_cannot_stay_open_raises_gap_closure(make_problem):
                                   material=vf.Elastic(1e10), deepest_position=-20e-9)
     with pytest.raises(vf.GapClosureError, match="the gap closes"):
         vf.static_equilibrium(pr, -20e-9)
+
+
+def test_contact_radius_when_only_the_centre_is_below_threshold():
+    from viscoforce.problem import contact_radius
+
+    grid = vf.RadialGrid(1e-6, 4, 8)
+    gaps = np.full(grid.size, 1.0001e-9)
+    a = contact_radius(grid, gaps, 0.9999e-9, 1e-9)
+    assert 0.0 <= a < grid.r[0]
+    assert contact_radius(grid, gaps, 1.0001e-9, 1e-9) == 0.0

@@ -84,7 +84,7 @@ def as_float_1d(name: str, values: ArrayLike, *, min_size: int = 1) -> NDArray[n
         raise ParameterError(f"{name} needs at least {min_size} values, got {arr.size}")
     if not np.all(np.isfinite(arr)):
         bad = int(np.flatnonzero(~np.isfinite(arr))[0])
-        raise ParameterError(f"{name} must be finite; entry {bad} is {arr[bad]!r}")
+        raise ParameterError(f"{name} must be finite; entry {bad} is {float(arr[bad])!r}")
     return arr
 
 
@@ -97,5 +97,6 @@ def require_increasing(name: str, values: ArrayLike, *, strict: bool = True) -> 
         i = int(bad[0])
         word = "strictly increasing" if strict else "non-decreasing"
         raise ParameterError(
-            f"{name} must be {word}; entry {i + 1} ({arr[i + 1]!r}) follows {arr[i]!r}")
+            f"{name} must be {word}; entry {i + 1} ({float(arr[i + 1])!r}) follows "
+            f"{float(arr[i])!r}")
     return arr

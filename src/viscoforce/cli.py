@@ -177,6 +177,10 @@ def _drive(args: argparse.Namespace):
 def _cmd_simulate(args: argparse.Namespace) -> int:
     import numpy as np
 
+    if args.samples < 2:
+        raise UsageError(f"--samples must be an integer >= 2, got {args.samples}")
+    if args.profiles < 0:
+        raise UsageError(f"--profiles must be >= 0, got {args.profiles}")
     drive = _drive(args)
     material = _material(args)
     problem = _problem(args, material, float(drive.extent()[0]))
@@ -251,8 +255,13 @@ def _cmd_spectrum(args: argparse.Namespace) -> int:
     material = _material(args)
     problem = _problem(args, material, args.h0 - args.eta)
     method, explanation = args.method, ""
+    auto_method, reason = _choose_spectrum_method(args, problem)
+    note = ""
     if method == "auto":
-        method, explanation = _choose_spectrum_method(args, problem)
+        method, explanation = auto_method, reason
+    elif method == "linear" and auto_method != "linear":
+        note = (f"note: {reason.split(':')[0]}: the small-amplitude spectrum may differ from the "
+                "finite-amplitude response by several percent; use --method time-domain")
     kwargs = {}
     if method == "time-domain":
         kwargs = {"n_jobs": args.jobs, "progress": args.progress, "periods": args.periods}
@@ -274,6 +283,9 @@ def _cmd_spectrum(args: argparse.Namespace) -> int:
     }
     if explanation:
         result["explanation"] = explanation
+    if note:
+        result["note"] = note
+        print(f"viscoforce spectrum: {note}", file=sys.stderr)
     if args.json:
         print(json.dumps(result))
         return 0

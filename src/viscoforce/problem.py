@@ -27,6 +27,10 @@ NEGLIGIBLE_PRESSURE_RTOL = 1e-10
 DEFAULT_PANEL_WIDTH = 0.5
 #: Default Gauss–Legendre nodes per panel.
 DEFAULT_ORDER = 8
+#: Largest grid a dense solve is allowed to build (a 4000² matrix is 128 MB).
+MAX_NODES = 4000
+#: Deepest position allowed, as a fraction of R (the model assumes |h0| ≪ R).
+MAX_DEPTH_FRACTION = 0.1
 
 
 def interaction_length(sphere: Sphere, law: SurfaceForceLaw) -> float:
@@ -66,11 +70,22 @@ def default_grid(sphere: Sphere, law: SurfaceForceLaw, deepest_position: float, 
     """
     deepest_position = require_finite("deepest_position", deepest_position)
     order = require_int("order", order, 2)
+    if deepest_position < -MAX_DEPTH_FRACTION * sphere.radius:
+        raise ParameterError(
+            f"deepest_position must be >= -{MAX_DEPTH_FRACTION:g} R = "
+            f"{-MAX_DEPTH_FRACTION * sphere.radius:.3g} m (the paraboloid and half-space model needs "
+            f"|h0| << R), got {deepest_position!r}; did you forget a unit such as 'nm'?")
     if outer_radius is None:
         outer_radius = default_outer_radius(sphere, law, deepest_position)
     if grid_spacing is None:
         grid_spacing = DEFAULT_PANEL_WIDTH * interaction_length(sphere, law) / order
-    return RadialGrid.from_spacing(outer_radius, grid_spacing, order)
+    grid = RadialGrid.from_spacing(outer_radius, grid_spacing, order)
+    if grid.size > MAX_NODES:
+        raise ParameterError(
+            f"the grid would have {grid.size} nodes (> {MAX_NODES}): grid_spacing "
+            f"{grid_spacing:.3g} m over outer_radius {outer_radius:.3g} m (deepest_position "
+            f"{deepest_position:.3g} m); use a coarser grid_spacing or a shallower position")
+    return grid
 
 
 @dataclass(frozen=True)
@@ -203,11 +218,10 @@ def contact_radius(grid: RadialGrid, gap: ArrayLike, gap_center: float, threshol
         t = bary / d
         return float(t @ values / t.sum()) - threshold
 
-    f_lo = gap_center - threshold if i < 0 else f(lo)
     if i >= 0 and lo < k * width:  # node i sits in the previous panel: start at the panel edge
-        lo, f_lo = k * width, f(k * width)
-    f_hi = f(hi)
-    if f_lo * f_hi > 0:  # interpolant not bracketing (rare): linear interpolation of the nodes
+        lo = k * width
+    f_lo, f_hi = f(lo), f(hi)
+    if f_lo * f_hi > 0:  # the interpolant does not bracket (rare): interpolate the nodes linearly
         g_lo = gap_center if i < 0 else gap[i]
         lo = 0.0 if i < 0 else float(grid.r[i])
         return lo + (threshold - g_lo) * (hi - lo) / (gap[i + 1] - g_lo)

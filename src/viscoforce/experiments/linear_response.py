@@ -4,7 +4,7 @@ Linearise the viscoelastic equations about the static E_inf equilibrium at h̄0.
 e^{+iωt} convention, u(t) = −2∫C(t − t') A ṗ(t') dt' becomes δu = −2 C*(ω) A δp, and
 δp = p'(h̄)(δh0 − δu), so that per unit drive
 
-    (I + 2C*(ω) A |p'|) δu = 2C*(ω) A |p'| δh0,         δF = −2π Σ_j W_j |p'_j| (δh0 − δu_j),
+    (I − 2C*(ω) A p') δu = −2C*(ω) A p' δh0,         δF = 2π Σ_j W_j p'_j (δh0 − δu_j),
 
 one complex linear solve per frequency for any Prony material. The complex stiffness per unit
 compression (compression = −δh0) is k*(ω) = −δF/δh0; its argument is the phase χ by which the
@@ -23,6 +23,9 @@ from viscoforce.problem import ContactProblem
 from viscoforce.schema import make_spectrum
 from viscoforce.solvers.static import equilibrium_gap
 
+#: Complex matrix elements solved in one batch (≈ 64 MB).
+_BATCH_ELEMENTS = 4_000_000
+
 
 def complex_stiffness(problem: ContactProblem, position: float, omega: ArrayLike) -> tuple[
         np.ndarray, float]:
@@ -40,20 +43,25 @@ def complex_stiffness(problem: ContactProblem, position: float, omega: ArrayLike
     position = require_finite("position (h0)", position)
     omega = as_float_1d("omega", omega)
     if np.any(omega < 0):
-        raise ParameterError(f"omega must be >= 0 rad/s, got min {omega.min()!r}")
+        raise ParameterError(f"omega must be >= 0 rad/s, got min {float(omega.min())!r}")
     problem.check_covers(position)
     material = problem.material
     sol = equilibrium_gap(problem, position, material.relaxed_modulus)
-    stiff = np.abs(problem.surface_force.pressure_derivative(sol.gap))
+    stiff = -problem.surface_force.pressure_derivative(sol.gap)  # −p′ (> 0 where repulsive)
     weights = 2.0 * np.pi * problem.grid.area_weights * stiff  # δF = −Σ weights (δh0 − δu)
     coupled = problem.influence * stiff[None, :]
     n = problem.grid.size
     compliance = 2.0 * np.asarray(material.complex_compliance(omega), dtype=complex)
-    mats = compliance[:, None, None] * coupled[None, :, :]
-    mats[:, np.arange(n), np.arange(n)] += 1.0
-    rhs = compliance[:, None] * coupled.sum(axis=1)[None, :]
-    du = np.linalg.solve(mats, rhs[..., None])[..., 0]
-    k = (weights[None, :] * (1.0 - du)).sum(axis=1)  # −δF/δh0
+    drive = coupled.sum(axis=1)
+    k = np.empty(omega.size, dtype=complex)
+    chunk = max(1, _BATCH_ELEMENTS // (n * n))  # bound the memory of the batched solve
+    diag = np.arange(n)
+    for start in range(0, omega.size, chunk):
+        c = compliance[start:start + chunk]
+        mats = c[:, None, None] * coupled[None, :, :]
+        mats[:, diag, diag] += 1.0
+        du = np.linalg.solve(mats, (c[:, None] * drive[None, :])[..., None])[..., 0]
+        k[start:start + chunk] = (weights[None, :] * (1.0 - du)).sum(axis=1)  # −δF/δh0
     return k, float(problem.load(sol.pressure))
 
 

@@ -170,6 +170,12 @@ def svda_spectrum(problem: ContactProblem, position: float, eta: float,
     resp = closed_form.svda_harmonic_response(
         omega, position, eta, material.instantaneous_modulus, material.relaxed_modulus,
         prony.taus[0], problem.sphere.radius, dl.pressure_scale, dl.debye_length)
+    central_gap = position - float(resp.u0)
+    if central_gap < dl.debye_length:
+        raise ParameterError(
+            f"the SVDA closed form holds before contact only: at position {position:.3g} m its "
+            f"central gap {central_gap:.3g} m is below the Debye length {dl.debye_length:.3g} m; "
+            "use method 'linear' (exact) here")
     k = resp.stiffness * np.exp(1j * np.radians(resp.phase))
     attrs = dict(problem.parameters())
     attrs.update({"method": "svda", "position": float(position), "eta": eta,

@@ -146,8 +146,8 @@ class SoftWall(SurfaceForceLaw):
 
     @property
     def decay_length(self) -> float:
-        """z0 [m]."""
-        return self.wall_length
+        """z0/9 [m]: the local decay length |p/p′| of the wall at h = z0."""
+        return self.wall_length / 9.0
 
     def negligible_gap(self, rtol: float) -> float:
         """Gap [m] where p = rtol × P_w."""

@@ -7,7 +7,8 @@ Every equilibrium viscoforce solves has the form
 with h the nodal gaps [m], b a known gap [m] (the undeformed gap minus any remembered deformation),
 c = 2 J [1/Pa] twice an (effective) compliance and A the influence matrix [m] (u = −c A p). The
 static elastic problem is c = 2/E, b = h0 + r²/2R; the implicit viscoelastic step is the same with an
-effective compliance and the memory of the past in b. The Jacobian is I + c·A·|p'(h)|.
+effective compliance and the memory of the past in b. The Jacobian is I − c·A·p'(h) (= I + c·A·|p'|
+for a repulsive law).
 
 Damping: a fraction-to-boundary rule keeps every gap > 0 (a step may shrink a gap by at most a factor
 5) and a backtracking line search on the max-norm of the residual of (*). Convergence: the full Newton

@@ -27,6 +27,8 @@ DEFAULT_TOL = 1e-5
 DEFAULT_OUTPUTS = 801
 #: Default fixed step of explicit Euler, as a fraction of τ_min·E_inf/E0 (the limit is 2).
 EULER_DEFAULT_FRACTION = 0.1
+#: Smallest dt or max_step accepted, as a fraction of t_end.
+MIN_STEP_FRACTION = 1e-12
 
 
 @dataclass(frozen=True)
@@ -104,45 +106,91 @@ def simulate(problem: ContactProblem, drive: SeparationHistory, *, t_end: float 
     GapClosureError, ConvergenceError
         The gap went through zero or Newton failed at the smallest step.
     """
-    stepper_cls = _resolve_method(method)
-    stepper = stepper_cls(problem)
+    stepper = _resolve_method(method)(problem)
     law = problem.surface_force
     t_end = default_end_time(problem, drive) if t_end is None else require_positive("t_end", t_end)
     problem.check_covers(float(drive.extent()[0]))
-    if t_eval is None:
-        t_eval = np.linspace(0.0, t_end, DEFAULT_OUTPUTS)
+    t_eval = np.linspace(0.0, t_end, DEFAULT_OUTPUTS) if t_eval is None else t_eval
     t_eval = require_increasing("t_eval", t_eval)
     if t_eval[0] < 0 or t_eval[-1] > t_end * (1 + 1e-12):
         raise ParameterError(f"t_eval must lie in [0, t_end = {t_end:g} s]")
     profiles = require_int("profiles", profiles, 0)
     threshold = (law.decay_length if contact_threshold is None
                  else require_positive("contact_threshold", contact_threshold))
+    control = _step_control(problem, stepper, t_end, dt, tol, max_step)
+    if initial_state is None:
+        state = stepper.relaxed_state(0.0, float(drive.position(0.0)))
+    else:
+        state = _checked_initial_state(problem, stepper, drive, initial_state)
+    records, counters = _march(stepper, drive, state, t_eval, t_end, control,
+                               _progress(progress, t_end))
+    return _trajectory_dataset(problem, drive, stepper, records, profiles, threshold, counters,
+                               {"dt": control.dt if control.fixed else 0.0,
+                                "tol": 0.0 if control.fixed else control.tol,
+                                "t_end": t_end, "max_step": control.max_step})
+
+
+@dataclass(frozen=True)
+class _StepControl:
+    fixed: bool
+    dt: float
+    tol: float
+    max_step: float
+    first_step: float
+
+
+def _step_control(problem: ContactProblem, stepper: TimeStepper, t_end: float, dt: float | None,
+                  tol: float | None, max_step: float | None) -> _StepControl:
+    """Resolve the step-size settings (fixed dt or adaptive tolerance) with their defaults."""
     tau_min = min(problem.material.prony().taus, default=np.inf)
     fixed = dt is not None or not stepper.adaptive
     if dt is None and not stepper.adaptive:
         ratio = problem.material.relaxed_modulus / problem.material.instantaneous_modulus
         dt = EULER_DEFAULT_FRACTION * tau_min * ratio if np.isfinite(tau_min) else t_end / 1000
+    smallest = MIN_STEP_FRACTION * t_end
     if dt is not None:
         dt = require_positive("dt", dt)
-    tol = DEFAULT_TOL * law.decay_length if tol is None else require_positive("tol", tol)
+        if dt < smallest:
+            raise ParameterError(f"dt must be >= {smallest:.3g} s (1e-12 t_end), got {dt!r}")
+    tol = DEFAULT_TOL * problem.surface_force.decay_length if tol is None else require_positive(
+        "tol", tol)
     max_step = t_end / 50 if max_step is None else require_positive("max_step", max_step)
+    if max_step < smallest:
+        raise ParameterError(f"max_step must be >= {smallest:.3g} s (1e-12 t_end), got {max_step!r}")
+    first = dt if fixed else min(1e-3 * (tau_min if np.isfinite(tau_min) else t_end), max_step)
+    return _StepControl(fixed, float(dt or 0.0), tol, max_step, float(first))
 
+
+def _checked_initial_state(problem: ContactProblem, stepper: TimeStepper,
+                           drive: SeparationHistory, state: State) -> State:
+    """Reject a given start state that does not belong to this problem and drive."""
+    if not isinstance(state, State):
+        raise ParameterError(f"initial_state must be a State, got {type(state).__name__}")
+    shape = (stepper.c_modes.size, problem.grid.size + 1)
+    if state.memory.shape != shape or state.gap.shape != (problem.grid.size,):
+        raise ParameterError(
+            f"initial_state belongs to another grid or material: memory shape "
+            f"{state.memory.shape}, expected {shape}")
+    if state.time != 0.0:
+        raise ParameterError(f"initial_state.time must be 0 (drives start at t = 0), got {state.time!r}")
+    start = float(drive.position(0.0))
+    if abs(state.position - start) > 1e-15 + 1e-9 * abs(start):
+        raise ParameterError(
+            f"initial_state.position {state.position!r} m differs from the drive's start {start!r} m")
+    return state
+
+
+def _march(stepper: TimeStepper, drive: SeparationHistory, state: State, t_eval: FloatArray,
+           t_end: float, control: _StepControl, bar) -> tuple[list[tuple[float, State]], _Counters]:
+    """The time loop: land on every kink and output, control the step, record the outputs."""
     kinks = {float(b) for b in np.asarray(drive.breakpoints(), dtype=float) if 0 < b < t_end}
     stops = np.unique(np.concatenate([t_eval, sorted(kinks), [t_end]]))
-    stops = stops[stops > 0]
     outputs = set(t_eval.tolist())
-
-    state = (stepper.relaxed_state(0.0, float(drive.position(0.0))) if initial_state is None
-             else initial_state)
-    records: list[tuple[float, State]] = []
-    if 0.0 in outputs:
-        records.append((0.0, state))
-    t = 0.0
-    step = dt if fixed else min(1e-3 * (tau_min if np.isfinite(tau_min) else t_end), max_step)
+    records: list[tuple[float, State]] = [(0.0, state)] if 0.0 in outputs else []
+    t, step = 0.0, control.first_step
     steps = rejected = newton = 0
-    bar = _progress(progress, t_end)
     try:
-        for target in stops:
+        for target in stops[stops > 0]:
             while t < target:
                 remaining = target - t
                 h = min(step, remaining)
@@ -150,30 +198,31 @@ def simulate(problem: ContactProblem, drive: SeparationHistory, *, t_end: float 
                     h = remaining
                 elif remaining < 1.2 * h:
                     h = 0.5 * remaining
+                if t + h <= t:
+                    raise ConvergenceError(
+                        f"step size underflow at t = {t:.6g} s (dt = {h:.3g} s): the step control "
+                        "cannot meet the tolerance; loosen tol or check the drive", time=t)
                 try:
                     outcome = stepper.step(state, drive, h)
                 except StabilityError as exc:
                     raise StabilityError(f"step {steps + 1}: {exc}") from None
                 except (ConvergenceError, GapClosureError) as exc:
-                    if fixed or h < 1e-9 * max_step:
+                    if control.fixed or h < 1e-9 * control.max_step:
                         raise type(exc)(
                             f"step {steps + 1} at t = {t:.6g} s (dt = {h:.3g} s) failed: {exc}",
                             time=t, iterations=exc.iterations,
                             residual_norm=exc.residual_norm) from None
-                    step = 0.25 * h
-                    rejected += 1
+                    step, rejected = 0.25 * h, rejected + 1
                     continue
                 newton += outcome.iterations
-                if not fixed:
-                    ratio = outcome.error / tol
+                if not control.fixed:
+                    ratio = outcome.error / control.tol
                     factor = 5.0 if ratio == 0 else 0.9 * ratio ** (-1.0 / (stepper.order + 1))
                     if ratio > 1.0:
-                        step = h * max(0.2, factor)
-                        rejected += 1
+                        step, rejected = h * max(0.2, factor), rejected + 1
                         continue
-                    step = min(h * min(5.0, max(0.2, factor)), max_step)
-                state = outcome.state
-                steps += 1
+                    step = min(h * min(5.0, max(0.2, factor)), control.max_step)
+                state, steps = outcome.state, steps + 1
                 t = target if h == remaining else t + h
                 if bar is not None:
                     bar.update(h)
@@ -184,10 +233,7 @@ def simulate(problem: ContactProblem, drive: SeparationHistory, *, t_end: float 
     finally:
         if bar is not None:
             bar.close()
-    counters = _Counters(steps, rejected, newton)
-    return _trajectory_dataset(problem, drive, stepper, records, profiles, threshold, counters,
-                               {"dt": dt if fixed else 0.0, "tol": 0.0 if fixed else tol,
-                                "t_end": t_end, "max_step": max_step})
+    return records, _Counters(steps, rejected, newton)
 
 
 def _progress(progress: bool | None, total: float):

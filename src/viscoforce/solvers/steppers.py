@@ -170,7 +170,7 @@ class ExplicitEuler(TimeStepper):
                 f"the stability limit {limit:.3g} s (≈ 2τ·E_inf/E0 in contact); use dt < "
                 f"{limit:.3g} s or the default method 'exponential'")
         velocity = float(drive.velocity(state.time))
-        stiff = np.abs(problem.surface_force.pressure_derivative(state.gap))
+        stiff = -problem.surface_force.pressure_derivative(state.gap)  # −p′
         q = state.response
         memory = state.memory.copy()
         if memory.shape[0]:
