@@ -25,7 +25,7 @@ Subclass contract (in the spirit of scipy's OdeSolver):
 from __future__ import annotations
 
 from abc import ABC, abstractmethod
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import ClassVar
 
 import numpy as np
@@ -55,6 +55,9 @@ class State:
         Internal deformations w_i of (†) [m].
     deformation : ndarray, shape (N + 1,)
         u at the nodes and at r = 0 [m].
+    history : tuple or None
+        (time [s], response, gap) of the previous accepted state on the same smooth piece of the
+        drive, for multi-point predictors and error estimates; None at the start and after a kink.
     """
 
     time: float
@@ -64,6 +67,11 @@ class State:
     response: FloatArray
     memory: FloatArray
     deformation: FloatArray
+    history: tuple[float, FloatArray, FloatArray] | None = None
+
+    def without_history(self) -> State:
+        """The same state with the history forgotten (used at drive kinks)."""
+        return replace(self, history=None)
 
     @property
     def u_center(self) -> float:
@@ -114,9 +122,6 @@ class TimeStepper(ABC):
         memory = -self.c_modes[:, None] * q[None, :]
         deformation = -(2.0 / e_inf) * q
         return State(time, position, sol.gap, sol.pressure, q, memory, deformation)
-
-    def reset_history(self) -> None:  # noqa: B027 - optional hook with a no-op default
-        """Forget multi-step history (called at drive kinks); one-step methods need nothing."""
 
     @abstractmethod
     def step(self, state: State, drive: SeparationHistory, dt: float) -> StepOutcome:

@@ -229,7 +229,7 @@ def _march(stepper: TimeStepper, drive: SeparationHistory, state: State, t_eval:
             if target in outputs:
                 records.append((target, state))
             if target in kinks:
-                stepper.reset_history()
+                state = state.without_history()
     finally:
         if bar is not None:
             bar.close()

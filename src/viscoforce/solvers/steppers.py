@@ -53,38 +53,24 @@ class _Exponential(TimeStepper):
 
     adaptive: ClassVar[bool] = True
 
-    def __init__(self, problem):
-        super().__init__(problem)
-        self._parents: list[tuple[State, State]] = []
-
     @staticmethod
     def weights(x: FloatArray) -> tuple[FloatArray, FloatArray]:
         """(a, b): weights of the new and old forcing for decay x = dt/τ."""
         raise NotImplementedError
 
-    def reset_history(self) -> None:
-        """Forget the previous step (used for the predictor and the error estimate)."""
-        self._parents = []
-
-    def _parent(self, state: State) -> State | None:
-        for child, parent in self._parents:
-            if child is state:
-                return parent
-        return None
-
-    def error_estimate(self, parent: State | None, state: State, q_new: FloatArray,
-                       dt: float, x: FloatArray) -> float:
+    def error_estimate(self, state: State, q_new: FloatArray, dt: float, x: FloatArray) -> float:
         """Local error [m] of the memory update from the curvature of the forcing q(t)."""
         if self.c_modes.size == 0:
             return 0.0
-        if parent is None or self.order == 1:
+        if state.history is None or self.order == 1:
             # distance between the held-forcing and the linear-forcing updates: the first-order
             # error (an upper bound for the second-order method right after a start or kink)
             gap = np.abs(_phi(x) - np.exp(-x))
             return float(np.max(np.abs(q_new - state.response)) * np.sum(self.c_modes * gap))
-        dt_prev = state.time - parent.time
+        t_prev, q_prev, _ = state.history
+        dt_prev = state.time - t_prev
         curvature = 2.0 * ((q_new - state.response) / dt
-                           - (state.response - parent.response) / dt_prev) / (dt + dt_prev)
+                           - (state.response - q_prev) / dt_prev) / (dt + dt_prev)
         return float(0.5 * np.max(np.abs(curvature))
                      * np.sum(self.c_modes * self.taus**2 * _psi(x)))
 
@@ -101,10 +87,10 @@ class _Exponential(TimeStepper):
         carry = (decay[:, None] * state.memory
                  - (self.c_modes * b)[:, None] * state.response[None, :]).sum(axis=0)
         base = problem.undeformed_gap(position) - carry[:n]
-        parent = self._parent(state)
         initial = state.gap
-        if parent is not None:
-            slope = (state.gap - parent.gap) * (dt / (state.time - parent.time))
+        if state.history is not None:
+            t_prev, _, gap_prev = state.history
+            slope = (state.gap - gap_prev) * (dt / (state.time - t_prev))
             initial = np.maximum(state.gap + slope, 0.5 * state.gap)
         sol = solve_gap(problem, base, c_eff, initial, xtol=self.xtol, time=t_new)
         q_new = self.response(sol.pressure)
@@ -112,10 +98,9 @@ class _Exponential(TimeStepper):
                   - (self.c_modes * a)[:, None] * q_new[None, :]
                   - (self.c_modes * b)[:, None] * state.response[None, :])
         deformation = -self.c_glassy * q_new + memory.sum(axis=0)
-        new = State(t_new, position, sol.gap, sol.pressure, q_new, memory, deformation)
-        error = self.error_estimate(parent, state, q_new, dt, x)
-        self._parents = [(state, parent), (new, state)] if parent is not None else [(new, state)]
-        return StepOutcome(new, error, sol.iterations)
+        new = State(t_new, position, sol.gap, sol.pressure, q_new, memory, deformation,
+                    history=(state.time, state.response, state.gap))
+        return StepOutcome(new, self.error_estimate(state, q_new, dt, x), sol.iterations)
 
 
 class ExponentialTrapezoidal(_Exponential):
