@@ -5,13 +5,13 @@ from __future__ import annotations
 import csv
 import json
 import math
-import os
 import subprocess
-import sys
 from pathlib import Path
 
 import pytest
 from scipy.special import i0
+
+from tests._bench import run_benchmark
 
 REPO = Path(__file__).resolve().parents[1]
 SCRIPT = REPO / "benchmarks" / "bench_spectrum.py"
@@ -31,10 +31,7 @@ DECAY_LENGTH = 1e-9  # the paper's 1/κ [m]
 
 
 def run_script(*args: str) -> subprocess.CompletedProcess:
-    env = dict(os.environ, MPLBACKEND="Agg")
-    env["PYTHONPATH"] = os.pathsep.join(filter(None, [str(REPO / "src"), env.get("PYTHONPATH")]))
-    return subprocess.run([sys.executable, str(SCRIPT), *args], capture_output=True, text=True,
-                          env=env, timeout=300, check=False)
+    return run_benchmark("bench_spectrum.py", *args)
 
 
 @pytest.fixture(scope="module")

@@ -4,12 +4,12 @@ from __future__ import annotations
 
 import json
 import math
-import os
 import subprocess
-import sys
 from pathlib import Path
 
 import pytest
+
+from tests._bench import run_benchmark
 
 REPO = Path(__file__).resolve().parents[1]
 BENCH = REPO / "benchmarks"
@@ -27,10 +27,7 @@ STATIC_SUMMARY_KEYS = {"worst_time_public_s", "worst_time_newton_s", "worst_rel_
 
 
 def run_script(name: str, *args: str) -> subprocess.CompletedProcess:
-    env = dict(os.environ, MPLBACKEND="Agg")
-    env["PYTHONPATH"] = os.pathsep.join(filter(None, [str(REPO / "src"), env.get("PYTHONPATH")]))
-    return subprocess.run([sys.executable, str(BENCH / name), *args], capture_output=True,
-                          text=True, env=env, timeout=300, check=False)
+    return run_benchmark(name, *args)
 
 
 @pytest.fixture(scope="module")
