@@ -102,7 +102,7 @@ def output_times(drive: Triangle, n: int) -> np.ndarray:
 
 
 def run_loop(problem, drive, t_eval, method: str, *, tol=None, dt=None, max_step=None):
-    return simulate(problem, drive, t_end=drive.duration, t_eval=t_eval, method=method, tol=tol,
+    return simulate(problem, drive, t_end=drive.duration, t_eval=t_eval, stepper=method, tol=tol,
                     dt=dt, max_step=max_step, progress=False)
 
 

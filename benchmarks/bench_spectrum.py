@@ -46,7 +46,7 @@ import viscoforce as vf  # noqa: E402
 from viscoforce.exceptions import ViscoforceError  # noqa: E402
 from viscoforce.experiments.drives import Sinusoid  # noqa: E402
 from viscoforce.experiments.linear_response import (  # noqa: E402
-    complex_stiffness,
+    linear_stiffness,
     linear_response,
 )
 from viscoforce.experiments.spectroscopy import DEFAULT_SETTLE_TAUS, sweep  # noqa: E402
@@ -227,7 +227,7 @@ def fixed_step_response(problem, h0: float, eta: float, omega: float, steps: int
     n_settle = math.ceil(settle_time() / period - 1e-9)
     drive = Sinusoid(h0, eta, omega, periods=float(n_settle + PERIODS))
     t_eval = n_settle * period + period * np.arange(PERIODS * steps + 1) / steps
-    ds = simulate(problem, drive, t_end=drive.duration, t_eval=t_eval, method=method,
+    ds = simulate(problem, drive, t_end=drive.duration, t_eval=t_eval, stepper=method,
                   dt=period / steps, progress=False)
     force, t = ds.force.values, ds.time.values
     first = complex(demodulate(force, t, omega))
@@ -249,7 +249,7 @@ def td_point(problem, scene: str, omega: float, n: int, method: str, mode: str,
         dt = min(euler_default_dt(), period / n) if method == "euler" else math.nan
 
         def run():
-            ds = sweep(problem, h0, eta, [omega], samples_per_period=n, method=method,
+            ds = sweep(problem, h0, eta, [omega], samples_per_period=n, stepper=method,
                        progress=False)
             return kstar(ds), float(ds.mean_force.values[0]), int(ds.steps.values[0])
     else:
@@ -394,7 +394,7 @@ def fig4_peak(problem, quick: bool) -> dict:
     h0, eta = SCENES["Fig. 4"]
     # (a) linear peak
     def lin_neg_phase(x: float) -> float:
-        return -math.degrees(np.angle(complex_stiffness(problem, h0, [math.exp(x)])[0][0]))
+        return -math.degrees(np.angle(linear_stiffness(problem, h0, [math.exp(x)])[0][0]))
 
     res = minimize_scalar(lin_neg_phase, bounds=(math.log(OMEGA_MIN), math.log(OMEGA_MAX)),
                           method="bounded", options={"xatol": 1e-6})
@@ -493,7 +493,7 @@ def fig4_peak(problem, quick: bool) -> dict:
     # the library sweep with method="euler" (its dt is the default, not period/samples)
     lib = []
     for n in (QUICK_EULER_SWEEP_SAMPLES if quick else EULER_SWEEP_SAMPLES):
-        ds = sweep(problem, h0, eta, [w_lin], samples_per_period=n, method="euler",
+        ds = sweep(problem, h0, eta, [w_lin], samples_per_period=n, stepper="euler",
                    progress=False)
         dt = min(euler_default_dt(), 2 * math.pi / w_lin / n)
         lib.append({"samples_per_period": n, "omega": w_lin, "dt_s": dt,

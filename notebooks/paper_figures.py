@@ -85,7 +85,7 @@ def run(problem, drive, n_out: int, *, t_end: float | None = None, profiles: int
 
 def run_info(ds) -> dict:
     """Numerics of one run (for the JSON)."""
-    return {"method": ds.attrs["method"], "steps": int(ds.attrs["steps"]),
+    return {"method": ds.attrs["stepper"], "steps": int(ds.attrs["steps"]),
             "rejected_steps": int(ds.attrs["rejected_steps"]),
             "grid_nodes": int(ds.attrs["n_panels"]) * int(ds.attrs["order"]),
             "outer_radius_m": float(ds.attrs["outer_radius"]), "tol_m": float(ds.attrs["tol"])}

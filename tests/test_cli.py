@@ -73,7 +73,7 @@ def test_simulate_triangle_json_contract(capsys):
         assert key in out
     assert len(out["time"]) == 31 and out["time"][-1] == pytest.approx(6e-3)
     assert min(out["position"]) == pytest.approx(-5e-9)
-    assert out["settings"]["method"] == "exponential" and out["settings"]["tau"] == 1e-3
+    assert out["settings"]["stepper"] == "exponential" and out["settings"]["tau"] == 1e-3
 
 
 @pytest.mark.parametrize("argv", [

@@ -133,7 +133,7 @@ def test_hold_values():
 
 
 def test_hold_raises():
-    with pytest.raises(ParameterError, match="separation must be finite"):
+    with pytest.raises(ParameterError, match="h0 must be finite"):
         Hold(np.nan, 1e-3)
     with pytest.raises(ParameterError, match=r"duration must be > 0, got 0"):
         Hold(0.0, 0)
@@ -284,11 +284,11 @@ def test_sinusoid_raises():
         Sinusoid(0.0, 1 * NM, 1e3, duration=1e-3)
     with pytest.raises(ParameterError, match="duration must be > 0"):
         Sinusoid(0.0, 1 * NM, 1e3, duration=-1.0)
-    with pytest.raises(ParameterError, match="amplitude must be > 0"):
+    with pytest.raises(ParameterError, match="eta must be > 0"):
         Sinusoid(0.0, 0.0, 1e3, periods=1)
     with pytest.raises(ParameterError, match=r"omega must be > 0, got -1"):
         Sinusoid(0.0, 1 * NM, -1.0, periods=1)
-    with pytest.raises(ParameterError, match="mean must be finite"):
+    with pytest.raises(ParameterError, match="h0 must be finite"):
         Sinusoid(np.nan, 1 * NM, 1e3, periods=1)
     with pytest.raises(ParameterError, match="finite duration"):
         Sinusoid(0.0, 1 * NM, 1e-308, periods=1)
@@ -374,9 +374,9 @@ def test_measured_trace_is_frozen_and_keeps_caller_data():
     sep = np.array([0.0, 1 * NM, 0.0])
     trace = MeasuredTrace(time, sep)
     assert not trace.time.flags.writeable
-    assert not trace.separation.flags.writeable
+    assert not trace.h0.flags.writeable
     with pytest.raises(ValueError, match="read-only"):
-        trace.separation[0] = 1.0
+        trace.h0[0] = 1.0
     sep[1] = 5 * NM  # caller's array is independent of the stored copy
     assert float(trace.position(1.0)) == 1 * NM
     assert time.flags.writeable
@@ -403,11 +403,11 @@ def test_measured_trace_raises():
         MeasuredTrace([0.0], [0.0])
     with pytest.raises(ParameterError, match="time must be finite"):
         MeasuredTrace([0.0, np.nan], [0.0, 0.0])
-    with pytest.raises(ParameterError, match="separation must be finite"):
+    with pytest.raises(ParameterError, match="h0 must be finite"):
         MeasuredTrace([0.0, 1.0], [0.0, np.inf])
     with pytest.raises(ParameterError, match="time must be strictly increasing"):
         MeasuredTrace([0.0, 1.0, 1.0], [0.0, 0.0, 0.0])
-    with pytest.raises(ParameterError, match=r"separation must have the same length as time \(3\)"):
+    with pytest.raises(ParameterError, match=r"h0 must have the same length as time \(3\)"):
         MeasuredTrace([0.0, 1.0, 2.0], [0.0, 0.0])
     with pytest.raises(ParameterError, match="smooth must be True or False"):
         MeasuredTrace([0.0, 1.0], [0.0, 0.0], smooth="yes")

@@ -104,8 +104,8 @@ def test_two_equal_modes_reproduce_single_mode(make_problem):
     a = loop(make_problem, 5e-6, turn=-5e-9, n=41)
     b = loop(make_problem, 5e-6, turn=-5e-9, n=41, material=two)
     np.testing.assert_allclose(b.force.values, a.force.values, rtol=1e-9)
-    c = loop(make_problem, 5e-6, turn=-5e-9, n=41, method="euler", dt=1e-5)
-    d = loop(make_problem, 5e-6, turn=-5e-9, n=41, material=two, method="euler", dt=1e-5)
+    c = loop(make_problem, 5e-6, turn=-5e-9, n=41, stepper="euler", dt=1e-5)
+    d = loop(make_problem, 5e-6, turn=-5e-9, n=41, material=two, stepper="euler", dt=1e-5)
     np.testing.assert_allclose(d.force.values, c.force.values, rtol=1e-9)
 
 
@@ -116,7 +116,7 @@ def test_multimode_long_time_limit_is_static_einf(make_problem, method):
     problem = make_problem(material, -7e-9)
     drive = Sequence((Ramp(-2e-9, -7e-9, 5e-4), Ramp(-7e-9, -5e-9, 2e-4)))
     kw = {"dt": 2e-6} if method == "euler" else {}
-    ds = simulate(problem, drive, t_end=drive.duration + 20e-3, method=method,
+    ds = simulate(problem, drive, t_end=drive.duration + 20e-3, stepper=method,
                   t_eval=np.array([0.0, drive.duration + 20e-3]), **kw)
     static = vf.static_equilibrium(problem, -5e-9)
     assert float(ds.force[-1]) == pytest.approx(float(static.force), rel=1e-7)
@@ -131,7 +131,7 @@ def test_elastic_material_follows_the_statics(make_problem):
 
 
 def fixed_step_error(make_problem, method, dt, reference):
-    ds = loop(make_problem, 5e-6, turn=-5e-9, n=25, method=method, dt=dt)
+    ds = loop(make_problem, 5e-6, turn=-5e-9, n=25, stepper=method, dt=dt)
     return float(np.max(np.abs(ds.force - reference.force)) / reference.force.max())
 
 
@@ -154,7 +154,7 @@ def test_adaptive_default_meets_its_accuracy(make_problem):
     ds = loop(make_problem, 5e-6, n=41)
     err = float(np.max(np.abs(ds.force - reference.force)) / reference.force.max())
     assert err < 1e-3
-    assert ds.attrs["method"] == "exponential" and ds.attrs["steps"] > 0
+    assert ds.attrs["stepper"] == "exponential" and ds.attrs["steps"] > 0
 
 
 def test_grid_refinement_changes_the_loop_by_less_than_1e4(make_problem):
@@ -181,7 +181,7 @@ def test_dataset_units_profiles_and_netcdf(make_problem, tmp_path):
 
 def test_explicit_euler_above_its_limit_raises_with_the_fix(make_problem):
     with pytest.raises(vf.StabilityError, match=r"step \d+: explicit Euler is unstable at t = .* use dt <"):
-        loop(make_problem, 5e-6, n=3, method="euler", dt=5e-4)
+        loop(make_problem, 5e-6, n=3, stepper="euler", dt=5e-4)
 
 
 def test_drive_that_crushes_the_gap_raises(make_problem):
@@ -195,8 +195,8 @@ def test_drive_that_crushes_the_gap_raises(make_problem):
 def test_bad_arguments(make_problem):
     problem = make_problem(SLS, -5e-9)
     drive = Hold(-5e-9, 1e-3)
-    with pytest.raises(vf.ParameterError, match="method must be one of"):
-        simulate(problem, drive, method="rk4")
+    with pytest.raises(vf.ParameterError, match="stepper must be one of"):
+        simulate(problem, drive, stepper="rk4")
     with pytest.raises(vf.ParameterError, match="t_eval must lie in"):
         simulate(problem, drive, t_end=1e-3, t_eval=[0.0, 2e-3])
     with pytest.raises(vf.ParameterError, match="t_eval must be strictly increasing"):

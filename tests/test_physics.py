@@ -31,11 +31,11 @@ def test_paper_law_values_and_sum():
 
 
 def test_law_validation():
-    with pytest.raises(vf.ParameterError, match="pressure_scale \\(P\\) must be > 0"):
+    with pytest.raises(vf.ParameterError, match="P \\(double-layer pressure scale\\) must be > 0"):
         vf.DoubleLayer(-1.0)
     with pytest.raises(vf.ParameterError, match="debye_length must be > 0"):
         vf.DoubleLayer(1e7, 0.0)
-    with pytest.raises(vf.ParameterError, match="wall_length \\(z0\\) must be finite"):
+    with pytest.raises(vf.ParameterError, match="z0 \\(soft-wall length\\) must be finite"):
         vf.SoftWall(1e7, float("nan"))
     with pytest.raises(vf.ParameterError, match="gap must be > 0 for the soft wall"):
         vf.SoftWall().pressure(np.array([1e-9, -1e-10]))

@@ -10,7 +10,7 @@ from scipy.optimize import minimize_scalar
 import viscoforce as vf
 from viscoforce.closed_form import svda_peak_phase_frequency, svda_ramp_deformation
 from viscoforce.experiments import Ramp
-from viscoforce.experiments.linear_response import complex_stiffness, linear_response
+from viscoforce.experiments.linear_response import linear_stiffness, linear_response
 from viscoforce.experiments.spectroscopy import svda_spectrum, sweep
 from viscoforce.schema import SchemaError, validate_spectrum
 from viscoforce.solvers.simulate import simulate
@@ -24,7 +24,7 @@ def phase_peak(problem, position):
     """Maximum of the linear-response phase over log ω (bounded scalar search)."""
 
     def neg(log_w):
-        k, _ = complex_stiffness(problem, position, [10.0**log_w])
+        k, _ = linear_stiffness(problem, position, [10.0**log_w])
         return -np.degrees(np.angle(k[0]))
 
     res = minimize_scalar(neg, bounds=(1.0, 5.0), method="bounded",
@@ -98,7 +98,7 @@ def test_linear_response_limits(make_problem):
     """ω → 0: the static E_inf stiffness −dF/dh0 (finite differences of the statics); χ → 0 at
     both ends; ω → ∞ stiffer (the E0 response about the same E_inf state)."""
     problem = make_problem(SLS, -3e-9)
-    k, mean = complex_stiffness(problem, -2e-9, [1e-6, 1e12])
+    k, mean = linear_stiffness(problem, -2e-9, [1e-6, 1e12])
     d = 1e-13
     fp = float(vf.static_equilibrium(problem, -2e-9 + d).force)
     fm = float(vf.static_equilibrium(problem, -2e-9 - d).force)
@@ -107,7 +107,7 @@ def test_linear_response_limits(make_problem):
     assert abs(np.degrees(np.angle(k))).max() < 1e-3
     assert k[1].real > 2 * k[0].real
     elastic = make_problem(vf.Elastic(1e9), -3e-9)
-    ke, _ = complex_stiffness(elastic, -2e-9, [1.0, 1e3, 1e6])
+    ke, _ = linear_stiffness(elastic, -2e-9, [1.0, 1e3, 1e6])
     np.testing.assert_allclose(ke, ke[0], rtol=1e-12)
 
 
@@ -217,7 +217,7 @@ def test_fig4_explicit_euler_coarse_steps_overestimate_the_phase(make_problem):
     """
     problem = make_problem(SLS, -6e-9)
     w = [2342.0]
-    coarse = sweep(problem, -5e-9, 1e-9, w, method="euler", steps_per_period=16,
+    coarse = sweep(problem, -5e-9, 1e-9, w, stepper="euler", steps_per_period=16,
                    samples_per_period=16, periods=2)
     exact = sweep(problem, -5e-9, 1e-9, w, periods=2)
     assert float(coarse.phase[0]) == pytest.approx(52.9, abs=0.5)

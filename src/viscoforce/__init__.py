@@ -18,7 +18,8 @@ from viscoforce.exceptions import (
 )
 from viscoforce.physics.materials import Elastic, PronySeries, StandardLinearSolid
 from viscoforce.physics.particle import Sphere
-from viscoforce.physics.surface_forces import DoubleLayer, SoftWall, paper_pressure_law
+from viscoforce.physics.paper import PAPER, PaperParameters, paper_pressure_law
+from viscoforce.physics.surface_forces import DoubleLayer, SoftWall, SumOfLaws
 from viscoforce.problem import ContactProblem, default_grid
 from viscoforce.radial_grid import RadialGrid
 from viscoforce.solvers.static import static_equilibrium
@@ -31,10 +32,13 @@ __all__ = [
     "DoubleLayer",
     "Elastic",
     "GapClosureError",
+    "PAPER",
+    "PaperParameters",
     "ParameterError",
     "PronySeries",
     "RadialGrid",
     "SoftWall",
+    "SumOfLaws",
     "Sphere",
     "StabilityError",
     "StandardLinearSolid",

@@ -24,7 +24,8 @@ from viscoforce.physics.materials import (
     ViscoelasticMaterial,
 )
 from viscoforce.physics.particle import Sphere
-from viscoforce.physics.surface_forces import SurfaceForceLaw, paper_pressure_law
+from viscoforce.physics.paper import PAPER, paper_pressure_law
+from viscoforce.physics.surface_forces import SurfaceForceLaw
 from viscoforce.problem import ContactProblem
 from viscoforce.solvers.simulate import default_end_time, simulate
 from viscoforce.solvers.static import static_equilibrium
@@ -48,15 +49,15 @@ def _finite_or_none(x: float) -> float | None:
 
 def _add_system_flags(p: argparse.ArgumentParser) -> None:
     g = p.add_argument_group("system (defaults: the paper's values)")
-    g.add_argument("--R", type=_LENGTH, default=10e-6, metavar="LENGTH",
+    g.add_argument("--R", type=_LENGTH, default=PAPER.R, metavar="LENGTH",
                    help="sphere radius R (default 10um)")
-    g.add_argument("--P", type=_PRESSURE, default=1e7, metavar="PRESSURE",
+    g.add_argument("--P", type=_PRESSURE, default=PAPER.P, metavar="PRESSURE",
                    help="double-layer pressure scale P (default 1e7Pa)")
-    g.add_argument("--Pw", type=_PRESSURE, default=1e7, metavar="PRESSURE",
+    g.add_argument("--Pw", type=_PRESSURE, default=PAPER.Pw, metavar="PRESSURE",
                    help="soft-wall pressure Pw (default 1e7Pa)")
-    g.add_argument("--z0", type=_LENGTH, default=0.5e-9, metavar="LENGTH",
+    g.add_argument("--z0", type=_LENGTH, default=PAPER.z0, metavar="LENGTH",
                    help="soft-wall length z0 (default 0.5nm)")
-    g.add_argument("--debye-length", type=_LENGTH, default=1e-9, metavar="LENGTH",
+    g.add_argument("--debye-length", type=_LENGTH, default=PAPER.debye_length, metavar="LENGTH",
                    help="Debye length 1/kappa (default 1nm)")
 
 
@@ -94,7 +95,7 @@ def _material(args: argparse.Namespace) -> ViscoelasticMaterial:
         return Elastic(args.E)
     if args.prony is not None:
         return PronySeries.from_moduli(*read_prony_moduli(args.prony))
-    e0, e_inf, tau = (d if v is None else v for v, d in zip(sls, (1e10, 1e9, 1e-3), strict=True))
+    e0, e_inf, tau = (d if v is None else v for v, d in zip(sls, (PAPER.E0, PAPER.E_inf, PAPER.tau), strict=True))
     return StandardLinearSolid(E0=e0, E_inf=e_inf, tau=tau)
 
 
@@ -186,7 +187,7 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
     problem = _problem(args, material, float(drive.extent()[0]))
     t_end = default_end_time(problem, drive) if args.t_end is None else args.t_end
     t_eval = np.linspace(0.0, t_end, args.samples)
-    ds = simulate(problem, drive, t_end=t_end, t_eval=t_eval, method=args.method, dt=args.dt,
+    ds = simulate(problem, drive, t_end=t_end, t_eval=t_eval, stepper=args.method, dt=args.dt,
                   tol=args.tol, profiles=args.profiles, progress=args.progress)
     if args.out:
         ds.to_netcdf(args.out, engine="scipy")
@@ -207,7 +208,7 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
             "settings": settings,
         }))
     else:
-        print(f"{settings['drive']}; {type(material).__name__}; method {settings['method']}: "
+        print(f"{settings['drive']}; {type(material).__name__}; stepper {settings['stepper']}: "
               f"{settings['steps']} steps ({settings['rejected_steps']} rejected), "
               f"{settings['newton_iterations']} Newton iterations")
         i = int(np.argmax(ds.force.values))

@@ -24,10 +24,10 @@ import math
 from abc import ABC, abstractmethod
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import ArrayLike
-from scipy.interpolate import PchipInterpolator
 
 from viscoforce._typing import FloatArray
 from viscoforce._validation import (
@@ -37,6 +37,9 @@ from viscoforce._validation import (
     require_positive,
 )
 from viscoforce.exceptions import ParameterError
+
+if TYPE_CHECKING:
+    from scipy.interpolate import PchipInterpolator
 
 __all__ = ["Hold", "Ramp", "Step", "Triangle", "Sinusoid", "Sequence", "MeasuredTrace"]
 
@@ -207,31 +210,31 @@ class Hold(_Drive):
 
     Parameters
     ----------
-    separation : float
+    h0 : float
         Position h0 held [m] (may be negative).
     duration : float
         How long it is held [s], > 0.
     """
 
-    separation: float
+    h0: float
     duration: float
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "separation", require_finite("separation", self.separation))
+        object.__setattr__(self, "h0", require_finite("h0", self.h0))
         object.__setattr__(self, "duration", require_positive("duration", self.duration))
 
     @property
     def start_position(self) -> float:
         """Position at t = 0 [m]."""
-        return self.separation
+        return self.h0
 
     @property
     def end_position(self) -> float:
         """Position at t = duration [m]."""
-        return self.separation
+        return self.h0
 
     def _position_active(self, t: FloatArray) -> FloatArray:
-        return np.full(t.shape, self.separation)
+        return np.full(t.shape, self.h0)
 
     def _velocity_active(self, t: FloatArray) -> FloatArray:
         return np.zeros(t.shape)
@@ -241,12 +244,12 @@ class Hold(_Drive):
         return _endpoints(self.duration)
 
     def extent(self) -> tuple[float, float]:
-        """Return the (min, max) position over [0, duration] [m]: both equal ``separation``."""
-        return (self.separation, self.separation)
+        """Return the (min, max) position over [0, duration] [m]: both equal ``h0``."""
+        return (self.h0, self.h0)
 
     def describe(self) -> str:
         """Return a one-line summary, e.g. ``"hold −5 nm for 1 ms"``."""
-        return f"hold {_si(self.separation, 'm')} for {_si(self.duration, 's')}"
+        return f"hold {_si(self.h0, 'm')} for {_si(self.duration, 's')}"
 
 
 @dataclass(frozen=True)
@@ -430,16 +433,16 @@ class Triangle(_Drive):
 
 @dataclass(frozen=True)
 class Sinusoid(_Drive):
-    """Oscillate as h0(t) = mean + amplitude·sin(ωt) for a whole or fractional number of periods.
+    """Oscillate as h0(t) = h0 + eta·sin(ωt) for a whole or fractional number of periods.
 
-    It starts at ``mean`` with velocity amplitude·ω, so t = 0 is a kink relative to a hold before
+    It starts at ``h0`` with velocity eta·ω, so t = 0 is a kink relative to a hold before
     it. Give exactly one of ``periods`` and ``duration``; at least one full period is required.
 
     Parameters
     ----------
-    mean : float
+    h0 : float
         Mean position h̄0 [m].
-    amplitude : float
+    eta : float
         Drive amplitude η [m], > 0.
     omega : float
         Angular frequency ω [rad/s], > 0.
@@ -449,15 +452,15 @@ class Sinusoid(_Drive):
         Duration [s], at least one period 2π/ω; periods = duration·ω/2π.
     """
 
-    mean: float
-    amplitude: float
+    h0: float
+    eta: float
     omega: float
     periods: float | None = None
     duration: float | None = None
 
     def __post_init__(self) -> None:
-        mean = require_finite("mean", self.mean)
-        amplitude = require_positive("amplitude", self.amplitude)
+        position = require_finite("h0", self.h0)
+        eta = require_positive("eta", self.eta)
         omega = require_positive("omega", self.omega)
         period = 2.0 * math.pi / omega
         if (self.periods is None) == (self.duration is None):
@@ -479,39 +482,39 @@ class Sinusoid(_Drive):
         if not math.isfinite(duration):
             raise ParameterError(
                 f"periods·2π/omega must be a finite duration [s], got {duration!r}")
-        object.__setattr__(self, "mean", mean)
-        object.__setattr__(self, "amplitude", amplitude)
+        object.__setattr__(self, "h0", position)
+        object.__setattr__(self, "eta", eta)
         object.__setattr__(self, "omega", omega)
         object.__setattr__(self, "periods", periods)
         object.__setattr__(self, "duration", duration)
 
     @property
     def start_position(self) -> float:
-        """Position at t = 0 [m] (= mean)."""
-        return self.mean
+        """Position at t = 0 [m] (= the mean position)."""
+        return self.h0
 
     @property
     def end_position(self) -> float:
         """Position at t = duration [m]."""
-        return self.mean + self.amplitude * math.sin(self.omega * self.duration)
+        return self.h0 + self.eta * math.sin(self.omega * self.duration)
 
     def _position_active(self, t: FloatArray) -> FloatArray:
-        return self.mean + self.amplitude * np.sin(self.omega * t)
+        return self.h0 + self.eta * np.sin(self.omega * t)
 
     def _velocity_active(self, t: FloatArray) -> FloatArray:
-        return self.amplitude * self.omega * np.cos(self.omega * t)
+        return self.eta * self.omega * np.cos(self.omega * t)
 
     def breakpoints(self) -> FloatArray:
         """Return the kink times [s]: 0 and duration (jumps from/to the holds around it)."""
         return _endpoints(self.duration)
 
     def extent(self) -> tuple[float, float]:
-        """Return the (min, max) position [m]: mean ∓ amplitude (>= one full period is played)."""
-        return (self.mean - self.amplitude, self.mean + self.amplitude)
+        """Return the (min, max) position [m]: h0 ∓ eta (>= one full period is played)."""
+        return (self.h0 - self.eta, self.h0 + self.eta)
 
     def describe(self) -> str:
         """Return a one-line summary, e.g. ``"sinusoid −5 nm + 100 pm·sin(ωt), …"``."""
-        return (f"sinusoid {_si(self.mean, 'm')} + {_si(self.amplitude, 'm')}·sin(ωt), "
+        return (f"sinusoid {_si(self.h0, 'm')} + {_si(self.eta, 'm')}·sin(ωt), "
                 f"ω = {self.omega:.4g} rad/s, {self.periods:.4g} periods "
                 f"({_si(self.duration, 's')})")
 
@@ -645,14 +648,14 @@ class MeasuredTrace(_Drive):
     ----------
     time : array_like
         Sample times [s], strictly increasing, at least 2 samples.
-    separation : array_like
+    h0 : array_like
         Positions h0 at those times [m], finite, same length as ``time``.
     smooth : bool, optional
         Use a C¹ monotone cubic interpolant instead of piecewise-linear (default False).
     """
 
     time: FloatArray
-    separation: FloatArray
+    h0: FloatArray
     smooth: bool = False
     time_offset: float = field(init=False)
     _interpolant: PchipInterpolator | None = field(init=False, repr=False)
@@ -660,22 +663,26 @@ class MeasuredTrace(_Drive):
     def __post_init__(self) -> None:
         time = as_float_1d("time", self.time, min_size=2)
         time = require_increasing("time", time)
-        separation = as_float_1d("separation", self.separation, min_size=2)
-        if separation.size != time.size:
+        position = as_float_1d("h0", self.h0, min_size=2)
+        if position.size != time.size:
             raise ParameterError(
-                f"separation must have the same length as time ({time.size}), "
-                f"got {separation.size}")
+                f"h0 must have the same length as time ({time.size}), "
+                f"got {position.size}")
         if not isinstance(self.smooth, bool | np.bool_):
             raise ParameterError(f"smooth must be True or False, got {self.smooth!r}")
         offset = float(time[0])
         shifted = np.array(time - offset, dtype=float)
         require_increasing("time (after shifting to start at 0)", shifted)
-        separation = np.array(separation, dtype=float)  # own copy: the caller's array stays as is
+        position = np.array(position, dtype=float)  # own copy: the caller's array stays as is
         shifted.flags.writeable = False
-        separation.flags.writeable = False
-        interpolant = PchipInterpolator(shifted, separation) if self.smooth else None
+        position.flags.writeable = False
+        interpolant = None
+        if self.smooth:
+            from scipy.interpolate import PchipInterpolator  # only smooth traces need scipy here
+
+            interpolant = PchipInterpolator(shifted, position)
         object.__setattr__(self, "time", shifted)
-        object.__setattr__(self, "separation", separation)
+        object.__setattr__(self, "h0", position)
         object.__setattr__(self, "smooth", bool(self.smooth))
         object.__setattr__(self, "time_offset", offset)
         object.__setattr__(self, "_interpolant", interpolant)
@@ -688,22 +695,22 @@ class MeasuredTrace(_Drive):
     @property
     def start_position(self) -> float:
         """First sample [m]."""
-        return float(self.separation[0])
+        return float(self.h0[0])
 
     @property
     def end_position(self) -> float:
         """Last sample [m]."""
-        return float(self.separation[-1])
+        return float(self.h0[-1])
 
     def _position_active(self, t: FloatArray) -> FloatArray:
         if self._interpolant is not None:
             return np.asarray(self._interpolant(t), dtype=float)
-        return np.interp(t, self.time, self.separation)
+        return np.interp(t, self.time, self.h0)
 
     def _velocity_active(self, t: FloatArray) -> FloatArray:
         if self._interpolant is not None:
             return np.asarray(self._interpolant(t, 1), dtype=float)
-        slopes = np.diff(self.separation) / np.diff(self.time)
+        slopes = np.diff(self.h0) / np.diff(self.time)
         idx = np.searchsorted(self.time, t, side="right") - 1
         return slopes[np.clip(idx, 0, slopes.size - 1)]
 
@@ -715,7 +722,7 @@ class MeasuredTrace(_Drive):
 
     def extent(self) -> tuple[float, float]:
         """Return the (min, max) position over [0, duration] [m]: the extreme samples."""
-        return (float(np.min(self.separation)), float(np.max(self.separation)))
+        return (float(np.min(self.h0)), float(np.max(self.h0)))
 
     def describe(self) -> str:
         """Return a one-line summary, e.g. ``"measured trace: 101 samples over 10 ms, …"``."""

@@ -27,7 +27,7 @@ from viscoforce.solvers.static import equilibrium_gap
 _BATCH_ELEMENTS = 4_000_000
 
 
-def complex_stiffness(problem: ContactProblem, position: float, omega: ArrayLike) -> tuple[
+def linear_stiffness(problem: ContactProblem, position: float, omega: ArrayLike) -> tuple[
         np.ndarray, float]:
     """k*(ω) [N/m] about the static E_inf state at ``position`` [m], and its mean force [N].
 
@@ -86,7 +86,7 @@ def linear_response(problem: ContactProblem, position: float, eta: float,
         Spectrum (see :mod:`viscoforce.schema`) with ``method = "linear"``.
     """
     eta = require_positive("eta", eta)
-    k, mean = complex_stiffness(problem, position, omega)
+    k, mean = linear_stiffness(problem, position, omega)
     attrs = dict(problem.parameters())
     attrs.update({"method": "linear", "position": float(position), "eta": eta,
                   "phase_convention": "force leads compression, degrees"})

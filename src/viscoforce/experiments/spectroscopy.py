@@ -41,14 +41,14 @@ DEFAULT_SWEEP_TOL = 1e-5
 
 def _one_frequency(problem: ContactProblem, position: float, eta: float, omega: float,
                    periods: int, settle: float, samples: int, tol: float,
-                   method: str, steps_per_period: int | None) -> tuple[complex, float, int]:
+                   stepper: str, steps_per_period: int | None) -> tuple[complex, float, int]:
     period = 2.0 * math.pi / omega
     n_settle = math.ceil(settle / period - 1e-9)
     drive = Sinusoid(position, eta, omega, periods=float(n_settle + periods))
     t0 = n_settle * period
     t_eval = t0 + period * np.arange(periods * samples + 1) / samples
     dt = None if steps_per_period is None else period / steps_per_period
-    ds = simulate(problem, drive, t_end=drive.duration, t_eval=t_eval, tol=tol, method=method,
+    ds = simulate(problem, drive, t_end=drive.duration, t_eval=t_eval, tol=tol, stepper=stepper,
                   dt=dt, progress=False)
     force, time = ds.force.values, ds.time.values
     first = complex(demodulate(force, time, omega))
@@ -59,7 +59,7 @@ def _one_frequency(problem: ContactProblem, position: float, eta: float, omega: 
 
 def sweep(problem: ContactProblem, position: float, eta: float, omega: ArrayLike, *,
           periods: int = 4, settle: float | None = None, samples_per_period: int = 64,
-          tol: float | None = None, method: str = "exponential",
+          tol: float | None = None, stepper: str = "exponential",
           steps_per_period: int | None = None, n_jobs: int = 1,
           progress: bool | None = None) -> xr.Dataset:
     """Time-domain force spectroscopy: simulate each ω to steady state and demodulate.
@@ -83,7 +83,7 @@ def sweep(problem: ContactProblem, position: float, eta: float, omega: ArrayLike
         Output samples per period fed to the lock-in (≥ 8).
     tol : float, optional
         Local error tolerance of the stepper [m]; default 1e-5·η.
-    method : str
+    stepper : str
         Time stepper (see :func:`~viscoforce.solvers.simulate.simulate`).
     steps_per_period : int, optional
         Fixed time step of period/``steps_per_period`` (default: adaptive, or explicit Euler's
@@ -116,7 +116,7 @@ def sweep(problem: ContactProblem, position: float, eta: float, omega: ArrayLike
     if steps_per_period is not None:
         steps_per_period = require_int("steps_per_period", steps_per_period, 1)
     problem.check_covers(position - eta)
-    args = [(problem, position, eta, float(w), periods, settle, samples, tol, method,
+    args = [(problem, position, eta, float(w), periods, settle, samples, tol, stepper,
              steps_per_period) for w in omega]
     show = sys.stderr.isatty() if progress is None else progress
     if n_jobs > 1 and len(omega) > 1:
@@ -130,7 +130,7 @@ def sweep(problem: ContactProblem, position: float, eta: float, omega: ArrayLike
     attrs = dict(problem.parameters())
     attrs.update({"method": "time-domain", "position": float(position), "eta": eta,
                   "periods": periods, "settle": settle, "samples_per_period": samples,
-                  "tol": tol, "stepper": method,
+                  "tol": tol, "stepper": stepper,
                   "steps_per_period": 0 if steps_per_period is None else steps_per_period,
                   "phase_convention": "force leads compression, degrees"})
     ds = make_spectrum(omega, k, mean, eta, attrs=attrs)
@@ -169,7 +169,7 @@ def svda_spectrum(problem: ContactProblem, position: float, eta: float,
     eta = require_positive("eta", eta)
     resp = closed_form.svda_harmonic_response(
         omega, position, eta, material.instantaneous_modulus, material.relaxed_modulus,
-        prony.taus[0], problem.sphere.radius, dl.pressure_scale, dl.debye_length)
+        prony.taus[0], problem.sphere.radius, dl.P, dl.debye_length)
     central_gap = position - float(resp.u0)
     if central_gap < dl.debye_length:
         raise ParameterError(

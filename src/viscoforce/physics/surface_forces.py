@@ -55,9 +55,18 @@ class SurfaceForceLaw(ABC):
         right = other.terms if isinstance(other, SumOfLaws) else (other,)
         return SumOfLaws(left + right)
 
-    def parameters(self) -> dict[str, float]:
-        """Named parameters in SI (for dataset attrs)."""
+    def values(self) -> dict[str, float]:
+        """The law's own parameters in SI, by field name (``{"P": 1e7, "debye_length": 1e-9}``)."""
         return {k: float(v) for k, v in vars(self).items()}
+
+    def parameters(self) -> dict[str, float | str]:
+        """Flat dataset attrs: ``surface_force`` (:meth:`describe`) and the named values (SI)."""
+        return {"surface_force": self.describe(), **self.values()}
+
+    def describe(self) -> str:
+        """The law and its parameters in SI, e.g. ``DoubleLayer(P=1e+07, debye_length=1e-09)``."""
+        args = ", ".join(f"{k}={v:.6g}" for k, v in self.values().items())
+        return f"{type(self).__name__}({args})"
 
 
 @dataclass(frozen=True)
@@ -66,24 +75,23 @@ class DoubleLayer(SurfaceForceLaw):
 
     Parameters
     ----------
-    pressure_scale : float
-        P [Pa], > 0 (the paper's 1e7 Pa ≈ 85 mV surface potential).
+    P : float
+        Pressure scale P [Pa], > 0 (the paper's 1e7 Pa ≈ 85 mV surface potential).
     debye_length : float
         λ_D = 1/κ [m], > 0 (1 nm ≈ 0.1 M monovalent salt).
     """
 
-    pressure_scale: float = 1e7
+    P: float = 1e7  # noqa: N815
     debye_length: float = 1e-9
 
     def __post_init__(self):
-        object.__setattr__(self, "pressure_scale",
-                           require_positive("pressure_scale (P)", self.pressure_scale))
+        object.__setattr__(self, "P", require_positive("P (double-layer pressure scale)", self.P))
         object.__setattr__(self, "debye_length",
                            require_positive("debye_length", self.debye_length))
 
     def pressure(self, gap):
         """Pressure [Pa] at gap [m]."""
-        return self.pressure_scale * np.exp(-np.asarray(gap, dtype=float) / self.debye_length)
+        return self.P * np.exp(-np.asarray(gap, dtype=float) / self.debye_length)
 
     def pressure_derivative(self, gap):
         """dp/dh [Pa/m] at gap [m]."""
@@ -109,19 +117,18 @@ class SoftWall(SurfaceForceLaw):
 
     Parameters
     ----------
-    wall_pressure : float
-        P_w [Pa], > 0.
-    wall_length : float
-        z0 [m], > 0.
+    Pw : float
+        Wall pressure P_w [Pa], > 0.
+    z0 : float
+        Wall length z0 [m], > 0.
     """
 
-    wall_pressure: float = 1e7
-    wall_length: float = 0.5e-9
+    Pw: float = 1e7  # noqa: N815
+    z0: float = 0.5e-9
 
     def __post_init__(self):
-        object.__setattr__(self, "wall_pressure",
-                           require_positive("wall_pressure (Pw)", self.wall_pressure))
-        object.__setattr__(self, "wall_length", require_positive("wall_length (z0)", self.wall_length))
+        object.__setattr__(self, "Pw", require_positive("Pw (soft-wall pressure)", self.Pw))
+        object.__setattr__(self, "z0", require_positive("z0 (soft-wall length)", self.z0))
 
     def _check_gap(self, gap) -> FloatArray:
         h = np.asarray(gap, dtype=float)
@@ -132,26 +139,26 @@ class SoftWall(SurfaceForceLaw):
 
     def pressure(self, gap):
         """Pressure [Pa] at gap [m]."""
-        return self.wall_pressure * (self.wall_length / self._check_gap(gap)) ** 9
+        return self.Pw * (self.z0 / self._check_gap(gap)) ** 9
 
     def pressure_derivative(self, gap):
         """dp/dh [Pa/m] at gap [m]."""
         h = self._check_gap(gap)
-        return -9.0 * self.wall_pressure * (self.wall_length / h) ** 9 / h
+        return -9.0 * self.Pw * (self.z0 / h) ** 9 / h
 
     def energy(self, gap):
         """Energy per area [J/m²] at gap [m]."""
         h = self._check_gap(gap)
-        return self.wall_pressure * self.wall_length * (self.wall_length / h) ** 8 / 8.0
+        return self.Pw * self.z0 * (self.z0 / h) ** 8 / 8.0
 
     @property
     def decay_length(self) -> float:
         """z0/9 [m]: the local decay length |p/p′| of the wall at h = z0."""
-        return self.wall_length / 9.0
+        return self.z0 / 9.0
 
     def negligible_gap(self, rtol: float) -> float:
         """Gap [m] where p = rtol × P_w."""
-        return self.wall_length * rtol ** (-1.0 / 9.0)
+        return self.z0 * rtol ** (-1.0 / 9.0)
 
 
 @dataclass(frozen=True)
@@ -161,8 +168,12 @@ class SumOfLaws(SurfaceForceLaw):
     terms: tuple[SurfaceForceLaw, ...]
 
     def __post_init__(self):
-        if not self.terms or not all(isinstance(t, SurfaceForceLaw) for t in self.terms):
-            raise ParameterError("terms must be a non-empty tuple of SurfaceForceLaw")
+        if (not isinstance(self.terms, tuple) or not self.terms
+                or not all(isinstance(t, SurfaceForceLaw) for t in self.terms)):
+            raise ParameterError("terms must be a non-empty tuple of SurfaceForceLaw, got "
+                                 f"{self.terms!r}")
+        flat = tuple(u for t in self.terms for u in (t.terms if isinstance(t, SumOfLaws) else (t,)))
+        object.__setattr__(self, "terms", flat)
 
     def pressure(self, gap):
         """Pressure [Pa] at gap [m]."""
@@ -185,15 +196,27 @@ class SumOfLaws(SurfaceForceLaw):
         """The largest negligible gap of the terms [m]."""
         return max(t.negligible_gap(rtol) for t in self.terms)
 
-    def parameters(self) -> dict[str, float]:
-        """Parameters of all terms (names are unique across the paper's laws)."""
+    def values(self) -> dict[str, float]:
+        """Parameters of every term (SI).
+
+        A name that occurs in several terms (two double layers) is numbered by occurrence
+        (``P_1``, ``debye_length_1``, ``P_2``, ...) so that no term is lost.
+        """
+        per_term = [t.values() for t in self.terms]
+        counts: dict[str, int] = {}
+        for params in per_term:
+            for name in params:
+                counts[name] = counts.get(name, 0) + 1
         out: dict[str, float] = {}
-        for t in self.terms:
-            out.update(t.parameters())
+        seen: dict[str, int] = {}
+        for params in per_term:
+            for name, value in params.items():
+                if counts[name] > 1:
+                    seen[name] = seen.get(name, 0) + 1
+                    name = f"{name}_{seen[name]}"
+                out[name] = value
         return out
 
-
-def paper_pressure_law(pressure_scale: float = 1e7, debye_length: float = 1e-9,
-                       wall_pressure: float = 1e7, wall_length: float = 0.5e-9) -> SumOfLaws:
-    """The paper's Eq. 13: double layer plus soft wall (defaults: the paper's values)."""
-    return DoubleLayer(pressure_scale, debye_length) + SoftWall(wall_pressure, wall_length)
+    def describe(self) -> str:
+        """The terms, e.g. ``DoubleLayer(P=1e+07, debye_length=1e-09) + SoftWall(...)`` (SI)."""
+        return " + ".join(t.describe() for t in self.terms)

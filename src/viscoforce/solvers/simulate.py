@@ -38,15 +38,15 @@ class _Counters:
     newton: int
 
 
-def _resolve_method(method: str | type[TimeStepper]) -> type[TimeStepper]:
-    if isinstance(method, str):
-        if method not in METHODS:
+def _resolve_stepper(stepper: str | type[TimeStepper]) -> type[TimeStepper]:
+    if isinstance(stepper, str):
+        if stepper not in METHODS:
             raise ParameterError(
-                f"method must be one of {sorted(METHODS)} or a TimeStepper subclass, got {method!r}")
-        return METHODS[method]
-    if isinstance(method, type) and issubclass(method, TimeStepper):
-        return method
-    raise ParameterError(f"method must be a name or a TimeStepper subclass, got {method!r}")
+                f"stepper must be one of {sorted(METHODS)} or a TimeStepper subclass, got {stepper!r}")
+        return METHODS[stepper]
+    if isinstance(stepper, type) and issubclass(stepper, TimeStepper):
+        return stepper
+    raise ParameterError(f"stepper must be a name or a TimeStepper subclass, got {stepper!r}")
 
 
 def default_end_time(problem: ContactProblem, drive: SeparationHistory) -> float:
@@ -56,7 +56,7 @@ def default_end_time(problem: ContactProblem, drive: SeparationHistory) -> float
 
 
 def simulate(problem: ContactProblem, drive: SeparationHistory, *, t_end: float | None = None,
-             t_eval: FloatArray | None = None, method: str | type[TimeStepper] = DEFAULT_METHOD,
+             t_eval: FloatArray | None = None, stepper: str | type[TimeStepper] = DEFAULT_METHOD,
              dt: float | None = None, tol: float | None = None, max_step: float | None = None,
              profiles: int = 0, initial_state: State | None = None,
              contact_threshold: float | None = None, progress: bool | None = None) -> xr.Dataset:
@@ -73,7 +73,7 @@ def simulate(problem: ContactProblem, drive: SeparationHistory, *, t_end: float 
         End time [s]; default the drive's end plus 5 τ_max.
     t_eval : array_like, optional
         Output times [s] in [0, t_end], increasing; default 801 equally spaced times.
-    method : str or TimeStepper subclass
+    stepper : str or TimeStepper subclass
         ``"exponential"`` (default: second-order, unconditionally stable, adaptive),
         ``"exponential-euler"`` (first order) or ``"euler"`` (the paper's explicit Euler).
     dt : float, optional
@@ -106,7 +106,7 @@ def simulate(problem: ContactProblem, drive: SeparationHistory, *, t_end: float 
     GapClosureError, ConvergenceError
         The gap went through zero or Newton failed at the smallest step.
     """
-    stepper = _resolve_method(method)(problem)
+    stepper = _resolve_stepper(stepper)(problem)
     law = problem.surface_force
     t_end = default_end_time(problem, drive) if t_end is None else require_positive("t_end", t_end)
     problem.check_covers(float(drive.extent()[0]))
@@ -288,7 +288,7 @@ def _trajectory_dataset(problem: ContactProblem, drive: SeparationHistory, stepp
             attrs={"units": "Pa", "long_name": "pressure p(r, t)"})
     attrs = dict(problem.parameters())
     attrs.update(settings)
-    attrs.update({"method": stepper.name, "drive": _describe(drive),
+    attrs.update({"stepper": stepper.name, "drive": _describe(drive),
                   "contact_threshold": threshold, "steps": counters.steps,
                   "rejected_steps": counters.rejected, "newton_iterations": counters.newton})
     return xr.Dataset(data, coords=coords, attrs=attrs)
