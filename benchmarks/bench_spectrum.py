@@ -46,8 +46,8 @@ import viscoforce as vf  # noqa: E402
 from viscoforce.exceptions import ViscoforceError  # noqa: E402
 from viscoforce.experiments.drives import Sinusoid  # noqa: E402
 from viscoforce.experiments.linear_response import (  # noqa: E402
-    linear_stiffness,
     linear_response,
+    linear_stiffness,
 )
 from viscoforce.experiments.spectroscopy import DEFAULT_SETTLE_TAUS, sweep  # noqa: E402
 from viscoforce.lockin import demodulate  # noqa: E402

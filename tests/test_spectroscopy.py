@@ -10,7 +10,7 @@ from scipy.optimize import minimize_scalar
 import viscoforce as vf
 from viscoforce.closed_form import svda_peak_phase_frequency, svda_ramp_deformation
 from viscoforce.experiments import Ramp
-from viscoforce.experiments.linear_response import linear_stiffness, linear_response
+from viscoforce.experiments.linear_response import linear_response, linear_stiffness
 from viscoforce.experiments.spectroscopy import svda_spectrum, sweep
 from viscoforce.schema import SchemaError, validate_spectrum
 from viscoforce.solvers.simulate import simulate

@@ -17,8 +17,8 @@ from viscoforce.exceptions import (
     ViscoforceError,
 )
 from viscoforce.physics.materials import Elastic, PronySeries, StandardLinearSolid
-from viscoforce.physics.particle import Sphere
 from viscoforce.physics.paper import PAPER, PaperParameters, paper_pressure_law
+from viscoforce.physics.particle import Sphere
 from viscoforce.physics.surface_forces import DoubleLayer, SoftWall, SumOfLaws
 from viscoforce.problem import ContactProblem, default_grid
 from viscoforce.radial_grid import RadialGrid

@@ -23,8 +23,8 @@ from viscoforce.physics.materials import (
     StandardLinearSolid,
     ViscoelasticMaterial,
 )
-from viscoforce.physics.particle import Sphere
 from viscoforce.physics.paper import PAPER, paper_pressure_law
+from viscoforce.physics.particle import Sphere
 from viscoforce.physics.surface_forces import SurfaceForceLaw
 from viscoforce.problem import ContactProblem
 from viscoforce.solvers.simulate import default_end_time, simulate
@@ -95,7 +95,8 @@ def _material(args: argparse.Namespace) -> ViscoelasticMaterial:
         return Elastic(args.E)
     if args.prony is not None:
         return PronySeries.from_moduli(*read_prony_moduli(args.prony))
-    e0, e_inf, tau = (d if v is None else v for v, d in zip(sls, (PAPER.E0, PAPER.E_inf, PAPER.tau), strict=True))
+    defaults = (PAPER.E0, PAPER.E_inf, PAPER.tau)
+    e0, e_inf, tau = (d if v is None else v for v, d in zip(sls, defaults, strict=True))
     return StandardLinearSolid(E0=e0, E_inf=e_inf, tau=tau)
 
 
