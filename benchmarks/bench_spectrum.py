@@ -228,7 +228,7 @@ def fixed_step_response(problem, h0: float, eta: float, omega: float, steps: int
     drive = Sinusoid(h0, eta, omega, periods=float(n_settle + PERIODS))
     t_eval = n_settle * period + period * np.arange(PERIODS * steps + 1) / steps
     ds = simulate(problem, drive, t_end=drive.duration, t_eval=t_eval, stepper=method,
-                  dt=period / steps, progress=False)
+                  dt=period / steps, progress=False, output_kinks=False)
     force, t = ds.force.values, ds.time.values
     first = complex(demodulate(force, t, omega))
     mean = float(np.real(demodulate(force, t, omega, harmonic=0)))

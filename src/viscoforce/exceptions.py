@@ -52,3 +52,23 @@ class SchemaError(ViscoforceError, ValueError):
 
 class UnitError(ViscoforceError, ValueError):
     """A quantity string has an unknown unit or the wrong dimension."""
+
+
+class EffortError(ViscoforceError, ValueError):
+    """A request needs more work (steps, samples, memory) than a stated limit; refused up front.
+
+    Parameters
+    ----------
+    message : str
+        What was estimated, the limit, and how to reduce the work.
+    estimate : float
+        The estimated amount of work.
+    limit : float
+        The limit it exceeds.
+    """
+
+    def __init__(self, message: str, *, estimate: float = float("nan"),
+                 limit: float = float("nan")):
+        super().__init__(message)
+        self.estimate = estimate
+        self.limit = limit

@@ -49,7 +49,7 @@ def _one_frequency(problem: ContactProblem, position: float, eta: float, omega: 
     t_eval = t0 + period * np.arange(periods * samples + 1) / samples
     dt = None if steps_per_period is None else period / steps_per_period
     ds = simulate(problem, drive, t_end=drive.duration, t_eval=t_eval, tol=tol, stepper=stepper,
-                  dt=dt, progress=False)
+                  dt=dt, progress=False, output_kinks=False)
     force, time = ds.force.values, ds.time.values
     first = complex(demodulate(force, time, omega))
     mean = float(np.real(demodulate(force, time, omega, harmonic=0)))
@@ -185,3 +185,85 @@ def svda_spectrum(problem: ContactProblem, position: float, eta: float,
 
 
 SPECTRUM_METHODS = {"linear": linear_response, "time-domain": sweep, "svda": svda_spectrum}
+
+#: κη at or below which the small-amplitude (linear) spectrum is used by ``method="auto"``.
+LINEAR_KAPPA_ETA = 0.05
+
+
+def choose_spectrum_method(problem: ContactProblem, eta: float) -> tuple[str, str]:
+    """The cheapest adequate spectrum method for drive amplitude ``eta`` [m], with the reason.
+
+    The nonlinear correction to the first-harmonic stiffness is O((κη)²), with κ the inverse decay
+    length of the surface force: for κη ≤ :data:`LINEAR_KAPPA_ETA` the exact small-amplitude
+    solve (``"linear"``) is used, otherwise each frequency is simulated (``"time-domain"``).
+
+    Parameters
+    ----------
+    problem : ContactProblem
+        System (its surface force sets κ).
+    eta : float
+        Drive amplitude η [m], > 0.
+
+    Returns
+    -------
+    tuple of str
+        The method name (a key of :data:`SPECTRUM_METHODS`) and a one-sentence explanation.
+    """
+    eta = require_positive("eta", eta)
+    kappa_eta = eta / problem.surface_force.decay_length
+    if kappa_eta <= LINEAR_KAPPA_ETA:
+        return "linear", (f"kappa*eta = {kappa_eta:.3g} <= {LINEAR_KAPPA_ETA:g}: the nonlinear "
+                          f"correction to the stiffness is O((kappa*eta)^2) ~ {kappa_eta ** 2:.1e}, "
+                          "so the exact small-amplitude frequency-domain solve is used")
+    return "time-domain", (f"kappa*eta = {kappa_eta:.3g} > {LINEAR_KAPPA_ETA:g}: the response is not "
+                           "linear enough, so each frequency is simulated to steady state and "
+                           "demodulated")
+
+
+def spectrum(problem: ContactProblem, position: float, eta: float, omega: ArrayLike, *,
+             method: str = "auto", **options: object) -> xr.Dataset:
+    """Force spectrum by any route; ``method="auto"`` picks the cheapest adequate one.
+
+    Parameters
+    ----------
+    problem : ContactProblem
+        System, material, grid.
+    position : float
+        Mean position h̄0 [m].
+    eta : float
+        Drive amplitude η [m], > 0.
+    omega : array_like
+        Angular frequencies [rad/s], > 0.
+    method : {"auto", "linear", "time-domain", "svda"}
+        The route (see :data:`SPECTRUM_METHODS`); ``"auto"`` uses
+        :func:`choose_spectrum_method` and stores its reason in ``attrs["explanation"]``.
+    **options
+        Passed to the time-domain :func:`sweep` (``periods``, ``n_jobs``, ``progress``, ...);
+        only accepted when that route runs.
+
+    Returns
+    -------
+    xarray.Dataset
+        Spectrum; ``attrs["method"]`` is the route used.
+
+    Raises
+    ------
+    ParameterError
+        Unknown method.
+    TypeError
+        Options given to a route that takes none.
+    """
+    if method != "auto" and method not in SPECTRUM_METHODS:
+        raise ParameterError(
+            f"method must be 'auto' or one of {sorted(SPECTRUM_METHODS)}, got {method!r}")
+    explanation = ""
+    if method == "auto":
+        method, explanation = choose_spectrum_method(problem, eta)
+        if method != "time-domain":
+            options = {}  # time-domain options do not apply to the route chosen
+    if options and method != "time-domain":
+        raise TypeError(f"method {method!r} takes no options, got {sorted(options)}")
+    ds = SPECTRUM_METHODS[method](problem, position, eta, omega, **options)
+    if explanation:
+        ds.attrs["explanation"] = explanation
+    return ds

@@ -59,7 +59,8 @@ def simulate(problem: ContactProblem, drive: SeparationHistory, *, t_end: float 
              t_eval: FloatArray | None = None, stepper: str | type[TimeStepper] = DEFAULT_METHOD,
              dt: float | None = None, tol: float | None = None, max_step: float | None = None,
              profiles: int = 0, initial_state: State | None = None,
-             contact_threshold: float | None = None, progress: bool | None = None) -> xr.Dataset:
+             contact_threshold: float | None = None, progress: bool | None = None,
+             output_kinks: bool = True) -> xr.Dataset:
     """Time-dependent viscoelastic response along the drive ``drive``.
 
     Parameters
@@ -92,6 +93,10 @@ def simulate(problem: ContactProblem, drive: SeparationHistory, *, t_end: float 
         Gap [m] defining contact (default: the force's decay length, 1/κ).
     progress : bool, optional
         Show a progress bar (default: only when stderr is a terminal).
+    output_kinks : bool
+        Add every drive kink in [0, t_end] (a triangle's turning point, the end of a step's rise,
+        every sample of a measured trace) to the output times, so that reported extremes are the
+        true extremes (default True; a lock-in that needs exactly ``t_eval`` passes False).
 
     Returns
     -------
@@ -114,6 +119,9 @@ def simulate(problem: ContactProblem, drive: SeparationHistory, *, t_end: float 
     t_eval = require_increasing("t_eval", t_eval)
     if t_eval[0] < 0 or t_eval[-1] > t_end * (1 + 1e-12):
         raise ParameterError(f"t_eval must lie in [0, t_end = {t_end:g} s]")
+    if output_kinks:
+        kinks = np.asarray(drive.breakpoints(), dtype=float)
+        t_eval = np.union1d(t_eval, kinks[(kinks >= 0) & (kinks <= t_end)])
     profiles = require_int("profiles", profiles, 0)
     threshold = (law.decay_length if contact_threshold is None
                  else require_positive("contact_threshold", contact_threshold))
