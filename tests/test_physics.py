@@ -72,7 +72,7 @@ def test_prony_forms_agree_with_sls():
 
 
 def test_material_validation():
-    with pytest.raises(vf.ParameterError, match="E0 must be > E_inf"):
+    with pytest.raises(vf.ParameterError, match=r"E0 \(instantaneous modulus\) must be > E_inf"):
         vf.StandardLinearSolid(E0=1e9, E_inf=1e9, tau=1e-3)
     with pytest.raises(vf.ParameterError, match="tau must be > 0"):
         vf.StandardLinearSolid(E0=1e10, E_inf=1e9, tau=0.0)

@@ -211,7 +211,7 @@ _T = np.linspace(0, 1e-3, 3)
     (dict(method="RK45"), "method must be one of"),
     (dict(rtol=1e-16), r"rtol must be in \[1e-13, 0.1\]"),
     (dict(atol=0.0), "atol must be > 0"),
-    (dict(E0=1e8), "E0 .* must be >= E_inf"),
+    (dict(E0=1e8), "E0 .* must be > E_inf"),
     (dict(pressure=-1.0), "pressure must be > 0"),
     (dict(radius=0.0), "radius must be > 0"),
     (dict(debye_length=np.nan), "debye_length must be finite"),
@@ -255,7 +255,7 @@ def test_solve_svda_raises_when_solve_ivp_fails(monkeypatch):
     (dict(samples_per_period=4), "samples_per_period must be an integer >= 8"),
     (dict(settle_time=-1.0), "settle_time must be >= 0"),
     (dict(tau=0.0), "tau must be > 0"),
-    (dict(E_inf=2e10), "E0 .* must be >= E_inf"),
+    (dict(E_inf=2e10), "E0 .* must be > E_inf"),
 ])
 def test_harmonic_ode_raises(kwargs, match):
     args = dict(omega=1e3, position=2e-9, eta=1e-12, **PARAMS)

@@ -100,3 +100,19 @@ def require_increasing(name: str, values: ArrayLike, *, strict: bool = True) -> 
             f"{name} must be {word}; entry {i + 1} ({float(arr[i + 1])!r}) follows "
             f"{float(arr[i])!r}")
     return arr
+
+
+def require_sls_moduli(E0: Any, E_inf: Any, tau: Any) -> tuple[float, float, float]:  # noqa: N803
+    """Validate the standard linear solid (E0 > E_inf > 0, tau > 0); the one rule everywhere.
+
+    E0 = E_inf is not a standard linear solid (nothing relaxes, τ is undefined): use an elastic
+    material with E instead.
+    """
+    e0 = require_positive("E0", E0)
+    e_inf = require_positive("E_inf", E_inf)
+    t = require_positive("tau", tau)
+    if not e0 > e_inf:
+        raise ParameterError(
+            f"E0 (instantaneous modulus) must be > E_inf (relaxed modulus) [Pa], got E0={E0!r}, "
+            f"E_inf={E_inf!r}; for a purely elastic material use Elastic(E) (--E)")
+    return e0, e_inf, t

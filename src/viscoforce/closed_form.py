@@ -44,6 +44,7 @@ from viscoforce._validation import (
     require_finite,
     require_nonnegative,
     require_positive,
+    require_sls_moduli,
 )
 from viscoforce.exceptions import ParameterError
 
@@ -88,15 +89,8 @@ def _as_nonnegative_array(name: str, values: ArrayLike) -> FloatArray:
 
 
 def _sls_moduli(E0: float, E_inf: float, tau: float) -> tuple[float, float, float]:
-    """Validate the standard-linear-solid triple (E0 >= E_inf > 0, tau > 0)."""
-    e0 = require_positive("E0", E0)
-    e_inf = require_positive("E_inf", E_inf)
-    t = require_positive("tau", tau)
-    if e0 < e_inf:
-        raise ParameterError(
-            f"E0 (instantaneous modulus) must be >= E_inf (relaxed modulus) [Pa], got "
-            f"E0={E0!r} < E_inf={E_inf!r}")
-    return e0, e_inf, t
+    """Validate the standard-linear-solid triple (E0 > E_inf > 0, tau > 0)."""
+    return require_sls_moduli(E0, E_inf, tau)
 
 
 def _surface(radius: float, pressure: float, debye_length: float, *,

@@ -27,7 +27,7 @@ from numpy.typing import ArrayLike
 
 from viscoforce import closed_form
 from viscoforce._typing import FloatArray
-from viscoforce._validation import as_float_1d, require_positive
+from viscoforce._validation import as_float_1d, require_positive, require_sls_moduli
 from viscoforce.exceptions import ParameterError
 
 
@@ -148,16 +148,10 @@ class StandardLinearSolid(ViscoelasticMaterial):
     tau: float
 
     def __post_init__(self):
-        e0 = require_positive("E0", self.E0)
-        einf = require_positive("E_inf", self.E_inf)
-        require_positive("tau", self.tau)
-        if not e0 > einf:
-            raise ParameterError(
-                f"E0 must be > E_inf (a material stiffens at short times), got E0={e0!r}, "
-                f"E_inf={einf!r}; use Elastic(E) for a purely elastic material")
+        e0, einf, tau = require_sls_moduli(self.E0, self.E_inf, self.tau)
         object.__setattr__(self, "E0", e0)
         object.__setattr__(self, "E_inf", einf)
-        object.__setattr__(self, "tau", float(self.tau))
+        object.__setattr__(self, "tau", tau)
 
     def prony(self) -> Prony:
         """One mode: J_g = 1/E0, ΔJ = 1/E_inf − 1/E0, τ."""
