@@ -32,7 +32,7 @@ import numpy as np  # noqa: E402
 from matplotlib.lines import Line2D  # noqa: E402
 
 import viscoforce as vf  # noqa: E402
-from viscoforce.closed_form import derjaguin_force, svda_ramp_deformation  # noqa: E402
+from viscoforce.closed_form import derjaguin_force  # noqa: E402
 from viscoforce.experiments import Ramp, Step, Triangle  # noqa: E402
 from viscoforce.plotting import (  # noqa: E402
     contact_radius_plot,
@@ -41,7 +41,8 @@ from viscoforce.plotting import (  # noqa: E402
     profile_plot,
 )
 from viscoforce.solvers.simulate import simulate  # noqa: E402
-from viscoforce.svda import solve_svda  # noqa: E402
+from viscoforce.solvers.svda_ode import solve_svda  # noqa: E402
+from viscoforce.svda import svda_ramp_deformation  # noqa: E402
 
 # ── parameters (the paper's Fig. 1 values) ──────────────────────────────────────────────────────
 RADIUS = 10e-6          # R [m]
@@ -174,7 +175,7 @@ def figure2(out: Path, quick: bool) -> dict:
     problem = make_problem(TAU, RAMP_TO)
     fig, ax = plt.subplots(figsize=(7.5, 5.2), layout="constrained")
     inset = ax.inset_axes((0.52, 0.1, 0.45, 0.48))
-    svda_kw = {"E0": E0, "E_inf": E_INF, "tau": TAU, "radius": RADIUS, "pressure": PRESSURE,
+    svda_kw = {"E0": E0, "E_inf": E_INF, "tau": TAU, "radius": RADIUS, "P": PRESSURE,
                "debye_length": DEBYE_LENGTH}
     numbers: dict = {"runs": []}
     for color, speed in zip(("C0", "C1"), RAMP_SPEEDS, strict=True):

@@ -1,4 +1,8 @@
-"""Smoke tests of the benchmark scripts in benchmarks/ (their --quick modes; no timing asserted)."""
+"""Smoke tests of the benchmark scripts in benchmarks/ (their --quick modes).
+
+No wall time is asserted or compared (timings depend on the machine and its load): only the JSON
+keys, the deterministic accuracy figures and the exit status.
+"""
 
 from __future__ import annotations
 
@@ -7,12 +11,15 @@ import math
 import subprocess
 from pathlib import Path
 
+import pandas as pd
 import pytest
 
 from tests._bench import run_benchmark
 
 REPO = Path(__file__).resolve().parents[1]
 BENCH = REPO / "benchmarks"
+#: The FFT peer's loads, copied into the repository (see tests/data/README.md).
+PEER_CSV = Path(__file__).parent / "data" / "static_loads_fft_peer.csv"
 
 # documented in benchmarks/README.md, section bench_static.py
 STATIC_TOP_KEYS = {"schema", "created", "quick", "machine", "target", "settings", "build",
@@ -53,7 +60,6 @@ def test_bench_static_quick_writes_documented_json(static_quick):
         (e, h) for e in (1e9, 1e10) for h in (-10, -7, -5, -3, 0, 2, 5, 10)}
     for row in rows:
         assert STATIC_ROW_KEYS <= set(row)
-        assert 0 < row["time_newton_s"] < row["time_public_s"]
         assert row["newton_iterations"] >= 1
     assert len(report["build"]) == 8
     assert STATIC_SUMMARY_KEYS <= set(report["summary"])
@@ -63,15 +69,28 @@ def test_bench_static_quick_writes_documented_json(static_quick):
     assert (out / "static_speed_accuracy.csv").read_text().startswith("case,")
 
 
+def _peer_loads() -> dict[tuple[float, int], float]:
+    """FFT-peer loads [N] keyed by (E [Pa], h0 [pm]) from tests/data (always present)."""
+    df = pd.read_csv(PEER_CSV)
+    return {(float(e), round(h * 1e12)): float(f)
+            for e, h, f in zip(df["E (Pa)"], df["h0 (m)"], df["force (N)"], strict=True)}
+
+
 def test_bench_static_default_grid_is_accurate(static_quick):
     # deterministic part of the benchmark: the default grid's load agrees with a 4x-refined grid to
-    # far better than the 1e-4 target, and with the independent FFT peer to its stated ~1e-4
+    # far better than the 1e-4 target, and with the independent FFT peer (the copy in tests/data,
+    # so this always runs) to its stated ~1e-4
     out, _ = static_quick
     report = json.loads((out / "static_benchmark.json").read_text())
+    peer = _peer_loads()
+    compared = 0
     for row in report["default_grid"]:
         assert row["rel_error_refined"] < 1e-5, row
-        if row["force_peer"] is not None:
-            assert math.isclose(row["force"], row["force_peer"], rel_tol=1e-4), row
+        key = (float(row["E"]), round(row["h0"] * 1e12))
+        if key in peer:
+            assert math.isclose(row["force"], peer[key], rel_tol=1e-4), (row, peer[key])
+            compared += 1
+    assert compared >= 10  # the benchmark's table shares most of its positions with the peer
     sweep = report["sweep"]
     assert {r["order"] for r in sweep} == {4, 8}
     assert sum(r["is_default"] for r in sweep) == 2  # one default point per sweep case

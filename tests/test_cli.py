@@ -1,4 +1,5 @@
-"""Command-line contract of ``viscoforce static`` (flags and --json keys are public)."""
+"""Command-line contract of ``viscoforce`` static | simulate | spectrum (flags and --json keys are
+public), exit statuses, output-path checks and lazy imports."""
 
 from __future__ import annotations
 
@@ -179,8 +180,237 @@ def test_spectrum_user_errors(capsys, argv, message):
 def test_cli_guards_and_linear_note(capsys):
     assert main(["simulate", "--drive", "step", "--from", "-5nm", "--to", "-7nm",
                  "--samples", "1"]) == 2
-    assert "--samples must be an integer >= 2" in capsys.readouterr().err
+    assert "argument --samples: must be an integer >= 2, got 1" in capsys.readouterr().err
     assert main(["static", "--h0", "-5", "--E", "1e9"]) == 2
     assert "forget a unit" in capsys.readouterr().err
     out = run_json(capsys, ["spectrum", "--h0=-5nm", "--eta", "1nm", "--omega", "1000", "--json"])
     assert "time-domain" in out["note"]
+
+
+# --------------------------------------------------------------------------------------------
+# the command table, help, version, exit statuses
+# --------------------------------------------------------------------------------------------
+
+def test_help_lists_every_command_with_its_help(capsys):
+    from viscoforce.cli import COMMANDS
+
+    assert main(["--help"]) == 0
+    out = capsys.readouterr().out
+    for command in COMMANDS:
+        assert command.name in out and command.help in out
+    assert {c.name for c in COMMANDS} >= {"static", "simulate", "spectrum"}
+
+
+def test_version_and_command_help(capsys):
+    import viscoforce
+
+    assert main(["--version"]) == 0
+    assert capsys.readouterr().out.strip() == f"viscoforce {viscoforce.__version__}"
+    assert main(["spectrum", "--help"]) == 0
+    out = capsys.readouterr().out
+    assert "--omega-range LO HI N" in out and "--debye-length" in out
+
+
+@pytest.mark.parametrize(("argv", "message"), [
+    ([], "the following arguments are required: command"),
+    (["statc", "--h0", "2nm"], "invalid choice: 'statc'"),
+    (["static", "--h0", "2nm", "--E", "1e9", "--bogus"], "unrecognized arguments: --bogus"),
+])
+def test_usage_errors_exit_2(capsys, argv, message):
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert message in err and "Traceback" not in err
+
+
+def test_python_dash_m_help_lists_the_commands():
+    proc = subprocess.run([sys.executable, "-m", "viscoforce", "--help"], capture_output=True,
+                          text=True, timeout=120)
+    assert proc.returncode == 0, proc.stderr
+    assert "static" in proc.stdout and "spectrum" in proc.stdout
+
+
+def test_library_errors_exit_2_and_bugs_exit_1(capsys, monkeypatch):
+    from viscoforce.exceptions import EffortError
+    from viscoforce.solvers import simulate as simulate_module
+
+    argv = ["simulate", "--drive", "step", "--from", "-5nm", "--to", "-7nm", "--samples", "5"]
+
+    def refuse(*args, **kwargs):
+        raise EffortError("time steps of simulate: about 1e+09 needed, beyond the limit")
+
+    monkeypatch.setattr(simulate_module, "simulate", refuse)
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert err == ("viscoforce simulate: error: time steps of simulate: about 1e+09 needed, "
+                   "beyond the limit\n")
+
+    def bug(*args, **kwargs):
+        raise ZeroDivisionError("oops")
+
+    monkeypatch.setattr(simulate_module, "simulate", bug)
+    assert main(argv) == 1
+    err = capsys.readouterr().err
+    assert "internal error (ZeroDivisionError: oops)" in err and "Traceback" in err
+
+
+def test_os_errors_exit_2_with_the_file_name(capsys, tmp_path):
+    prony = tmp_path / "prony_dir.csv"
+    prony.mkdir()
+    assert main(["simulate", "--drive", "step", "--from", "-5nm", "--to", "-7nm",
+                 "--prony", str(prony)]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("viscoforce simulate: error:") and "Traceback" not in err
+
+
+# --------------------------------------------------------------------------------------------
+# defects of issue 11: counts, output paths, strict JSON
+# --------------------------------------------------------------------------------------------
+
+SPECTRUM = ["spectrum", "--h0", "2nm", "--eta", "0.1nm"]
+SIMULATE = ["simulate", "--drive", "step", "--from", "-5nm", "--to", "-7nm"]
+
+
+@pytest.fixture
+def no_compute(monkeypatch):
+    """Fail the test if a command gets as far as building a problem."""
+    from viscoforce.cli import model
+
+    def forbidden(*args, **kwargs):
+        raise AssertionError("computed although the arguments are invalid")
+
+    monkeypatch.setattr(model, "problem_from_args", forbidden)
+
+
+@pytest.mark.parametrize(("argv", "message"), [
+    ([*SPECTRUM, "--omega-range", "10", "1e5", "1Hz"],
+     "argument --omega-range: expected a plain integer >= 1 (no unit, no decimal point), got '1Hz'"),
+    ([*SPECTRUM, "--omega-range", "10", "1e5", "2.5"], "expected a plain integer >= 1"),
+    ([*SPECTRUM, "--omega-range", "10", "1e5", "0"], "must be an integer >= 1, got 0"),
+    ([*SPECTRUM, "--omega-range", "0", "1e5", "5"], "needs 0 < LO < HI"),
+    ([*SPECTRUM, "--omega-range", "10", "1e5", "10000001"],
+     "frequencies: about 1e+07 needed, beyond the limit of 1e+07; refused before computing"),
+    ([*SPECTRUM, "--omega", "1", "-2kHz", "--periods", "0"],
+     "argument --periods: must be an integer >= 1, got 0"),
+    ([*SPECTRUM, "--omega", "1", "--jobs", "1.5"], "argument --jobs: expected a plain integer"),
+    ([*SIMULATE, "--samples", "2.5"], "argument --samples: expected a plain integer >= 2"),
+    ([*SIMULATE, "--samples", "20000000"],
+     "argument --samples: output samples: about 2e+07 needed, beyond the limit of 1e+07"),
+    ([*SIMULATE, "--profiles", "-1"], "argument --profiles: must be an integer >= 0, got -1"),
+    ([*SIMULATE, "--periods", "inf"], "argument --periods: a dimensionless number must be finite"),
+    ([*SIMULATE, "--periods", "nan"], "must be finite"),
+    ([*SIMULATE, "--periods", "0.5"], "argument --periods: must be >= 1, got '0.5'"),
+])
+def test_counts_are_checked_before_computing(capsys, no_compute, argv, message):
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert message in err and "Traceback" not in err
+
+
+def test_omega_list_count_is_bounded(capsys, monkeypatch, no_compute):
+    from viscoforce import _limits
+
+    monkeypatch.setattr(_limits, "MAX_SAMPLES", 3)
+    assert main([*SPECTRUM, "--omega", "1", "2", "3", "4"]) == 2
+    assert "frequencies: about 4 needed, beyond the limit of 3" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize(("command", "outputs", "message"), [
+    (SIMULATE, ["--plot", "{d}/out.xyz"], "unsupported figure format '.xyz'; supported: "),
+    (SPECTRUM + ["--omega", "1"], ["--plot", "{d}"], "is a directory; give a file name"),
+    (SIMULATE, ["--plot", "{d}/name"], "no file extension to choose the figure format"),
+    (SIMULATE, ["--plot", "{d}/x", "--out", "{d}/x"], "the same file as"),
+    (SPECTRUM + ["--omega", "1"], ["--plot", "{d}/x.png", "--out", "{d}/x.png"],
+     "the same file as"),
+    (SIMULATE, ["--out", "{d}/missing/run.nc"], "missing' does not exist"),
+    (SPECTRUM + ["--omega", "1"], ["--plot", "{d}/missing/bode.png"], "missing' does not exist"),
+    (SIMULATE, ["--out", "{d}/run.csv"], "a netCDF file name must end in .nc"),
+    (["static", "--h0", "2nm", "--E", "1e9"], ["--out", "{d}/s.h5"], "must end in .nc"),
+    (["static", "--h0", "2nm", "--E", "1e9"], ["--out", "{d}"], "is a directory"),
+])
+def test_output_paths_are_checked_before_computing(capsys, tmp_path, no_compute, command,
+                                                   outputs, message):
+    argv = [*command, *(a.format(d=tmp_path) for a in outputs)]
+    assert main(argv) == 2
+    captured = capsys.readouterr()
+    assert message in captured.err and "Traceback" not in captured.err
+    assert captured.err.count("\n") == 1  # one message
+    assert "wrote" not in captured.out
+    assert list(tmp_path.iterdir()) == []  # nothing written
+
+
+def test_wrote_is_printed_only_for_written_files(capsys, tmp_path):
+    out, png = tmp_path / "run.nc", tmp_path / "loop.svg"
+    assert main([*SIMULATE, "--samples", "5", "--t-end", "1ms", "--out", str(out),
+                 "--plot", str(png)]) == 0
+    text = capsys.readouterr().out
+    assert f"wrote {out}" in text and f"wrote {png}" in text
+    assert out.stat().st_size > 0 and png.read_text().startswith("<?xml")
+
+
+def strict_json(text: str):
+    def refuse(name):
+        raise AssertionError(f"{name} is not JSON")
+
+    return json.loads(text, parse_constant=refuse)
+
+
+def test_json_is_strict_and_settings_are_the_dataset_attrs(capsys, tmp_path):
+    nc = tmp_path / "run.nc"
+    assert main([*SIMULATE, "--samples", "5", "--t-end", "1ms", "--out", str(nc), "--json"]) == 0
+    out = strict_json(capsys.readouterr().out)
+    with xr.open_dataset(nc, engine="scipy") as ds:
+        attrs = dict(ds.attrs)
+    assert set(out["settings"]) == set(attrs)
+    assert out["settings"]["stepper"] == attrs["stepper"] == "exponential"
+    assert "method" not in out["settings"]
+    assert main(["static", "--h0=-5nm", "--E", "1e9", "--json"]) == 0
+    assert strict_json(capsys.readouterr().out)["force_rigid"] is None
+
+
+def test_json_safe_maps_nonfinite_to_null():
+    import numpy as np
+
+    from viscoforce.cli._output import json_safe
+
+    data = {"a": float("nan"), "b": np.array([1.0, np.inf]), "c": np.int64(3), "d": np.bool_(True),
+            "e": (1, -np.inf), 4: "x", "f": np.float32(0.5)}
+    assert json_safe(data) == {"a": None, "b": [1.0, None], "c": 3, "d": True, "e": [1, None],
+                               "4": "x", "f": 0.5}
+    assert json.dumps(json_safe(data), allow_nan=False)
+
+
+def test_spectrum_auto_is_the_library_choice(capsys):
+    from viscoforce.cli import _build_parser, _requested, model
+    from viscoforce.experiments.spectroscopy import choose_spectrum_method
+
+    assert not hasattr(model, "_choose_spectrum_method")
+    argv = ["spectrum", "--h0", "2nm", "--eta", "0.01nm", "--omega", "100", "--method", "auto"]
+    out = run_json(capsys, [*argv, "--json"])
+    args = _build_parser(_requested(argv))[0].parse_args(argv)
+    problem = model.problem_from_args(args, model.material_from_args(args), args.h0 - args.eta)
+    assert (out["method"], out["explanation"]) == choose_spectrum_method(problem, args.eta)
+
+
+def test_cli_modules_import_no_heavy_optional_libraries():
+    heavy = ("matplotlib", "lmfit", "scipy.interpolate", "scipy.signal", "scipy.integrate",
+             "scipy.optimize", "tqdm", "viscoforce.plotting", "viscoforce.lockin",
+             "viscoforce.experiments.spectroscopy")
+    code = ("import sys, viscoforce.cli, viscoforce.cli.model; "
+            f"print([m for m in {heavy!r} if m in sys.modules])")
+    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                          timeout=120, check=True)
+    assert proc.stdout.strip() == "[]"
+
+
+def test_static_far_outside_the_half_space_model_exits_2(capsys):
+    """The issue's defect: --debye-length 1m printed u(0) = −158 µm on a 10 µm sphere, exit 0."""
+    assert main(["static", "--h0=-5nm", "--E", "1e9", "--debye-length", "1m", "--json"]) == 2
+    err = capsys.readouterr().err
+    assert "result outside the model at h0 = -5 nm" in err and "Traceback" not in err
+
+
+def test_static_near_the_edge_of_the_model_warns_on_stderr(capsys):
+    assert main(["static", "--h0=-300nm", "--E", "1e8", "--debye-length", "100nm", "--json"]) == 0
+    out, err = capsys.readouterr()
+    assert json.loads(out)["contact_radius"] > 1e-6
+    assert err.startswith("viscoforce static: warning: result near the edge of the model")

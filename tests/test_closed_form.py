@@ -1,4 +1,5 @@
-"""Tests of viscoforce.closed_form: material laws, Derjaguin force and the SVDA closed forms."""
+"""Closed forms: viscoforce.closed_form (material laws, Derjaguin force, shared validation helpers)
+and viscoforce.svda (the SVDA closed forms, paper Eqs. 15–26)."""
 
 from __future__ import annotations
 
@@ -10,25 +11,30 @@ from scipy.integrate import quad
 from scipy.optimize import brentq, minimize_scalar
 
 from viscoforce.closed_form import (
+    as_finite_array,
+    as_nonnegative_array,
     derjaguin_force,
     prony_complex_compliance,
     prony_creep_compliance,
+    require_exponential_law,
     sls_complex_compliance,
     sls_creep_compliance,
+)
+from viscoforce.exceptions import ParameterError
+from viscoforce.svda import (
     svda_complex_stiffness,
     svda_harmonic_response,
     svda_peak_phase_frequency,
     svda_ramp_deformation,
     svda_static_deformation,
 )
-from viscoforce.exceptions import ParameterError
 
 # Paper parameters (Fig. 1–3).
 E0, E_INF, TAU = 1e10, 1e9, 1e-3
 R, P, DEBYE = 10e-6, 1e7, 1e-9
 KAPPA = 1.0 / DEBYE
 MATERIAL = dict(E0=E0, E_inf=E_INF, tau=TAU)
-SURFACE = dict(radius=R, pressure=P, debye_length=DEBYE)
+SURFACE = dict(radius=R, P=P, debye_length=DEBYE)
 H_FIG3, ETA_FIG3 = 2e-9, 0.1e-9
 
 
@@ -120,9 +126,9 @@ def test_derjaguin_force_values():
 
 @pytest.mark.parametrize(("kwargs", "match"), [
     (dict(gap=-1e-6, **SURFACE), "gap must be >"),
-    (dict(gap=1e-9, radius=0.0, pressure=P, debye_length=DEBYE), "radius must be > 0"),
-    (dict(gap=1e-9, radius=R, pressure=np.inf, debye_length=DEBYE), "pressure must be finite"),
-    (dict(gap=1e-9, radius=R, pressure=P, debye_length=-1.0), "debye_length must be > 0"),
+    (dict(gap=1e-9, radius=0.0, P=P, debye_length=DEBYE), "radius must be > 0"),
+    (dict(gap=1e-9, radius=R, P=np.inf, debye_length=DEBYE), "P must be finite"),
+    (dict(gap=1e-9, radius=R, P=P, debye_length=-1.0), "debye_length must be > 0"),
 ])
 def test_derjaguin_force_raises(kwargs, match):
     with pytest.raises(ParameterError, match=match):
@@ -236,8 +242,8 @@ def test_ramp_raises(kwargs, match):
 
 
 def test_ramp_raises_on_bad_pressure():
-    with pytest.raises(ParameterError, match="pressure must be > 0"):
-        svda_ramp_deformation(0.0, 1e-8, -1e-6, **MATERIAL, radius=R, pressure=-P,
+    with pytest.raises(ParameterError, match="P must be > 0"):
+        svda_ramp_deformation(0.0, 1e-8, -1e-6, **MATERIAL, radius=R, P=-P,
                               debye_length=DEBYE)
 
 
@@ -398,8 +404,8 @@ def test_fig3_numbers():
      "position must be finite"),
     (lambda: svda_complex_stiffness(1.0, H_FIG3, E0=1e8, E_inf=E_INF, tau=TAU, **SURFACE),
      "E0 .* must be > E_inf"),
-    (lambda: svda_complex_stiffness(1.0, H_FIG3, **MATERIAL, radius=R, pressure=-P,
-                                    debye_length=DEBYE), "pressure must be > 0"),
+    (lambda: svda_complex_stiffness(1.0, H_FIG3, **MATERIAL, radius=R, P=-P,
+                                    debye_length=DEBYE), "P must be > 0"),
     (lambda: svda_peak_phase_frequency(H_FIG3, E0=E0, E_inf=E_INF, tau=-1.0, **SURFACE),
      "tau must be > 0"),
 ])
@@ -411,3 +417,27 @@ def test_harmonic_raises(call, match):
 def test_prony_with_no_modes_is_elastic():
     assert prony_complex_compliance(5.0, 1e-10, [], []) == pytest.approx(1e-10)
     assert prony_creep_compliance(5.0, 1e-10, [], []) == pytest.approx(1e-10)
+
+
+# ── shared validation helpers ───────────────────────────────────────────────────────────────────
+
+def test_validation_helpers_accept_and_return():
+    assert as_finite_array("x", 2.0).shape == ()
+    np.testing.assert_array_equal(as_nonnegative_array("t", [[0.0, 1.0]]), [[0.0, 1.0]])
+    assert require_exponential_law(R, P, DEBYE) == (R, P, KAPPA)
+    assert require_exponential_law(R, -P, DEBYE, allow_attraction=True)[1] == -P
+    assert require_exponential_law(R, 0.0, DEBYE, allow_attraction=True)[1] == 0.0
+
+
+@pytest.mark.parametrize(("call", "match"), [
+    (lambda: as_finite_array("x", [1.0, np.inf]), "x must be finite; entry 1 is inf"),
+    (lambda: as_finite_array("x", None), "x must be real numbers, got None"),
+    (lambda: as_nonnegative_array("t", [0.0, -2.0]), "t must be >= 0; entry 1 is -2.0"),
+    (lambda: require_exponential_law(R, 0.0, DEBYE), "P must be > 0"),
+    (lambda: require_exponential_law(R, np.nan, DEBYE, allow_attraction=True), "P must be finite"),
+    (lambda: require_exponential_law(None, P, DEBYE), "radius must be a real number"),
+    (lambda: require_exponential_law(R, P, 0.0), "debye_length must be > 0"),
+])
+def test_validation_helpers_raise(call, match):
+    with pytest.raises(ParameterError, match=match):
+        call()

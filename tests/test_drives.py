@@ -13,6 +13,7 @@ from viscoforce import experiments
 from viscoforce._typing import SeparationHistory
 from viscoforce.exceptions import ParameterError
 from viscoforce.experiments.drives import (
+    STEPS_PER_PERIOD,
     Hold,
     MeasuredTrace,
     Ramp,
@@ -345,6 +346,46 @@ def test_sequence_raises():
         Sequence((Hold(0.0, 1e-3), lambda t: t))
     with pytest.raises(ParameterError, match="segments must be a sequence of drives"):
         Sequence(5)
+
+
+# ── min_steps ────────────────────────────────────────────────────────────────────────────────
+
+
+@pytest.mark.parametrize("drive", ALL_DRIVES, ids=IDS)
+def test_min_steps_is_a_positive_int_at_least_the_breakpoint_intervals(drive):
+    n = drive.min_steps()
+    assert type(n) is int
+    assert n >= drive.breakpoints().size - 1 >= 1
+
+
+@pytest.mark.parametrize(("drive", "expected"), [
+    (Hold(-5 * NM, 1e-3), 2),
+    (Ramp(-5 * NM, -7 * NM, 1e-3), 2),
+    (Step(-5 * NM, -3 * NM), 2),
+    (Triangle(10 * NM, -10 * NM, 5e-6), 3),
+    (MeasuredTrace([0.0, 1e-3, 3e-3, 4e-3, 5e-3], [0.0, NM, -NM, 0.5 * NM, 0.0]), 5),
+    (MeasuredTrace([0.0, 1e-3, 3e-3, 4e-3, 5e-3], [0.0, NM, -NM, 0.5 * NM, 0.0], smooth=True), 5),
+    (Sinusoid(-5 * NM, 0.1 * NM, 1e3, periods=1), 2 + 8),
+    (Sinusoid(-5 * NM, 0.1 * NM, 1e3, periods=2.5), 2 + 20),
+    (Sinusoid(-5 * NM, 0.1 * NM, 1e3, periods=1.01), 2 + 9),  # 8.08 rounds up
+], ids=["hold", "ramp", "step", "triangle", "trace", "trace_smooth", "sine_1", "sine_2.5",
+        "sine_1.01"])
+def test_min_steps_values(drive, expected):
+    assert drive.min_steps() == expected
+
+
+def test_min_steps_of_a_sequence_is_the_sum_over_segments():
+    segments = (Hold(-5 * NM, 1e-3), Step(-5 * NM, -7 * NM), Triangle(-7 * NM, -9 * NM, 1e-6),
+                Sinusoid(-7 * NM, 0.1 * NM, 1e3, periods=3))
+    seq = Sequence(segments)
+    assert seq.min_steps() == 2 + 2 + 3 + (2 + 3 * STEPS_PER_PERIOD)
+    assert Sequence((seq, Hold(seq.end_position, 1.0))).min_steps() == seq.min_steps() + 2
+
+
+def test_min_steps_of_a_very_long_sine_is_cheap_and_huge():
+    # the number the effort limit refuses "--drive sine --periods 1e7" with, computed instantly
+    drive = Sinusoid(-5 * NM, 0.1 * NM, 2 * math.pi * 1e3, periods=1e7)
+    assert drive.min_steps() == 2 + 8 * 10**7
 
 
 # ── MeasuredTrace ────────────────────────────────────────────────────────────────────────────

@@ -265,3 +265,31 @@ def test_reported_peak_is_the_true_peak(make_problem, drive, material):
     missed = simulate(problem, drive, t_end=t_end, t_eval=np.linspace(0, t_end, 401), tol=tol,
                       output_kinks=False)
     assert _peak(missed)[0] < f_coarse * (1 - 1e-4)
+
+
+@pytest.mark.parametrize(("kwargs", "message"), [
+    ({"dt": 1e-10}, r"time steps of simulate: about 1e\+07 needed, beyond the limit of 5e\+06"),
+    ({"t_eval": np.linspace(0, 1e-3, 20_000_001)}, "output times of simulate: about 2e\\+07"),
+    ({"t_eval": np.linspace(0, 1e-3, 3_000_000), "profiles": 1}, "memory of the stored states"),
+])
+def test_effort_beyond_limits_is_refused_up_front(make_problem, kwargs, message):
+    problem = make_problem(SLS, -5e-9)
+    with pytest.raises(vf.ViscoforceError, match=message):
+        simulate(problem, Hold(-5e-9, 1e-3), t_end=1e-3, **kwargs)
+
+
+@pytest.mark.parametrize(("problem", "drive", "message"), [
+    (None, Hold(-5e-9, 1e-3), "problem must be a ContactProblem, got NoneType"),
+    ("make", None, "drive must be a drive with position"),
+    ("make", 3.0, "drive must be a drive with position.*got float"),
+])
+def test_simulate_rejects_wrong_types(make_problem, problem, drive, message):
+    problem = make_problem(SLS, -5e-9) if problem == "make" else problem
+    with pytest.raises(vf.ParameterError, match=message):
+        simulate(problem, drive)
+
+
+def test_simulate_rejects_non_bool_flags(make_problem):
+    problem = make_problem(SLS, -5e-9)
+    with pytest.raises(vf.ParameterError, match="output_kinks must be True or False"):
+        simulate(problem, Hold(-5e-9, 1e-3), output_kinks="yes")

@@ -318,3 +318,63 @@ def test_paper_figures_quick(tmp_path):
     works = [r["hysteresis_work_J"] for r in results["fig8"]["runs"]]
     assert all(w > 0 for w in works)
     assert "Fig.1 tau=1 ms" in done.stdout
+
+
+# ── inputs are checked against the schema ───────────────────────────────────────────────────────
+
+
+def _spectrum():
+    from viscoforce.schema import make_spectrum
+
+    w = np.geomspace(10, 1e4, 5)
+    return make_spectrum(w, 10 + 30j * w * 1e-3 / (1 + 1j * w * 1e-3), 1e-7, 1e-10,
+                         attrs={"method": "linear"})
+
+
+@pytest.mark.parametrize(("spectra", "error", "match"), [
+    (None, ParameterError, "spectra must be a spectrum Dataset, a mapping .* got NoneType"),
+    (42, ParameterError, "spectra must be a spectrum Dataset, .* got int"),
+    ("spectrum.nc", ParameterError, "got str"),
+    ([], ParameterError, "at least one spectrum"),
+    ([None], SchemaError, "bode_plot: spectrum 'spectrum 1': spectrum must be an xarray.Dataset"),
+    ({"data": 3.0}, SchemaError, "spectrum 'data': spectrum must be an xarray.Dataset, got float"),
+])
+def test_bode_plot_rejects_what_is_not_a_spectrum(spectra, error, match):
+    from viscoforce.plotting import bode_plot
+
+    with pytest.raises(error, match=match):
+        bode_plot(spectra)
+
+
+def test_bode_plot_checks_units_and_dims():
+    from viscoforce.plotting import bode_plot
+
+    ds = _spectrum()
+    assert len(bode_plot(ds).lines) == 2
+    assert bode_plot([ds]).axes[0].get_legend_handles_labels()[1] == ["linear"]
+    bad = ds.assign(phase=ds.phase.assign_attrs(units="rad"))
+    with pytest.raises(SchemaError, match="spectrum 'linear': spectrum: 'phase' must have units "
+                                          "'degree', got 'rad'"):
+        bode_plot(bad)
+    with pytest.raises(SchemaError, match="has no 'amplitude'"):
+        bode_plot(ds.drop_vars("amplitude"), magnitude="amplitude")
+    with pytest.raises(ParameterError, match=r"also spans \['curve'\]: select one, e.g. "
+                                             r"ds.isel\(curve=0\)"):
+        bode_plot(ds.expand_dims(curve=2).transpose("curve", "omega"))
+
+
+@pytest.mark.parametrize("plot", [hysteresis_plot, contact_radius_plot, force_time_plot,
+                                  profile_plot])
+def test_trajectory_plots_reject_none(plot):
+    with pytest.raises(ParameterError, match="trajectory must be the xarray.Dataset returned by "
+                                             "simulate\\(\\), got NoneType"):
+        plot(None)
+
+
+def test_trajectory_plots_check_units(trajectory):
+    bad = trajectory.assign(force=trajectory.force.assign_attrs(units="uN"))
+    with pytest.raises(SchemaError, match="hysteresis_plot: trajectory: 'force' must have units "
+                                          "'N', got 'uN'"):
+        hysteresis_plot(bad)
+    with pytest.raises(SchemaError, match="force_time_plot: trajectory is missing 'time'"):
+        force_time_plot(trajectory.drop_vars("time"))

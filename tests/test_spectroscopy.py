@@ -8,13 +8,20 @@ import xarray as xr
 from scipy.optimize import minimize_scalar
 
 import viscoforce as vf
-from viscoforce.closed_form import svda_peak_phase_frequency, svda_ramp_deformation
+from viscoforce._limits import MAX_SAMPLES
+from viscoforce.exceptions import EffortError
 from viscoforce.experiments import Ramp
 from viscoforce.experiments.linear_response import linear_response, linear_stiffness
-from viscoforce.experiments.spectroscopy import svda_spectrum, sweep
+from viscoforce.experiments.spectroscopy import (
+    choose_spectrum_method,
+    spectrum,
+    svda_spectrum,
+    sweep,
+)
 from viscoforce.schema import SchemaError, validate_spectrum
 from viscoforce.solvers.simulate import simulate
-from viscoforce.svda import solve_svda
+from viscoforce.solvers.svda_ode import solve_svda
+from viscoforce.svda import svda_peak_phase_frequency, svda_ramp_deformation
 
 TAU = 1e-3
 SLS = vf.StandardLinearSolid(E0=1e10, E_inf=1e9, tau=TAU)
@@ -136,7 +143,7 @@ def test_fig2_exact_vs_svda_ode_vs_eq20():
         drive = Ramp.from_speed(10e-9, 2e-9, v)
         t = np.linspace(0, drive.duration, 5)
         ex = simulate(problem, drive, t_end=drive.duration, t_eval=t)
-        sv = solve_svda(drive, E0=1e10, E_inf=1e9, tau=TAU, radius=10e-6, pressure=1e7,
+        sv = solve_svda(drive, E0=1e10, E_inf=1e9, tau=TAU, radius=10e-6, P=1e7,
                         debye_length=1e-9, t_eval=t)
         eq20 = svda_ramp_deformation(t, 10e-9, -v, 1e10, 1e9, TAU, 10e-6, 1e7, 1e-9)
         u = ex.u_center.values
@@ -178,6 +185,184 @@ def test_spectroscopy_bad_inputs(make_problem):
     prony = vf.PronySeries.from_moduli([1e10, 3e9, 1e9], [1e-4, 1e-3])
     with pytest.raises(vf.ParameterError, match="single-relaxation-time"):
         svda_spectrum(make_problem(prony, 2e-9), 2e-9, 1e-10, [1.0])
+
+
+# Every bad argument raises ParameterError naming the parameter and its allowed range, before
+# any computing (the problem is built once; each call fails in its argument checks).
+_PROBLEM = "problem must be a ContactProblem"
+_POSITION = r"position must be finite \[m\]"
+_ETA = r"eta must be > 0 \[m\] \(finite\)"
+_OMEGA_POS = r"omega must be .*> 0 rad/s"
+_OMEGA_NONNEG = r"omega must be .*>= 0 rad/s"
+_COMMON = [
+    (dict(problem=None), _PROBLEM),
+    (dict(problem="paper"), _PROBLEM),
+    (dict(position=None), _POSITION),
+    (dict(position=np.nan), _POSITION),
+    (dict(position=np.inf), _POSITION),
+    (dict(position="2nm"), _POSITION),
+    (dict(eta=None), _ETA),
+    (dict(eta=np.nan), _ETA),
+    (dict(eta=-np.inf), _ETA),
+    (dict(eta=0.0), _ETA),
+    (dict(eta=-1e-10), _ETA),
+    (dict(eta="0.1nm"), _ETA),
+    (dict(omega=None), r"omega must be a non-empty 1-D array"),
+    (dict(omega=[]), r"omega must be a non-empty 1-D array.*needs at least 1 values, got 0"),
+    (dict(omega="fast"), r"omega must be a non-empty 1-D array"),
+    (dict(omega=[[1.0, 2.0]]), r"omega must be a non-empty 1-D array.*must be 1-D"),
+    (dict(omega=[1.0, np.nan]), r"omega must be .*finite; entry 1 is nan"),
+    (dict(omega=[np.inf]), r"omega must be .*finite; entry 0 is inf"),
+]
+_SWEEP_ONLY = [
+    (dict(omega=[1.0, 0.0]), r"omega must be > 0 rad/s; entry 1 is 0.0"),
+    (dict(omega=[-1.0]), _OMEGA_POS),
+    (dict(settle=np.nan), r"settle must be >= 0 \[s\] \(finite; None for 10 tau_max\), got nan"),
+    (dict(settle=np.inf), r"settle must be >= 0 \[s\]"),
+    (dict(settle=-1e-3), r"settle must be >= 0 \[s\]"),
+    (dict(settle="1ms"), r"settle must be >= 0 \[s\]"),
+    (dict(periods=0), "periods must be an integer >= 1, got 0"),
+    (dict(periods=2.0), "periods must be an integer >= 1, got 2.0"),
+    (dict(periods=None), "periods must be an integer >= 1, got None"),
+    (dict(samples_per_period=7), "samples_per_period must be an integer >= 8"),
+    (dict(tol=0.0), r"tol must be > 0 \[m\]"),
+    (dict(tol=np.nan), r"tol must be > 0 \[m\]"),
+    (dict(stepper="rk4"), r"stepper must be one of \['euler', 'exponential', 'exponential-euler'\]"),
+    (dict(stepper=None), "stepper must be one of"),
+    (dict(steps_per_period=0), "steps_per_period must be an integer >= 1"),
+    (dict(n_jobs=0), "n_jobs must be an integer >= 1"),
+    (dict(n_jobs=None), "n_jobs must be an integer >= 1"),
+    (dict(progress="yes"), "progress must be True, False or None"),
+]
+
+
+def _call(func, problem, kwargs):
+    args = dict(problem=problem, position=2e-9, eta=1e-10, omega=[1e3])
+    args.update(kwargs)
+    return func(args.pop("problem"), args.pop("position"), args.pop("eta"), args.pop("omega"),
+                **args)
+
+
+@pytest.mark.parametrize(("kwargs", "match"), _COMMON + _SWEEP_ONLY)
+def test_sweep_rejects_every_bad_argument(make_problem, no_compute, kwargs, match):
+    with pytest.raises(vf.ParameterError, match=match):
+        _call(sweep, make_problem(SLS, 1.9e-9), kwargs)
+
+
+@pytest.mark.parametrize(("kwargs", "match"), _COMMON + [(dict(omega=[-1.0]), _OMEGA_NONNEG)])
+@pytest.mark.parametrize("func", [linear_response, svda_spectrum])
+def test_frequency_domain_routes_reject_every_bad_argument(make_problem, no_compute, func, kwargs,
+                                                           match):
+    with pytest.raises(vf.ParameterError, match=match):
+        _call(func, make_problem(SLS, 1.9e-9), kwargs)
+
+
+@pytest.mark.parametrize(("args", "match"), [
+    ((None, 2e-9, [1.0]), _PROBLEM),
+    (("problem", 2e-9, [1.0]), _PROBLEM),
+    ((..., np.nan, [1.0]), _POSITION),
+    ((..., None, [1.0]), _POSITION),
+    ((..., 2e-9, []), r"omega must be a non-empty 1-D array"),
+    ((..., 2e-9, None), r"omega must be a non-empty 1-D array"),
+    ((..., 2e-9, [-1.0]), _OMEGA_NONNEG),
+    ((..., 2e-9, [np.nan]), r"omega must be .*finite"),
+])
+def test_linear_stiffness_rejects_bad_arguments(make_problem, no_compute, args, match):
+    problem = make_problem(SLS, 1.9e-9) if args[0] is ... else args[0]
+    with pytest.raises(vf.ParameterError, match=match):
+        linear_stiffness(problem, *args[1:])
+
+
+@pytest.mark.parametrize("method", ["auto", "linear", "time-domain", "svda"])
+@pytest.mark.parametrize(("kwargs", "match"), [
+    (dict(problem=None), _PROBLEM),
+    (dict(eta=np.nan), _ETA),
+    (dict(eta=None), _ETA),
+    (dict(eta=0.0), _ETA),
+    (dict(omega=[]), r"omega must be a non-empty 1-D array"),
+    (dict(omega=None), r"omega must be a non-empty 1-D array"),
+    (dict(position=np.nan), _POSITION),
+])
+def test_spectrum_rejects_bad_arguments_for_every_method(make_problem, no_compute, method, kwargs,
+                                                          match):
+    with pytest.raises(vf.ParameterError, match=match):
+        _call(spectrum, make_problem(SLS, 1.9e-9), {"method": method, **kwargs})
+
+
+@pytest.mark.parametrize("method", [None, "fast", ["linear"], 3])
+def test_spectrum_rejects_unknown_methods(make_problem, method):
+    with pytest.raises(vf.ParameterError, match=r"method must be 'auto' or one of \['linear', "
+                                                r"'svda', 'time-domain'\], got"):
+        spectrum(make_problem(SLS, 1.9e-9), 2e-9, 1e-10, [1e3], method=method)
+
+
+def test_spectrum_options_only_for_the_time_domain(make_problem):
+    with pytest.raises(TypeError, match="method 'linear' takes no options, got \\['periods'\\]"):
+        spectrum(make_problem(SLS, 1.9e-9), 2e-9, 1e-10, [1e3], method="linear", periods=2)
+
+
+def test_choose_spectrum_method_rejects_bad_arguments(make_problem):
+    with pytest.raises(vf.ParameterError, match=_PROBLEM):
+        choose_spectrum_method(None, 1e-10)
+    with pytest.raises(vf.ParameterError, match=_ETA):
+        choose_spectrum_method(make_problem(SLS, 1.9e-9), np.nan)
+
+
+# ── effort guards: refused before computing, the estimate in the message (fast) ────────────────
+
+@pytest.fixture
+def no_compute(monkeypatch):
+    """Make any simulation or static solve fail at once: a refusal test must never compute."""
+    from viscoforce.experiments import linear_response as lr_module
+    from viscoforce.experiments import spectroscopy as sp_module
+
+    def forbidden(*args, **kwargs):
+        raise AssertionError("computed although the request should have been refused")
+
+    monkeypatch.setattr(sp_module, "simulate", forbidden)
+    monkeypatch.setattr(lr_module, "equilibrium_gap", forbidden)
+
+
+def test_time_domain_spectrum_at_1e9_rad_s_is_refused_instantly(make_problem, no_compute):
+    # τ = 1 ms: 10τ settling at ω = 1e9 rad/s is 1.59e6 periods, ≥ 8 steps each.
+    problem = make_problem(SLS, 1.9e-9)
+    with pytest.raises(EffortError, match=r"time steps of the time-domain sweep \(1 frequency, "
+                                          r"settling and demodulated periods, at least 8 steps per "
+                                          r"period\): about 1.27e\+07 needed, beyond the limit of "
+                                          r"5e\+06; "
+                                          r"refused before computing \(fewer or lower frequencies"):
+        spectrum(problem, 2e-9, 1e-9, [1e9], method="time-domain")
+    with pytest.raises(EffortError, match="about 1.27e\\+07 needed"):
+        sweep(problem, 2e-9, 1e-10, [1e9], n_jobs=4)
+
+
+def test_sweep_effort_counts_every_frequency_and_the_stepper(make_problem, no_compute):
+    problem = make_problem(SLS, 1.9e-9)
+    # 4000 frequencies at 1e5 rad/s: 160 settling periods x ≥ 8 steps + 4 x 64 samples = 1536
+    # steps per ω, 6.14e6 in all
+    with pytest.raises(EffortError, match=r"\(4000 frequencies.*about 6.14e\+06 needed"):
+        sweep(problem, 2e-9, 1e-10, np.full(4000, 1e5))
+    # a fixed step of period/1e5 at 1e3 rad/s: 6 periods x 1e5 steps = 6e5 per ω; 10 ω = 6e6
+    with pytest.raises(EffortError, match=r"steps_per_period = 100000\): about 6e\+06 needed"):
+        sweep(problem, 2e-9, 1e-10, np.full(10, 1e3), steps_per_period=100_000)
+    # explicit Euler's default dt = 0.1 τ E_inf/E0 = 1e-5 s: 5 periods at 10 rad/s = 3.14 s,
+    # 3.1e5 steps per ω; 20 ω = 6.28e6
+    with pytest.raises(EffortError, match=r"euler stepper's default dt = 1e-05 s\): about "
+                                          r"6.28e\+06 needed"):
+        sweep(problem, 2e-9, 1e-10, np.full(20, 10.0), stepper="euler")
+    with pytest.raises(EffortError, match=r"output samples of the time-domain sweep \(2 "
+                                          r"frequencies x 40000001\): about 8e\+07"):
+        sweep(problem, 2e-9, 1e-10, [1e3, 2e3], samples_per_period=10_000_000)
+
+
+def test_linear_response_refuses_more_than_max_samples_frequencies(make_problem, no_compute):
+    problem = make_problem(SLS, 1.9e-9)
+    too_many = np.broadcast_to(10.0, (MAX_SAMPLES + 1,))  # a view: no 80 MB allocation
+    with pytest.raises(EffortError, match=r"frequencies of linear_stiffness \(10000001 "
+                                          r"requested\): about 1e\+07 needed, beyond the limit"):
+        linear_response(problem, 2e-9, 1e-10, too_many)
+    with pytest.raises(EffortError, match="refused before computing"):
+        linear_stiffness(problem, 2e-9, too_many)
 
 
 def test_bode_plot_overlays_methods_with_error_bars(make_problem):

@@ -2,6 +2,10 @@
 
 from __future__ import annotations
 
+import hashlib
+import math
+from pathlib import Path
+
 import numpy as np
 import pandas as pd
 import pytest
@@ -9,7 +13,13 @@ import xarray as xr
 
 import viscoforce as vf
 from tests.conftest import REFERENCE_DIR
+from viscoforce.exceptions import ModelValidityError, ModelValidityWarning
+from viscoforce.problem import HALF_SPACE_WARNING, check_half_space
 from viscoforce.solvers.newton import solve_gap
+
+#: The FFT peer's table, copied into the repository (tests/data/README.md says where from).
+PEER_CSV = Path(__file__).parent / "data" / "static_loads_fft_peer.csv"
+PEER_SHA256 = "a6656f9dc23c5dc2e75da47e8d753cd78507edc299e455df7618356dd6c771a1"
 
 PAPER_STATIC = [  # (h0 [m], load [N] as printed, absolute tolerance = half the last printed digit)
     (-7e-9, 1.59e-6, 0.005e-6),
@@ -33,14 +43,19 @@ def test_paper_mean_deformation_at_2nm(make_problem):
 
 
 def _peer_rows():
-    path = REFERENCE_DIR / "static_loads_fft_peer.csv"
-    if not path.exists():
-        return []
-    df = pd.read_csv(path)
+    df = pd.read_csv(PEER_CSV)
     return [tuple(row) for row in df.itertuples(index=False)]
 
 
-@pytest.mark.skipif(not _peer_rows(), reason="shared/data/reference is absent")
+def test_fft_peer_copy_is_complete_and_matches_shared_source():
+    """The copy in tests/data is the shared file byte for byte (checked whenever it is present)."""
+    assert hashlib.sha256(PEER_CSV.read_bytes()).hexdigest() == PEER_SHA256
+    assert len(_peer_rows()) == 16
+    source = REFERENCE_DIR / "static_loads_fft_peer.csv"
+    if source.exists():
+        assert source.read_bytes() == PEER_CSV.read_bytes()
+
+
 @pytest.mark.parametrize("row", _peer_rows())
 def test_against_independent_fft_peer(make_problem, row):
     """3-D FFT half-space + energy minimisation (ContactMechanics/Adhesion), README: ~1e-4.
@@ -165,3 +180,105 @@ def test_contact_radius_when_only_the_centre_is_below_threshold():
     a = contact_radius(grid, gaps, 0.9999e-9, 1e-9)
     assert 0.0 <= a < grid.r[0]
     assert contact_radius(grid, gaps, 1.0001e-9, 1e-9) == 0.0
+
+
+# ── half-space validity ──────────────────────────────────────────────────────────────────────
+
+R_PAPER = 10e-6
+
+
+@pytest.mark.parametrize("E", [1e9, 1e10])
+def test_paper_deepest_statics_are_well_inside_the_half_space_model(make_problem, E):
+    """h0 = −10 nm: measured a/R = 0.030 (1e9 Pa), 0.036 (1e10 Pa); |u(0)|/R = 0.0011, 0.0010."""
+    ds = vf.static_equilibrium(make_problem(vf.Elastic(E), -10e-9), -10e-9)
+    a_ratio, u_ratio = check_half_space(R_PAPER, float(ds.u_center), float(ds.contact_radius))
+    assert 0.02 < a_ratio < 0.04 < HALF_SPACE_WARNING["contact_radius"] / 2
+    assert 5e-4 < u_ratio < 1.2e-3 < HALF_SPACE_WARNING["deformation"] / 5
+
+
+def test_paper_fig5_loop_is_well_inside_the_half_space_model(make_problem):
+    """Triangle 10 → −10 → 10 nm at 5 µm/s: measured max a/R = 0.034, max |u(0)|/R = 0.0011."""
+    from viscoforce.experiments.drives import Triangle
+    from viscoforce.solvers.simulate import simulate
+
+    sls = vf.StandardLinearSolid(E0=1e10, E_inf=1e9, tau=1e-3)
+    ds = simulate(make_problem(sls, -10e-9), Triangle(10e-9, -10e-9, 5e-6), progress=False)
+    a_ratio, u_ratio = check_half_space(R_PAPER, ds.u_center.values, ds.contact_radius.values)
+    assert a_ratio < 0.04 and u_ratio < 1.2e-3
+
+
+def test_unit_slip_debye_length_of_one_metre_is_refused():
+    """The issue's defect: --debye-length 1m gave u(0) = −158 µm and a = 4.5 mm on R = 10 µm."""
+    law = vf.DoubleLayer(1e7, 1.0) + vf.SoftWall(1e7, 0.5e-9)
+    pr = vf.ContactProblem.create(sphere=vf.Sphere(R_PAPER), surface_force=law,
+                                  material=vf.Elastic(1e9), deepest_position=-5e-9)
+    with pytest.raises(ModelValidityError,
+                       match=r"outside the model at h0 = -5 nm: the contact radius a = 4\.\d+ mm = "
+                             r"4\d\d R \(limit 0\.5 R\) and the central deformation \|u\(0\)\| = "
+                             r"1\d\d µm = 1\d\.\d R \(limit 0\.1 R\); the half-space \(small-slope\) "
+                             r"model assumes deformations and contact radii small against the "
+                             r"sphere radius R = 10 µm"):
+        vf.static_equilibrium(pr, -5e-9)
+
+
+@pytest.mark.parametrize(("u_center", "a", "outcome", "match"), [
+    (-1e-8, 3e-7, None, None),
+    (-0.01 * R_PAPER, 0.1 * R_PAPER, None, None),  # exactly at the warning levels: accepted
+    (-0.011 * R_PAPER, 0.0, "warn", r"\|u\(0\)\| = 110 nm = 0\.011 R \(warning above 0\.01 R\)"),
+    (0.0, 0.2 * R_PAPER, "warn", r"a = 2 µm = 0\.2 R \(warning above 0\.1 R\)"),
+    (+0.05 * R_PAPER, 0.0, "warn", r"\|u\(0\)\| = 500 nm = 0\.05 R"),  # the sign does not matter
+    (-0.1 * R_PAPER, 0.5 * R_PAPER, "warn", r"a = 5 µm = 0\.5 R .* \|u\(0\)\| = 1 µm = 0\.1 R"),
+    (-0.2 * R_PAPER, 0.0, "error", r"\|u\(0\)\| = 2 µm = 0\.2 R \(limit 0\.1 R\)"),
+    (0.0, 0.6 * R_PAPER, "error", r"the contact radius a = 6 µm = 0\.6 R \(limit 0\.5 R\)"),
+], ids=["paper", "at-warning-levels", "warn-u", "warn-a", "warn-u-positive", "at-error-levels",
+        "error-u", "error-a"])
+def test_half_space_thresholds(u_center, a, outcome, match):
+    if outcome is None:
+        check_half_space(R_PAPER, u_center, a)
+    elif outcome == "warn":
+        with pytest.warns(ModelValidityWarning, match=match):
+            check_half_space(R_PAPER, u_center, a)
+    else:
+        with pytest.raises(ModelValidityError, match=match):
+            check_half_space(R_PAPER, u_center, a)
+
+
+def test_half_space_check_takes_the_worst_of_arrays_and_names_the_context():
+    u = np.array([0.0, -1e-9, -2e-6, -1e-9])
+    a = np.array([0.0, 1e-7, 2e-6, 0.0])
+    with pytest.raises(ModelValidityError, match=r"at t = 1\.5 ms: the central deformation "
+                                                 r"\|u\(0\)\| = 2 µm = 0\.2 R"):
+        check_half_space(R_PAPER, u, a, where="at t = 1.5 ms")
+    assert check_half_space(R_PAPER, u[:2], a[:2]) == pytest.approx((0.01, 1e-4))
+    assert check_half_space(R_PAPER, [], []) == (0.0, 0.0)
+    assert issubclass(ModelValidityError, vf.ViscoforceError)
+    assert issubclass(ModelValidityError, ValueError)
+    assert issubclass(ModelValidityWarning, UserWarning)
+
+
+@pytest.mark.parametrize(("args", "match"), [
+    ((0.0, 0.0, 0.0), r"radius \(R\) must be > 0"),
+    ((None, 0.0, 0.0), r"radius \(R\) must be a real number"),
+    ((R_PAPER, float("nan"), 0.0), r"deformation must be finite"),
+    ((R_PAPER, 0.0, -1e-9), r"contact_radius must be >= 0 m"),
+    ((R_PAPER, 0.0, [1e-9, float("inf")]), r"contact_radius must be finite; entry 1 is inf"),
+    ((R_PAPER, "1 nm", 0.0), r"deformation must be a number or an array of real numbers"),
+])
+def test_half_space_check_validates_its_input(args, match):
+    with pytest.raises(vf.ParameterError, match=match):
+        check_half_space(*args)
+
+
+@pytest.mark.parametrize(("f", "lo", "hi"), [
+    (lambda x: math.cos(3 * x) + 0.3 * x**3 - 0.2, 0.0, 1.0),
+    (lambda x: x**9 - 1e-3, 0.0, 2.0),  # flat on one side: Illinois must not stall
+    (lambda x: math.tanh(50 * (x - 0.3)), 0.0, 1.0),
+    (lambda x: x - 0.5, 0.0, 1.0),
+])
+def test_bracketed_root_matches_brentq(f, lo, hi):
+    from scipy.optimize import brentq
+
+    from viscoforce.problem import _bracketed_root
+
+    expected = brentq(f, lo, hi, xtol=1e-14)
+    assert _bracketed_root(f, lo, hi, f(lo), f(hi), xtol=1e-12) == pytest.approx(expected, abs=2e-12)

@@ -1,4 +1,5 @@
-"""Tests of viscoforce.svda: the SVDA ODE (paper Eqs. 17–18) against the closed forms."""
+"""The SVDA ODE (paper Eqs. 17–18, viscoforce.solvers.svda_ode) and its sine sweep + lock-in
+(experiments.spectroscopy.svda_sweep) against the closed forms of viscoforce.svda."""
 
 from __future__ import annotations
 
@@ -10,22 +11,32 @@ import pytest
 from scipy.integrate import solve_ivp
 from scipy.optimize import OptimizeResult
 
-import viscoforce.svda as svda_module
-from viscoforce.closed_form import (
-    derjaguin_force,
+import viscoforce as vf
+import viscoforce.solvers.svda_ode as svda_ode
+from viscoforce.closed_form import derjaguin_force
+from viscoforce.exceptions import ConvergenceError, EffortError, ParameterError
+from viscoforce.experiments.spectroscopy import svda_spectrum, svda_sweep
+from viscoforce.schema import validate_spectrum
+from viscoforce.solvers.svda_ode import ODE_METHODS, solve_svda
+from viscoforce.svda import (
     svda_harmonic_response,
     svda_peak_phase_frequency,
     svda_ramp_deformation,
     svda_static_deformation,
 )
-from viscoforce.exceptions import ConvergenceError, ParameterError
-from viscoforce.svda import solve_svda, svda_harmonic_response_ode
 
 E0, E_INF, TAU = 1e10, 1e9, 1e-3
 R, P, DEBYE = 10e-6, 1e7, 1e-9
 KAPPA = 1.0 / DEBYE
-PARAMS = dict(E0=E0, E_inf=E_INF, tau=TAU, radius=R, pressure=P, debye_length=DEBYE)
-SURFACE = dict(radius=R, pressure=P, debye_length=DEBYE)
+PARAMS = dict(E0=E0, E_inf=E_INF, tau=TAU, radius=R, P=P, debye_length=DEBYE)
+SURFACE = dict(radius=R, P=P, debye_length=DEBYE)
+SLS = vf.StandardLinearSolid(E0=E0, E_inf=E_INF, tau=TAU)
+
+
+def svda_problem(material=SLS, deepest=1.9e-9):
+    """The SVDA system as a ContactProblem (one DoubleLayer; the grid is not used by the SVDA)."""
+    return vf.ContactProblem.create(sphere=vf.Sphere(R), surface_force=vf.DoubleLayer(P, DEBYE),
+                                    material=material, deepest_position=deepest)
 
 
 @dataclass(frozen=True)
@@ -106,8 +117,8 @@ def test_relaxation_from_glassy_state_at_linearised_rate():
 def test_methods_agree_and_t_eval_need_not_start_at_zero():
     drive = _PiecewiseLinear((0.0, 4e-3, 8e-3), (6e-9, 2e-9, 6e-9))
     t = np.linspace(1e-3, 10e-3, 10)
-    runs = [solve_svda(drive, **PARAMS, t_eval=t, method=m, rtol=1e-10)
-            for m in svda_module.METHODS]
+    runs = [solve_svda(drive, **PARAMS, t_eval=t, ode_method=m, rtol=1e-10)
+            for m in ODE_METHODS]
     for other in runs[1:]:
         np.testing.assert_allclose(other.deformation, runs[0].deformation, rtol=1e-6)
     only_start = solve_svda(drive, **PARAMS, t_eval=[0.0])
@@ -171,31 +182,50 @@ def test_eq20_valid_at_large_separation_only():
     assert np.all(rel[near] > 0.2)             # > 20 % overestimate at 2 and 1 nm
 
 
-# ── harmonic response: ODE + projection against the closed form ───────────────────────────────
+# ── harmonic response: ODE + sine drive + lock-in against the closed form ────────────────────
 
 @pytest.mark.parametrize("omega_tau", [0.2, 1.17, 8.0])
 def test_harmonic_ode_matches_closed_form_at_small_eta(omega_tau):
+    # Measured: |Δa|/a, |Δν|/ν ≤ 2e-7, |Δχ| ≤ 4e-6°, |Δφ| ≤ 2e-6 rad, |ΔF̄|/F̄ ≤ 2e-7 (the
+    # O((κη)²) = 1e-6 nonlinearity and rtol); the bounds below are the original ones.
     eta, h_bar = 1e-12, 2e-9                   # η = 1e-3 nm
     w = omega_tau / TAU
-    sim = svda_harmonic_response_ode(w, position=h_bar, eta=eta, **PARAMS, method="LSODA")
+    sim = svda_sweep(svda_problem(), h_bar, eta, [w], ode_method="LSODA")
     cf = svda_harmonic_response(w, h_bar, eta, **PARAMS)
-    assert sim.amplitude == pytest.approx(float(cf.amplitude), rel=1e-3)
-    assert abs(sim.phase - float(cf.phase)) <= 0.05
-    assert sim.nu == pytest.approx(float(cf.nu), rel=1e-3)
-    assert abs(sim.phi - float(cf.phi)) <= math.radians(0.05)
-    assert sim.stiffness == pytest.approx(float(cf.stiffness), rel=1e-3)
-    assert sim.mean_force == pytest.approx(cf.mean_force, rel=1e-6)
-    assert sim.mean_deformation == pytest.approx(cf.u0, rel=1e-6)
+    assert sim.attrs["method"] == "svda-ode"
+    assert float(sim.amplitude[0]) == pytest.approx(float(cf.amplitude), rel=1e-3)
+    assert abs(float(sim.phase[0]) - float(cf.phase)) <= 0.05
+    assert float(sim.deformation_amplitude[0]) == pytest.approx(float(cf.nu), rel=1e-3)
+    assert abs(float(sim.deformation_phase[0]) - math.degrees(float(cf.phi))) <= 0.05
+    assert float(sim.stiffness[0]) == pytest.approx(float(cf.stiffness), rel=1e-3)
+    assert float(sim.mean_force[0]) == pytest.approx(cf.mean_force, rel=1e-6)
+    assert float(sim.mean_deformation[0]) == pytest.approx(cf.u0, rel=1e-6)
 
 
 def test_harmonic_ode_fig3_phase_peak():
     # Fig. 3 amplitude η = 0.1 nm at the SVDA peak-phase frequency: the nonlinear ODE stays
     # within 0.1° and 0.2 % of the linear closed form (9.14°).
     w0 = svda_peak_phase_frequency(2e-9, **PARAMS)
-    sim = svda_harmonic_response_ode(w0, position=2e-9, eta=1e-10, **PARAMS, method="LSODA")
+    sim = svda_sweep(svda_problem(), 2e-9, 1e-10, [w0], ode_method="LSODA")
     cf = svda_harmonic_response(w0, 2e-9, 1e-10, **PARAMS)
-    assert abs(sim.phase - float(cf.phase)) < 0.1
-    assert sim.amplitude == pytest.approx(float(cf.amplitude), rel=2e-3)
+    assert abs(float(sim.phase[0]) - float(cf.phase)) < 0.1
+    assert float(sim.amplitude[0]) == pytest.approx(float(cf.amplitude), rel=2e-3)
+
+
+def test_svda_sweep_equals_svda_spectrum_and_follows_the_schema():
+    # Two SVDA routes, one Spectrum convention: the ODE + lock-in and the closed form.
+    problem = svda_problem()
+    w = np.array([0.5, 2.0]) / TAU
+    sim = svda_sweep(problem, 2e-9, 1e-12, w, periods=2, samples_per_period=32,
+                     ode_method="LSODA", progress=False)
+    cf = svda_spectrum(problem, 2e-9, 1e-12, w)
+    validate_spectrum(sim)
+    np.testing.assert_allclose(sim.stiffness, cf.stiffness, rtol=1e-3)
+    np.testing.assert_allclose(sim.phase, cf.phase, atol=0.05)
+    np.testing.assert_allclose(sim.mean_force, cf.mean_force, rtol=1e-6)
+    assert sim.deformation_phase.attrs["units"] == "degree"
+    assert np.all(sim.deformation_phase < 0) and np.all(sim.nfev > 0)
+    assert sim.attrs["ode_method"] == "LSODA" and sim.attrs["settle"] == 20 * TAU
 
 
 # ── raise branches ──────────────────────────────────────────────────────────────────────────────
@@ -208,11 +238,11 @@ _T = np.linspace(0, 1e-3, 3)
     (dict(drive=object()), "drive must provide position"),
     (dict(t_eval=[0.0, 2e-3, 1e-3]), "t_eval must be strictly increasing"),
     (dict(t_eval=[-1e-3, 0.0]), r"t_eval must start at >= 0"),
-    (dict(method="RK45"), "method must be one of"),
+    (dict(ode_method="RK45"), r"ode_method must be one of \('Radau', 'BDF', 'LSODA'\)"),
     (dict(rtol=1e-16), r"rtol must be in \[1e-13, 0.1\]"),
     (dict(atol=0.0), "atol must be > 0"),
     (dict(E0=1e8), "E0 .* must be > E_inf"),
-    (dict(pressure=-1.0), "pressure must be > 0"),
+    (dict(P=-1.0), "P must be > 0"),
     (dict(radius=0.0), "radius must be > 0"),
     (dict(debye_length=np.nan), "debye_length must be finite"),
     (dict(u_start=np.inf), "u_start must be finite"),
@@ -223,6 +253,11 @@ def test_solve_svda_raises_parameter_error(kwargs, match):
     drive = args.pop("drive")
     with pytest.raises(ParameterError, match=match):
         solve_svda(drive, **args)
+
+
+def test_solve_svda_refuses_too_many_output_times():
+    with pytest.raises(EffortError, match=r"output times of solve_svda: about 1e\+07 needed"):
+        solve_svda(_DRIVE, **PARAMS, t_eval=np.arange(10_000_001) * 1e-9)
 
 
 def test_solve_svda_raises_on_non_finite_rhs():
@@ -241,25 +276,61 @@ def test_solve_svda_raises_when_solve_ivp_fails(monkeypatch):
         return OptimizeResult(t=np.array([t_span[0]]), y=np.array([y0]).T, status=-1, nfev=3,
                          message="Required step size is less than spacing between numbers.")
 
-    monkeypatch.setattr(svda_module, "solve_ivp", failing)
+    monkeypatch.setattr("scipy.integrate.solve_ivp", failing)  # imported where it is used
     with pytest.raises(ConvergenceError, match=r"solve_ivp \(Radau\) failed .*step size") as info:
         solve_svda(_DRIVE, **PARAMS, t_eval=_T)
     assert info.value.time == 0.0
 
 
 @pytest.mark.parametrize(("kwargs", "match"), [
-    (dict(omega=0.0), "omega must be > 0"),
-    (dict(eta=0.0), "eta must be > 0"),
-    (dict(position=np.nan), "position must be finite"),
+    (dict(problem=None), "problem must be a ContactProblem"),
+    (dict(omega=[0.0]), r"omega must be > 0 rad/s; entry 0 is 0.0"),
+    (dict(omega=[]), r"omega must be a non-empty 1-D array .* > 0 rad/s"),
+    (dict(omega=None), r"omega must be a non-empty 1-D array"),
+    (dict(omega=[np.nan]), r"omega must be .* finite"),
+    (dict(eta=0.0), r"eta must be > 0 \[m\]"),
+    (dict(eta=None), r"eta must be > 0 \[m\] \(finite\), got None"),
+    (dict(position=np.nan), r"position must be finite \[m\]"),
+    (dict(position="2nm"), r"position must be finite \[m\]"),
+    (dict(position=-5e-9), "holds before contact only"),
     (dict(periods=0), "periods must be an integer >= 1"),
     (dict(samples_per_period=4), "samples_per_period must be an integer >= 8"),
-    (dict(settle_time=-1.0), "settle_time must be >= 0"),
-    (dict(tau=0.0), "tau must be > 0"),
-    (dict(E_inf=2e10), "E0 .* must be > E_inf"),
+    (dict(settle=-1.0), r"settle must be >= 0 \[s\]"),
+    (dict(settle=np.nan), r"settle must be >= 0 \[s\].*got nan"),
+    (dict(ode_method="RK45"), "ode_method must be one of"),
+    (dict(rtol=0.5), r"rtol must be in \[1e-13, 0.1\]"),
+    (dict(atol=-1.0), "atol must be > 0"),
+    (dict(progress="yes"), "progress must be True, False or None"),
 ])
-def test_harmonic_ode_raises(kwargs, match):
-    args = dict(omega=1e3, position=2e-9, eta=1e-12, **PARAMS)
+def test_svda_sweep_raises(kwargs, match):
+    args = dict(problem=svda_problem(deepest=-6e-9), position=2e-9, eta=1e-12, omega=[1e3])
     args.update(kwargs)
-    omega = args.pop("omega")
     with pytest.raises(ParameterError, match=match):
-        svda_harmonic_response_ode(omega, **args)
+        svda_sweep(args.pop("problem"), args.pop("position"), args.pop("eta"), args.pop("omega"),
+                   **args)
+
+
+def test_svda_sweep_needs_the_svda_material_and_law():
+    prony = vf.PronySeries.from_moduli([1e10, 3e9, 1e9], [1e-4, 1e-3])
+    with pytest.raises(ParameterError, match="single-relaxation-time material, got 2 modes"):
+        svda_sweep(svda_problem(prony), 2e-9, 1e-12, [1e3])
+    walls = vf.ContactProblem.create(sphere=vf.Sphere(R), surface_force=vf.SoftWall(1e7, 0.5e-9),
+                                     material=SLS, deepest_position=1.9e-9)
+    with pytest.raises(ParameterError, match="exactly one DoubleLayer term"):
+        svda_sweep(walls, 2e-9, 1e-12, [1e3])
+
+
+def test_svda_sweep_refuses_huge_effort_before_integrating(monkeypatch):
+    import viscoforce.experiments.spectroscopy as sp_module
+
+    def forbidden(*args, **kwargs):
+        raise AssertionError("integrated although the request should have been refused")
+
+    monkeypatch.setattr(sp_module, "solve_svda", forbidden)
+    # ω = 1e9 rad/s with 20τ = 20 ms settling: 3.2e6 periods, ≥ 2.5e7 steps > MAX_STEPS.
+    with pytest.raises(EffortError, match=r"time steps of the SVDA ODE sweep \(1 frequency.*"
+                                          r"about 2.55e\+07 needed, beyond the limit of 5e\+06"):
+        svda_sweep(svda_problem(), 2e-9, 1e-12, [1e9])
+    with pytest.raises(EffortError, match=r"output samples of the SVDA ODE sweep"):
+        svda_sweep(svda_problem(), 2e-9, 1e-12, [1e3], settle=0.0, periods=1,
+                   samples_per_period=20_000_000)

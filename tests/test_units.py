@@ -1,10 +1,14 @@
-"""Tests of viscoforce.units: quantity parsing/formatting, argparse helpers, the rulebook."""
+"""Tests of viscoforce.units: quantity parsing/formatting, the rulebook.
+
+The argparse helpers (quantity_type, normalize_negative_args) live in viscoforce.cli._args and
+are tested in tests/test_cli_args.py.
+"""
 
 from __future__ import annotations
 
-import argparse
 import math
 from fractions import Fraction
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -17,9 +21,7 @@ from viscoforce.units import (
     DIMENSIONS,
     accepted_units,
     format_quantity,
-    normalize_negative_args,
     parse_quantity,
-    quantity_type,
     unit_factor,
 )
 
@@ -276,8 +278,6 @@ def test_unknown_dimension(dimension):
                                              r"stiffness, dimensionless; got"):
         parse_quantity("1", dimension)
     with pytest.raises(ParameterError, match=r"dimension must be one of"):
-        quantity_type(dimension)
-    with pytest.raises(ParameterError, match=r"dimension must be one of"):
         accepted_units(dimension)
     with pytest.raises(ParameterError, match=r"dimension must be one of"):
         unit_factor(dimension, "")
@@ -412,130 +412,6 @@ def test_format_quantity_bad_unit():
 
 
 # --------------------------------------------------------------------------------------------
-# argparse integration
-# --------------------------------------------------------------------------------------------
-
-VALUE_OPTIONS = {"--h0", "--from", "--to", "--t-end", "--speed", "--E", "-x"}
-MULTI_OPTIONS = {"--omega"}
-
-
-def make_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(prog="viscoforce")
-    parser.add_argument("--h0", type=quantity_type("length"))
-    parser.add_argument("--from", dest="from_", type=quantity_type("length"))
-    parser.add_argument("--to", type=quantity_type("length"))
-    parser.add_argument("--t-end", type=quantity_type("time"))
-    parser.add_argument("--speed", type=quantity_type("speed"))
-    parser.add_argument("--E", type=quantity_type("pressure"))
-    parser.add_argument("-x", type=quantity_type("length"))
-    parser.add_argument("--omega", nargs="+", type=quantity_type("angular_frequency"))
-    parser.add_argument("--verbose", "-v", action="store_true")
-    parser.add_argument("data", nargs="?")
-    return parser
-
-
-def parse(argv: list[str]) -> argparse.Namespace:
-    return make_parser().parse_args(normalize_negative_args(argv, VALUE_OPTIONS, MULTI_OPTIONS))
-
-
-@pytest.mark.parametrize(("argv", "attr", "expected"), [
-    (["--h0", "-5nm"], "h0", -5e-9),
-    (["--h0=-5nm"], "h0", -5e-9),
-    (["--h0", "-.5nm"], "h0", -5e-10),
-    (["--h0", "-1e-9"], "h0", -1e-9),
-    (["--h0", "-3"], "h0", -3.0),
-    (["--h0", "2nm"], "h0", 2e-9),
-    (["--h0", "2e-9"], "h0", 2e-9),
-    (["--from", "10nm", "--to", "-10nm"], "to", -1e-8),
-    (["--from", "10nm", "--to", "-10nm"], "from_", 1e-8),
-    (["--from", "-10nm", "--to", "10nm"], "from_", -1e-8),
-    (["--t-end", "5ms"], "t_end", 5e-3),
-    (["--speed", "5um/s"], "speed", 5e-6),
-    (["--speed", f"5{MU}m/s"], "speed", 5e-6),
-    (["--E", "1e9Pa"], "E", 1e9),
-    (["--E", "1GPa"], "E", 1e9),
-    (["-x", "-5nm"], "x", -5e-9),
-    (["--omega", "100", "1kHz"], "omega", [100.0, 1000.0 * TWO_PI]),
-    (["--omega", "1", "-2kHz", "3"], "omega", [1.0, -2000.0 * TWO_PI, 3.0]),
-    (["--omega", "-1e3", "-.5", "--h0", "-5nm"], "omega", [-1e3, -0.5]),
-    (["--omega", "-1e3", "-.5", "--h0", "-5nm"], "h0", -5e-9),
-    (["--omega", "1", "2", "-v"], "verbose", True),
-])
-def test_argparse_accepts(argv, attr, expected):
-    value = getattr(parse(argv), attr)
-    if isinstance(expected, list):
-        assert value == [exact(e) for e in expected]
-    else:
-        assert value == exact(expected)
-
-
-def test_argparse_needs_normalization_for_negative_suffixed_values(capsys):
-    with pytest.raises(SystemExit) as info:
-        make_parser().parse_args(["--h0", "-5nm"])
-    assert info.value.code == 2
-    assert "expected one argument" in capsys.readouterr().err
-
-
-@pytest.mark.parametrize(("argv", "message"), [
-    (["--t-end", "5nm"], "argument --t-end: expected a time (s, ms, us/µs, ns, min), got '5nm'"),
-    (["--h0", "-5xm"], "argument --h0: unknown unit 'xm' in '-5xm' for a length"),
-    (["--E", "1,5GPa"], "argument --E: commas are not accepted in '1,5GPa'"),
-    (["--omega", "1", "-2nm"], "argument --omega: expected an angular frequency"),
-    (["--h0", "nan"], "argument --h0: a length must be finite, got 'nan'"),
-    (["--speed", ""], "argument --speed: empty string is not a speed"),
-])
-def test_argparse_errors_exit_2_with_the_unit_message(argv, message, capsys):
-    with pytest.raises(SystemExit) as info:
-        parse(argv)
-    assert info.value.code == 2
-    err = capsys.readouterr().err
-    assert message in err
-    assert "Traceback" not in err
-
-
-def test_quantity_type_callable():
-    length = quantity_type("length")
-    assert length("-5nm") == -5e-9
-    assert length.__name__ == "length"
-    assert repr(length) == "quantity_type('length')"
-    assert quantity_type("angular_frequency").__name__ == "angular frequency"
-    with pytest.raises(argparse.ArgumentTypeError, match=r"expected a length .*got '5ms'") as info:
-        length("5ms")
-    assert isinstance(info.value.__cause__, UnitError)
-
-
-def test_normalize_negative_args_rewrites():
-    argv = ["--h0", "-5nm", "--to", "-10nm", "--omega", "1", "-2", "-3kHz", "--E", "1GPa"]
-    original = list(argv)
-    out = normalize_negative_args(argv, VALUE_OPTIONS, MULTI_OPTIONS)
-    assert out == ["--h0=-5nm", "--to=-10nm", "--omega", "1", " -2", " -3kHz", "--E", "1GPa"]
-    assert argv == original  # input not modified
-
-
-@pytest.mark.parametrize("argv", [
-    ["--h0=-5nm"],                       # already joined
-    ["--h0", "5nm"],                     # not negative
-    ["--h0"],                            # value missing: argparse reports it
-    ["--h0", "-v"],                      # an option, not a value
-    ["--h0", "-"],                       # a lone dash
-    ["--name", "-5nm"],                  # not a value option
-    ["--", "--h0", "-5nm"],              # after "--" nothing is touched
-    ["--omega", "1", "--", "-2"],
-    [],
-])
-def test_normalize_negative_args_leaves_alone(argv):
-    assert normalize_negative_args(argv, VALUE_OPTIONS, MULTI_OPTIONS) == argv
-
-
-def test_normalize_negative_args_accepts_any_iterables():
-    out = normalize_negative_args(iter(["--h0", "-5nm", "--omega", "-1"]), ("--h0",),
-                                  frozenset({"--omega"}))
-    assert out == ["--h0=-5nm", "--omega", " -1"]
-    # without multi_value_options, a multi-value option's negative values are left alone
-    assert normalize_negative_args(["--omega", "-1"], {"--h0"}) == ["--omega", "-1"]
-
-
-# --------------------------------------------------------------------------------------------
 # the rulebook
 # --------------------------------------------------------------------------------------------
 
@@ -564,3 +440,9 @@ def test_public_names_have_docstrings():
         obj = getattr(units, name)
         if callable(obj):
             assert obj.__doc__ and "Parameters" in obj.__doc__, name
+
+
+def test_units_holds_no_argparse_helpers():
+    source = Path(units.__file__).read_text(encoding="utf-8")
+    assert "import argparse" not in source
+    assert not {"quantity_type", "normalize_negative_args"} & set(units.__all__)

@@ -72,3 +72,22 @@ class EffortError(ViscoforceError, ValueError):
         super().__init__(message)
         self.estimate = estimate
         self.limit = limit
+
+
+class ModelValidityError(ViscoforceError, ValueError):
+    """A result lies outside the model's domain of validity (e.g. the half-space small-slope model).
+
+    The numbers may be exact for the equations solved, but the equations no longer describe the
+    physical system; the message gives the offending numbers and the limit.
+    """
+
+
+class ModelValidityWarning(UserWarning):
+    """A result approaches the edge of the model's domain of validity (see ModelValidityError)."""
+
+
+class InstrumentFormatError(ViscoforceError, ValueError):
+    """An instrument file is empty, truncated, corrupt, or lacks what the reader needs.
+
+    The message names the file, the archive member and what is wrong.
+    """

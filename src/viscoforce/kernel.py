@@ -32,6 +32,8 @@ from numpy.typing import ArrayLike
 from scipy.special import ellipkm1
 
 from viscoforce._typing import FloatArray
+from viscoforce._validation import as_float_array, require_instance
+from viscoforce.exceptions import ParameterError
 from viscoforce.radial_grid import RadialGrid, gauss_legendre_unit, lagrange_matrix
 
 _FAR_POINTS = 18
@@ -52,9 +54,28 @@ def kernel_times_s(r: ArrayLike, s: ArrayLike, *, offset: ArrayLike | None = Non
     offset : array_like, optional
         s − r computed without cancellation; when given, 1 − m is formed from it, which keeps full
         precision within a few ulps of the singularity.
+
+    Returns
+    -------
+    ndarray
+        s·k(r, s), broadcast over the inputs; +inf at s = r (the logarithmic singularity).
     """
-    r = np.asarray(r, dtype=float)
-    s = np.asarray(s, dtype=float)
+    r = as_float_array("r", r)
+    s = as_float_array("s", s)
+    if np.any(r < 0):
+        raise ParameterError(f"r must be >= 0, got min {float(np.min(r))!r}")
+    if np.any(s <= 0):
+        raise ParameterError(f"s must be > 0, got min {float(np.min(s))!r}")
+    if offset is not None:
+        offset = as_float_array("offset", offset)
+    try:
+        return _kernel_times_s(r, s, offset)
+    except ValueError as exc:  # shapes that do not broadcast
+        raise ParameterError(f"r, s and offset must broadcast together: {exc}") from None
+
+
+def _kernel_times_s(r: FloatArray, s: FloatArray, offset: FloatArray | None) -> FloatArray:
+    """:func:`kernel_times_s` without the input checks (float arrays, r ≥ 0, s > 0)."""
     total = r + s
     diff = (r - s) if offset is None else -np.asarray(offset, dtype=float)
     q = diff / total
@@ -88,7 +109,7 @@ def _rows_unit(n_panels: int, order: int, targets: FloatArray) -> FloatArray:
     panels = np.arange(n_panels)
     # far rule everywhere first
     s = panels[:, None] + xf[None, :]  # (P, F)
-    integrand = kernel_times_s(targets[:, None, None], s[None, :, :]) * wf  # (T, P, F)
+    integrand = _kernel_times_s(targets[:, None, None], s[None, :, :], None) * wf  # (T, P, F)
     out = np.einsum("tpf,fj->tpj", integrand, lag_far)
     # replace blocks of panels within one panel width of the target
     for t, x in enumerate(targets):
@@ -96,7 +117,7 @@ def _rows_unit(n_panels: int, order: int, targets: FloatArray) -> FloatArray:
         for k in near:
             c = min(max(x - k, 0.0), 1.0)
             y, wy, off = _graded_rule(c)
-            vals = kernel_times_s(x, k + y, offset=(k + c - x) + off) * wy
+            vals = _kernel_times_s(x, k + y, (k + c - x) + off) * wy
             out[t, k, :] = vals @ lagrange_matrix(local, y)
     return out.reshape(len(targets), n_panels * order)
 
@@ -123,6 +144,7 @@ def influence_matrix(grid: RadialGrid) -> FloatArray:
     ndarray, shape (grid.size, grid.size)
         Read-only product-integration matrix (cached per panel count and order).
     """
+    require_instance("grid", grid, RadialGrid)
     mat = grid.panel_width * _node_matrix_unit(grid.n_panels, grid.order)
     mat.flags.writeable = False
     return mat
@@ -131,13 +153,21 @@ def influence_matrix(grid: RadialGrid) -> FloatArray:
 def influence_rows(grid: RadialGrid, r: ArrayLike) -> FloatArray:
     """Influence rows [m] for arbitrary target radii ``r`` [m] (u(r) = −(2/E) rows @ p).
 
-    Use it for output at points that are not nodes, e.g. the centre r = 0.
+    Use it for output at points that are not nodes, e.g. the centre r = 0; 0 ≤ r ≤ outer_radius.
     """
-    r = np.atleast_1d(np.asarray(r, dtype=float))
+    require_instance("grid", grid, RadialGrid)
+    r = np.atleast_1d(as_float_array("r", r))
+    if r.ndim != 1:
+        raise ParameterError(f"r must be a number or a 1-D array of radii [m], got shape {r.shape}")
+    if np.any(r < 0) or np.any(r > grid.outer_radius * (1 + 1e-12)):
+        raise ParameterError(
+            f"r must lie in [0, {grid.outer_radius:g}] m (the grid), got min {float(r.min())!r}, "
+            f"max {float(r.max())!r}")
     return grid.panel_width * _rows_unit(grid.n_panels, grid.order, r / grid.panel_width)
 
 
 def center_row(grid: RadialGrid) -> FloatArray:
     """Row c [m] with u(0) = −(2/E) c @ p: since s·k(0, s) = 2, c_j = 2 × (quadrature weight of node j)."""
+    require_instance("grid", grid, RadialGrid)
     _, w = gauss_legendre_unit(grid.order)
     return 2.0 * grid.panel_width * np.tile(w, grid.n_panels)

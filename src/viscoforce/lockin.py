@@ -28,11 +28,9 @@ from typing import Literal
 import numpy as np
 import xarray as xr
 from numpy.typing import ArrayLike, NDArray
-from scipy.interpolate import CubicSpline
-from scipy.signal import lfilter
-from scipy.special import gammainccinv
 
 from viscoforce._validation import (
+    describe_value,
     require_in_range,
     require_increasing,
     require_int,
@@ -109,13 +107,42 @@ def _signal_last_axis(name: str, signal: ArrayLike, n_time: int, axis: int) -> N
     return arr
 
 
+def _check_detrend(detrend: object) -> Detrend:
+    """Return ``detrend``, raising unless it is None or the string ``"linear"``."""
+    if detrend is not None and not (isinstance(detrend, str) and detrend == "linear"):
+        raise ParameterError(
+            f"detrend must be None or 'linear', got {describe_value(detrend)}")
+    return detrend
+
+
+def _as_complex_amplitude(amplitude: ArrayLike) -> NDArray[np.complex128]:
+    """Return ``amplitude`` as a complex array, raising unless it holds finite numbers."""
+    kinds = "iufc"  # integers, floats, complex (not bool, text or objects)
+    if amplitude is None or isinstance(amplitude, str | bytes | dict):
+        arr = None
+    else:
+        try:
+            arr = np.asarray(amplitude)
+        except (TypeError, ValueError):
+            arr = None
+    if arr is None or arr.dtype.kind not in kinds:
+        raise ParameterError(
+            f"amplitude must be a complex number or an array of complex numbers, got "
+            f"{describe_value(amplitude)}")
+    z = arr.astype(complex, copy=False)
+    if not np.all(np.isfinite(z)):
+        bad = int(np.flatnonzero(~np.isfinite(z.ravel()))[0])
+        raise ParameterError(
+            f"amplitude must be finite (no NaN/inf); entry {bad} is {complex(z.ravel()[bad])!r}")
+    return z
+
+
 def _window(signal: ArrayLike, time: ArrayLike, omega: float, *, settle: float, axis: int,
             detrend: Detrend, max_harmonic: int) -> _Window:
     """Select the whole-period window, resample it on a uniform grid and optionally detrend it."""
     omega = require_positive("omega", omega)
     settle = require_nonnegative("settle", settle)
-    if detrend not in (None, "linear"):
-        raise ParameterError(f"detrend must be None or 'linear', got {detrend!r}")
+    detrend = _check_detrend(detrend)
     t = require_increasing("time", time)
     if t.size < 2:
         raise ParameterError(f"time needs at least 2 samples, got {t.size}")
@@ -154,6 +181,8 @@ def _window(signal: ArrayLike, time: ArrayLike, omega: float, *, settle: float, 
         nodes = t[start:]
         values = x[..., start:]
     else:
+        from scipy.interpolate import CubicSpline
+
         spline = CubicSpline(t[first:], x[..., first:], axis=-1)
         values = spline(nodes)
 
@@ -309,8 +338,13 @@ def sin_phase(amplitude: ArrayLike) -> NDArray[np.float64] | np.float64:
     -------
     numpy.ndarray or numpy.float64
         ψ [rad] in (−π, π], same shape as ``amplitude``.
+
+    Raises
+    ------
+    ParameterError
+        If ``amplitude`` is not numeric (None, text, objects) or holds NaN or ±inf.
     """
-    return np.angle(1j * np.asarray(amplitude, dtype=complex))[()]
+    return np.angle(1j * _as_complex_amplitude(amplitude))[()]
 
 
 def amplitude_phase_from_complex(amplitude: ArrayLike
@@ -330,8 +364,13 @@ def amplitude_phase_from_complex(amplitude: ArrayLike
         |X̂| [u].
     phase : numpy.ndarray
         ψ [rad] in (−π, π].
+
+    Raises
+    ------
+    ParameterError
+        If ``amplitude`` is not numeric (None, text, objects) or holds NaN or ±inf.
     """
-    z = np.asarray(amplitude, dtype=complex)
+    z = _as_complex_amplitude(amplitude)
     return np.abs(z), np.angle(1j * z)
 
 
@@ -392,12 +431,14 @@ def demodulate_dataarray(da: xr.DataArray, omega: float | xr.DataArray, *, dim: 
     """
     if not isinstance(da, xr.DataArray):
         raise ParameterError(f"da must be an xarray.DataArray, got {type(da).__name__}")
-    if dim not in da.dims:
-        raise ParameterError(f"dim must be one of the dimensions {tuple(da.dims)}, got {dim!r}")
+    if not isinstance(dim, str) or dim not in da.dims:
+        raise ParameterError(
+            f"dim must be one of the dimensions {tuple(da.dims)}, got {describe_value(dim)}")
     if dim not in da.coords:
         raise ParameterError(f"da needs a coordinate {dim!r} holding the sample times [s]")
     harmonic = require_int("harmonic", harmonic, 0)
     settle = require_nonnegative("settle", settle)
+    detrend = _check_detrend(detrend)
     if isinstance(omega, xr.DataArray):
         if dim in omega.dims:
             raise ParameterError(f"omega must not vary along {dim!r}, got dims {omega.dims}")
@@ -459,6 +500,8 @@ def lockin_filter(signal: ArrayLike, time: ArrayLike, omega: float, *, time_cons
         If omega or time_constant ≤ 0, order < 1, harmonic < 0, time is not strictly increasing
         and uniform, or the signal is complex, not finite or does not match ``time``.
     """
+    from scipy.signal import lfilter
+
     omega = require_positive("omega", omega)
     time_constant = require_positive("time_constant", time_constant)
     order = require_int("order", order, 1)
@@ -508,6 +551,8 @@ def settling_time(time_constant: float, order: int, accuracy: float = 1e-3) -> f
     ParameterError
         If time_constant ≤ 0, order < 1 or accuracy is outside (0, 1).
     """
+    from scipy.special import gammainccinv
+
     time_constant = require_positive("time_constant", time_constant)
     order = require_int("order", order, 1)
     accuracy = require_in_range("accuracy", accuracy, 0.0, 1.0, inclusive=(False, False))

@@ -6,6 +6,10 @@ when ``ax`` is None) and returns a :class:`PlotHandle` holding the figure, the a
 artists it drew, so that callers can restyle, annotate or save the result. Nothing here computes
 physics, changes global state or calls ``plt.show()``.
 
+Inputs are checked against the dataset contracts of :mod:`viscoforce.schema`
+(:func:`~viscoforce.schema.validate_trajectory`, :func:`~viscoforce.schema.validate_spectrum`), so
+a wrong unit or dim raises :class:`~viscoforce.exceptions.SchemaError` before anything is drawn.
+
 Data stay in SI inside; conversion happens only for display: positions and gaps in nm, forces in
 µN (or ``force_unit``), times in ms (or ``time_unit``). Axis labels carry the unit.
 
@@ -22,8 +26,14 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from viscoforce._typing import FloatArray
-from viscoforce._validation import as_float_1d, require_finite, require_positive
+from viscoforce._validation import (
+    as_float_1d,
+    describe_value,
+    require_finite,
+    require_positive,
+)
 from viscoforce.exceptions import ParameterError, SchemaError
+from viscoforce.schema import validate_spectrum, validate_trajectory
 
 if TYPE_CHECKING:
     import xarray as xr
@@ -93,13 +103,63 @@ class PlotHandle:
 # ── helpers: validation and unit conversion ─────────────────────────────────────────────────────
 
 
+def _require_choice(name: str, value: Any, choices: Sequence[str] | Mapping[str, Any]) -> str:
+    """Return ``value``, raising unless it is one of the strings ``choices``.
+
+    The ``isinstance`` test comes first: ``value in choices`` would raise for an unhashable
+    value (list, dict) or be ambiguous for an array.
+    """
+    if not isinstance(value, str) or value not in choices:
+        listed = ", ".join(repr(c) for c in (sorted(choices) if isinstance(choices, Mapping)
+                                             else choices))
+        raise ParameterError(f"{name} must be one of {listed}, got {describe_value(value)}")
+    return value
+
+
+def _require_flag(name: str, value: Any, *, allow_none: bool = False) -> bool | None:
+    """Return ``value`` as a bool, raising unless it is True or False (or None if allowed)."""
+    if value is None and allow_none:
+        return None
+    if not isinstance(value, bool | np.bool_):
+        allowed = "True, False or None" if allow_none else "True or False"
+        raise ParameterError(f"{name} must be {allowed}, got {describe_value(value)}")
+    return bool(value)
+
+
+def _require_text(name: str, value: Any) -> str | None:
+    """Return ``value``, raising unless it is a string or None (a label or title)."""
+    if value is not None and not isinstance(value, str):
+        raise ParameterError(f"{name} must be a string or None, got {describe_value(value)}")
+    return value
+
+
+def _display_limit(name: str, value: Any, scale: float, unit: str) -> float | None:
+    """Validate an axis limit [SI] (> 0, or None) that is shown in ``unit`` (= ``scale`` SI)."""
+    if value is None:
+        return None
+    limit = require_positive(name, value)
+    if not np.isfinite(limit / scale):
+        raise ParameterError(
+            f"{name} must be at most {np.finfo(float).max * scale:.3g} m to be shown in {unit}, "
+            f"got {value!r}")
+    return limit
+
+
 def _unit(name: str, value: str, table: Mapping[str, tuple[float, str]]) -> tuple[float, str]:
-    if value not in table:
-        raise ParameterError(f"{name} must be one of {sorted(table)}, got {value!r}")
-    return table[value]
+    return table[_require_choice(name, value, table)]
+
+
+def _plot(ax: Axes, x: FloatArray, y: FloatArray, **kw: Any) -> Artist:
+    """``ax.plot`` of one line; a bad matplotlib property in ``line_kw`` raises ParameterError."""
+    try:
+        (line,) = ax.plot(x, y, **kw)
+    except (AttributeError, TypeError, ValueError) as exc:
+        raise ParameterError(f"line_kw holds an invalid matplotlib line property: {exc}") from None
+    return line
 
 
 def _require_trajectory(trajectory: Any, names: Sequence[str], function: str) -> xr.Dataset:
+    """The variables ``names`` a plot needs, then the trajectory contract (units, dims)."""
     import xarray as xr
 
     if not isinstance(trajectory, xr.Dataset):
@@ -112,6 +172,10 @@ def _require_trajectory(trajectory: Any, names: Sequence[str], function: str) ->
             f"{function} needs the trajectory variables {list(names)}; missing {missing}"
             + (" (run simulate(..., profiles=N) to store profiles)"
                if "gap" in missing or "profile_time" in missing else ""))
+    try:
+        validate_trajectory(trajectory, require=("time", *names))
+    except SchemaError as exc:
+        raise SchemaError(f"{function}: {exc}") from None
     if trajectory.sizes.get("time", 0) < 2:
         raise SchemaError(f"{function} needs at least 2 output times, got "
                           f"{trajectory.sizes.get('time', 0)}")
@@ -136,7 +200,14 @@ def _new_or_given_axes(ax: Any, figsize: tuple[float, float]) -> tuple[Figure, A
 
 
 def _line_kw(line_kw: Mapping[str, Any] | None) -> dict[str, Any]:
+    if line_kw is not None and not isinstance(line_kw, Mapping):
+        raise ParameterError(
+            f"line_kw must be a mapping of matplotlib line properties (e.g. {{'color': 'r'}}) or "
+            f"None, got {describe_value(line_kw)}")
     kw = {} if line_kw is None else dict(line_kw)
+    bad = [k for k in kw if not isinstance(k, str)]
+    if bad:
+        raise ParameterError(f"line_kw keys must be property names (strings), got {bad[0]!r}")
     clash = {"linestyle", "ls", "label"} & set(kw)
     if clash:
         raise ParameterError(
@@ -197,8 +268,8 @@ def _draw_branches(ax: Axes, x: FloatArray, y: FloatArray, runs: list[tuple[int,
     color = kw.pop("color", None)
     for k, (start, stop, loading) in enumerate(runs):
         style = LOADING_STYLE if loading else UNLOADING_STYLE
-        (line,) = ax.plot(x[start:stop + 1], y[start:stop + 1], linestyle=style, color=color,
-                          label=label if k == 0 and label is not None else "_nolegend_", **kw)
+        line = _plot(ax, x[start:stop + 1], y[start:stop + 1], linestyle=style, color=color,
+                     label=label if k == 0 and label is not None else "_nolegend_", **kw)
         color = line.get_color()
         lines.append(line)
     return lines
@@ -279,6 +350,8 @@ def hysteresis_plot(trajectory: xr.Dataset, *, ax: Axes | None = None,
         The trajectory lacks ``position`` or ``force``.
     """
     scale, unit = _unit("force_unit", force_unit, _FORCE_UNITS)
+    label = _require_text("label", label)
+    log = _require_flag("log", log)
     ds = _require_trajectory(trajectory, ("position", "force"), "hysteresis_plot")
     kw = _line_kw(line_kw)
     curves = _static_curves(statics)
@@ -342,6 +415,7 @@ def contact_radius_plot(trajectory: xr.Dataset, *, ax: Axes | None = None,
         The trajectory lacks ``position`` or ``contact_radius``.
     """
     scale, unit = _unit("radius_unit", radius_unit, _LENGTH_UNITS)
+    label = _require_text("label", label)
     ds = _require_trajectory(trajectory, ("position", "contact_radius"), "contact_radius_plot")
     kw = _line_kw(line_kw)
     curves = _static_curves(statics)
@@ -415,10 +489,11 @@ def profile_plot(trajectory: xr.Dataset, *, ax: Axes | Sequence[Axes] | None = N
     r_scale, r_unit = _unit("radius_unit", radius_unit, _LENGTH_UNITS)
     ds = _require_trajectory(trajectory, ("position", "gap", "profile_time", "r"),
                              "profile_plot")
-    r_limit = None if r_max is None else require_positive("r_max", r_max)
-    h_limit = None if gap_max is None else require_positive("gap_max", gap_max)
-    if cmap not in mpl.colormaps:
-        raise ParameterError(f"cmap must be a matplotlib colormap name, got {cmap!r}")
+    r_limit = _display_limit("r_max", r_max, r_scale, r_unit)
+    h_limit = _display_limit("gap_max", gap_max, _NM, "nm")
+    if not isinstance(cmap, str) or cmap not in mpl.colormaps:
+        raise ParameterError(
+            f"cmap must be a matplotlib colormap name (e.g. 'viridis'), got {describe_value(cmap)}")
     figure, panels = _profile_axes(ax)
     time = _values(ds, "time")
     position = _values(ds, "position")
@@ -498,6 +573,8 @@ def force_time_plot(trajectory: xr.Dataset, *, ax: Axes | None = None, log: bool
     """
     f_scale, f_unit = _unit("force_unit", force_unit, _FORCE_UNITS)
     t_scale, t_unit = _unit("time_unit", time_unit, _TIME_UNITS)
+    log = _require_flag("log", log)
+    label = _require_text("label", label)
     ds = _require_trajectory(trajectory, ("force",), "force_time_plot")
     f_ref = None if reference is None else require_finite("reference", reference)
     t0 = require_finite("t_start", t_start)
@@ -509,7 +586,7 @@ def force_time_plot(trajectory: xr.Dataset, *, ax: Axes | None = None, log: bool
     if log:
         y = np.abs(y) if f_ref is not None else y
         y = np.where(y > 0, y, np.nan)
-    (line,) = axes.plot((time - t0) / t_scale, y / f_scale, label=label or "_nolegend_", **kw)
+    line = _plot(axes, (time - t0) / t_scale, y / f_scale, label=label or "_nolegend_", **kw)
     if log:
         axes.set_yscale("log")
     if f_ref is None:
@@ -529,6 +606,44 @@ FrequencyUnit = Literal["rad/s", "Hz"]
 Magnitude = Literal["stiffness", "amplitude"]
 _MAGNITUDE_LABELS = {"stiffness": "stiffness $|F_1|/\\eta$ [N/m]",
                      "amplitude": "relative amplitude $a = |F_1|/\\bar F$"}
+
+
+def _spectrum_items(spectra: Any, magnitude: str) -> list[tuple[str, xr.Dataset]]:
+    """(label, spectrum) pairs, each validated (:func:`viscoforce.schema.validate_spectrum`)."""
+    import xarray as xr
+
+    if isinstance(spectra, xr.Dataset):  # itself a Mapping, so test it first
+        pairs: list[tuple[str | None, Any]] = [(None, spectra)]
+    elif isinstance(spectra, Mapping):
+        pairs = [(str(label), ds) for label, ds in spectra.items()]
+    elif isinstance(spectra, Sequence) and not isinstance(spectra, str | bytes):
+        pairs = [(None, ds) for ds in spectra]
+    else:
+        raise ParameterError(
+            "spectra must be a spectrum Dataset, a mapping label -> Dataset or a sequence of "
+            f"Datasets, got {type(spectra).__name__}")
+    if not pairs:
+        raise ParameterError("spectra must contain at least one spectrum")
+    items = []
+    for i, (given, ds) in enumerate(pairs):
+        label = given if given is not None else (
+            "spectrum" if isinstance(spectra, xr.Dataset) else f"spectrum {i + 1}")
+        if isinstance(ds, xr.Dataset):
+            label = given if given is not None else str(ds.attrs.get("method", label))
+            for name in ("omega", magnitude, "phase"):
+                if name not in ds.variables:
+                    raise SchemaError(f"bode_plot: spectrum {label!r} has no '{name}'")
+        try:
+            validate_spectrum(ds, require=("omega", magnitude, "phase"))
+        except SchemaError as exc:
+            raise SchemaError(f"bode_plot: spectrum {label!r}: {exc}") from None
+        extra = [d for d in ds[magnitude].dims if d != "omega"]
+        if extra:
+            raise ParameterError(
+                f"bode_plot draws one spectrum per entry; spectrum {label!r} also spans {extra}: "
+                f"select one, e.g. ds.isel({extra[0]}=0)")
+        items.append((label, ds))
+    return items
 
 
 def bode_plot(spectra: xr.Dataset | Mapping[str, xr.Dataset] | Sequence[xr.Dataset], *,
@@ -558,35 +673,37 @@ def bode_plot(spectra: xr.Dataset | Mapping[str, xr.Dataset] | Sequence[xr.Datas
     -------
     PlotHandle
         ``axes = (magnitude_axes, phase_axes)``.
+
+    Raises
+    ------
+    ParameterError
+        Bad option or axes; ``spectra`` neither a Dataset, a mapping nor a sequence; a spectrum
+        with extra dims besides ``omega`` (select one first).
+    SchemaError
+        An entry is not a spectrum (:func:`viscoforce.schema.validate_spectrum`): not a Dataset,
+        no magnitude or phase, wrong units or dims.
     """
     import matplotlib.pyplot as plt
+    from matplotlib.axes import Axes
 
-    if magnitude not in _MAGNITUDE_LABELS:
-        raise ParameterError(f"magnitude must be 'stiffness' or 'amplitude', got {magnitude!r}")
-    if frequency_unit not in ("rad/s", "Hz"):
-        raise ParameterError(f"frequency_unit must be 'rad/s' or 'Hz', got {frequency_unit!r}")
-    if hasattr(spectra, "data_vars"):  # a Dataset (itself a Mapping, so test it first)
-        items = [(str(spectra.attrs.get("method", "spectrum")), spectra)]
-    elif isinstance(spectra, Mapping):
-        items = list(spectra.items())
-    else:
-        items = [(str(ds.attrs.get("method", f"spectrum {i + 1}")), ds)
-                 for i, ds in enumerate(spectra)]
-    if not items:
-        raise ParameterError("spectra must contain at least one spectrum")
+    _require_choice("magnitude", magnitude, tuple(_MAGNITUDE_LABELS))
+    _require_choice("frequency_unit", frequency_unit, ("rad/s", "Hz"))
+    markers = _require_flag("markers", markers, allow_none=True)
+    title = _require_text("title", title)
+    if ax is not None and not (isinstance(ax, Sequence) and not isinstance(ax, str | bytes)
+                               and len(ax) == 2 and all(isinstance(a, Axes) for a in ax)):
+        raise ParameterError(
+            f"ax must be None or a pair of matplotlib Axes (magnitude axes, phase axes), got "
+            f"{describe_value(ax)}")
+    items = _spectrum_items(spectra, magnitude)
     if ax is None:
         figure, axes = plt.subplots(2, 1, sharex=True, figsize=(6.4, 5.6), layout="constrained")
     else:
-        if len(ax) != 2:
-            raise ParameterError("ax must be a pair (magnitude axes, phase axes)")
         axes = tuple(ax)
         figure = axes[0].figure
     scale = 1.0 if frequency_unit == "rad/s" else 1.0 / (2.0 * np.pi)
     drawn = []
     for label, ds in items:
-        for name in ("omega", magnitude, "phase"):
-            if name not in ds.variables:
-                raise SchemaError(f"bode_plot: spectrum {label!r} has no '{name}'")
         x = np.asarray(ds["omega"].values, dtype=float) * scale
         show_markers = markers if markers is not None else x.size <= 30
         style = {"marker": "o", "markersize": 4} if show_markers else {}

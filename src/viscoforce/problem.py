@@ -6,6 +6,7 @@ it carries the elastic influence matrix of its grid. It has no time loop and no 
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass
 from functools import cached_property
 
@@ -14,12 +15,19 @@ from numpy.typing import ArrayLike
 
 from viscoforce import kernel
 from viscoforce._typing import FloatArray
-from viscoforce._validation import require_finite, require_int, require_positive
-from viscoforce.exceptions import ParameterError
+from viscoforce._validation import (
+    as_float_array,
+    require_finite,
+    require_instance,
+    require_int,
+    require_positive,
+)
+from viscoforce.exceptions import ModelValidityError, ModelValidityWarning, ParameterError
 from viscoforce.physics.materials import ViscoelasticMaterial
 from viscoforce.physics.particle import Sphere
 from viscoforce.physics.surface_forces import SurfaceForceLaw
 from viscoforce.radial_grid import RadialGrid, barycentric_weights, gauss_legendre_unit
+from viscoforce.units import format_quantity
 
 #: Relative pressure below which the surface force is treated as zero when sizing the grid.
 NEGLIGIBLE_PRESSURE_RTOL = 1e-10
@@ -31,10 +39,25 @@ DEFAULT_ORDER = 8
 MAX_NODES = 4000
 #: Deepest position allowed, as a fraction of R (the model assumes |h0| ≪ R).
 MAX_DEPTH_FRACTION = 0.1
+#: Half-space validity (:func:`check_half_space`): contact radius a and central deformation |u(0)|
+#: as fractions of R beyond which a result is refused (ModelValidityError) ...
+HALF_SPACE_ERROR = {"contact_radius": 0.5, "deformation": 0.1}
+#: ... and beyond which it is flagged (ModelValidityWarning). The paper's deepest cases reach
+#: a/R = 0.036 and |u(0)|/R = 0.0011 (h0 = −10 nm, E = 1e9 and 1e10 Pa, R = 10 µm, Figs. 5–8 loops).
+HALF_SPACE_WARNING = {"contact_radius": 0.1, "deformation": 0.01}
+
+_SURFACE_FORCE_KIND = "SurfaceForceLaw (e.g. DoubleLayer(P, debye_length) + SoftWall(Pw, z0))"
+_MATERIAL_KIND = "ViscoelasticMaterial (Elastic, StandardLinearSolid or PronySeries)"
+
+
+def _check_geometry(sphere: Sphere, law: SurfaceForceLaw) -> None:
+    require_instance("sphere", sphere, Sphere)
+    require_instance("surface_force", law, SurfaceForceLaw, what=_SURFACE_FORCE_KIND)
 
 
 def interaction_length(sphere: Sphere, law: SurfaceForceLaw) -> float:
     """sqrt(2 R λ) [m]: the radius over which the undeformed gap grows by one decay length λ."""
+    _check_geometry(sphere, law)
     return float(np.sqrt(2.0 * sphere.radius * law.decay_length))
 
 
@@ -45,6 +68,8 @@ def default_outer_radius(sphere: Sphere, law: SurfaceForceLaw, deepest_position:
     ``NEGLIGIBLE_PRESSURE_RTOL`` of the law's pressure scale for every position ≥
     ``deepest_position``. At least 3 interaction lengths.
     """
+    _check_geometry(sphere, law)
+    deepest_position = require_finite("deepest_position", deepest_position)
     h_cut = law.negligible_gap(NEGLIGIBLE_PRESSURE_RTOL)
     r_cut = sphere.radius_at_gap(deepest_position, h_cut)
     return max(r_cut, 3.0 * interaction_length(sphere, law))
@@ -68,6 +93,7 @@ def default_grid(sphere: Sphere, law: SurfaceForceLaw, deepest_position: float, 
     order : int
         Gauss nodes per panel.
     """
+    _check_geometry(sphere, law)
     deepest_position = require_finite("deepest_position", deepest_position)
     order = require_int("order", order, 2)
     if deepest_position < -MAX_DEPTH_FRACTION * sphere.radius:
@@ -110,11 +136,9 @@ class ContactProblem:
     grid: RadialGrid
 
     def __post_init__(self):
-        for name, cls in (("sphere", Sphere), ("surface_force", SurfaceForceLaw),
-                          ("material", ViscoelasticMaterial), ("grid", RadialGrid)):
-            if not isinstance(getattr(self, name), cls):
-                raise ParameterError(
-                    f"{name} must be a {cls.__name__}, got {type(getattr(self, name)).__name__}")
+        _check_geometry(self.sphere, self.surface_force)
+        require_instance("material", self.material, ViscoelasticMaterial, what=_MATERIAL_KIND)
+        require_instance("grid", self.grid, RadialGrid)
 
     @classmethod
     def create(cls, *, sphere: Sphere, surface_force: SurfaceForceLaw,
@@ -122,6 +146,8 @@ class ContactProblem:
                grid_spacing: float | None = None, outer_radius: float | None = None,
                order: int = DEFAULT_ORDER) -> ContactProblem:
         """Bundle with the default grid for positions down to ``deepest_position`` [m]."""
+        _check_geometry(sphere, surface_force)
+        require_instance("material", material, ViscoelasticMaterial, what=_MATERIAL_KIND)
         grid = default_grid(sphere, surface_force, deepest_position, grid_spacing=grid_spacing,
                             outer_radius=outer_radius, order=order)
         return cls(sphere, surface_force, material, grid)
@@ -141,9 +167,16 @@ class ContactProblem:
         """Node radii [m]."""
         return self.grid.r
 
+    @cached_property
+    def _sag(self) -> FloatArray:
+        """r²/2R at the nodes [m] (read-only)."""
+        out = self.sphere.undeformed_gap(0.0, self.grid.r)
+        out.flags.writeable = False
+        return out
+
     def undeformed_gap(self, position: float) -> FloatArray:
-        """h0(r) = h0 + r²/2R at the nodes [m]."""
-        return self.sphere.undeformed_gap(position, self.grid.r)
+        """h0(r) = h0 + r²/2R at the nodes [m] for a finite apex position ``position`` [m]."""
+        return require_finite("position (h0)", position) + self._sag
 
     def pressure(self, gap: ArrayLike) -> FloatArray:
         """p(h) [Pa] at nodal gaps [m]."""
@@ -165,6 +198,7 @@ class ContactProblem:
 
     def check_covers(self, position: float) -> None:
         """Raise if the grid is too small for apex position ``position`` [m]."""
+        position = require_finite("position (h0)", position)
         need = default_outer_radius(self.sphere, self.surface_force, position)
         if self.grid.outer_radius < 0.999 * need:
             raise ParameterError(
@@ -183,16 +217,89 @@ class ContactProblem:
         return out
 
 
+def check_half_space(radius: float, deformation: ArrayLike, contact_radius: ArrayLike, *,
+                     where: str = "", stacklevel: int = 2) -> tuple[float, float]:
+    """Check that a result stays inside the half-space (small-slope) model: a ≪ R and |u(0)| ≪ R.
+
+    The elastic half-space kernel (paper Eq. 2) and the paraboloid h0 + r²/2R hold only while the
+    contact radius and the deformation are small against the sphere radius R. A result far
+    outside (usually an input with a wrong unit, e.g. a Debye length of 1 m) is refused.
+
+    Parameters
+    ----------
+    radius : float
+        Sphere radius R [m], > 0.
+    deformation : float or array_like
+        Central deformation(s) u(0) [m] (any sign; the largest magnitude counts).
+    contact_radius : float or array_like
+        Contact radius (radii) a [m], ≥ 0 (the largest counts).
+    where : str
+        Context for the message, e.g. ``"at h0 = -5 nm"``.
+    stacklevel : int
+        Passed to :func:`warnings.warn`.
+
+    Returns
+    -------
+    a_ratio, u_ratio : float
+        max a / R and max |u(0)| / R.
+
+    Raises
+    ------
+    ModelValidityError
+        a > ``HALF_SPACE_ERROR["contact_radius"]`` R (0.5 R) or |u(0)| >
+        ``HALF_SPACE_ERROR["deformation"]`` R (0.1 R).
+
+    Warns
+    -----
+    ModelValidityWarning
+        a > ``HALF_SPACE_WARNING["contact_radius"]`` R (0.1 R) or |u(0)| >
+        ``HALF_SPACE_WARNING["deformation"]`` R (0.01 R).
+    """
+    radius = require_positive("radius (R)", radius)
+    u = as_float_array("deformation", deformation)
+    a = as_float_array("contact_radius", contact_radius)
+    if np.any(a < 0):
+        raise ParameterError(f"contact_radius must be >= 0 m, got min {float(np.min(a))!r}")
+    a_max = float(np.max(a)) if a.size else 0.0
+    u_max = float(np.max(np.abs(u))) if u.size else 0.0
+    ratios = {"contact_radius": a_max / radius, "deformation": u_max / radius}
+    labels = {"contact_radius": f"the contact radius a = {format_quantity(a_max, 'length')}",
+              "deformation": f"the central deformation |u(0)| = {format_quantity(u_max, 'length')}"}
+
+    def offending(limits: dict[str, float], word: str) -> list[str]:
+        return [f"{labels[k]} = {ratios[k]:.3g} R ({word} {limits[k]:g} R)"
+                for k in ("contact_radius", "deformation") if ratios[k] > limits[k]]
+
+    context = f" {where.strip()}" if where and where.strip() else ""
+    model = (f"the half-space (small-slope) model assumes deformations and contact radii small "
+             f"against the sphere radius R = {format_quantity(radius, 'length')}")
+    errors = offending(HALF_SPACE_ERROR, "limit")
+    if errors:
+        raise ModelValidityError(
+            f"result outside the model{context}: {' and '.join(errors)}; {model}, so this result "
+            "is meaningless; check the inputs' units and magnitudes (a Debye length or decay "
+            "length in m instead of nm, a modulus far too small, a position far too deep)")
+    notes = offending(HALF_SPACE_WARNING, "warning above")
+    if notes:
+        warnings.warn(
+            f"result near the edge of the model{context}: {' and '.join(notes)}; {model}, so "
+            "expect errors of the order of these ratios", ModelValidityWarning,
+            stacklevel=stacklevel)
+    return ratios["contact_radius"], ratios["deformation"]
+
+
 def contact_radius(grid: RadialGrid, gap: ArrayLike, gap_center: float, threshold: float) -> float:
     """Largest radius [m] where the gap is below ``threshold`` [m] (0 if nowhere).
 
     The crossing is located on the panel's Lagrange interpolant of the nodal gaps (barycentric
     form, bracketing root search), so it is as accurate as the discretisation.
     """
-    from scipy.optimize import brentq
-
+    require_instance("grid", grid, RadialGrid)
     threshold = require_positive("contact_threshold", threshold)
-    gap = np.asarray(gap, dtype=float)
+    gap = as_float_array("gap", gap, size=grid.size)
+    if gap.ndim != 1:
+        raise ParameterError(f"gap must be 1-D (one value per node), got shape {gap.shape}")
+    gap_center = require_finite("gap_center", gap_center)
     below = np.flatnonzero(gap < threshold)
     if below.size == 0:
         if gap_center >= threshold:
@@ -227,4 +334,42 @@ def contact_radius(grid: RadialGrid, gap: ArrayLike, gap_center: float, threshol
         return lo + (threshold - g_lo) * (hi - lo) / (gap[i + 1] - g_lo)
     if f_lo == 0.0:
         return lo
-    return float(brentq(f, lo, hi, xtol=1e-9 * grid.spacing))
+    return _bracketed_root(f, lo, hi, f_lo, f_hi, xtol=1e-9 * grid.spacing)
+
+
+def _bracketed_root(f, lo: float, hi: float, f_lo: float, f_hi: float, *, xtol: float) -> float:
+    """Root of ``f`` in [lo, hi] with f(lo)·f(hi) < 0, to ``xtol`` [same unit as lo, hi].
+
+    Illinois (modified regula falsi): superlinear on the smooth panel interpolants, a handful of
+    evaluations; bisection takes over if it has not converged after 60 evaluations, so it always
+    terminates with the bracket below ``xtol``. (Replaces scipy.optimize.brentq, whose import
+    alone costs more than a static solve.)
+    """
+    side = 0
+    for _ in range(60):
+        x = (lo * f_hi - hi * f_lo) / (f_hi - f_lo)
+        fx = f(x)
+        if fx == 0.0:
+            return float(x)
+        if (fx < 0) == (f_hi < 0):
+            step, hi, f_hi = hi - x, x, fx
+            if side == -1:
+                f_lo *= 0.5
+            side = -1
+        else:
+            step, lo, f_lo = x - lo, x, fx
+            if side == 1:
+                f_hi *= 0.5
+            side = 1
+        if hi - lo <= xtol or abs(step) <= 0.5 * xtol:
+            return float(x)
+    while hi - lo > xtol:
+        mid = 0.5 * (lo + hi)
+        f_mid = f(mid)
+        if f_mid == 0.0:
+            return float(mid)
+        if (f_mid < 0) == (f_hi < 0):
+            hi, f_hi = mid, f_mid
+        else:
+            lo, f_lo = mid, f_mid
+    return float(0.5 * (lo + hi))

@@ -19,7 +19,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from viscoforce._typing import FloatArray
-from viscoforce._validation import require_int, require_positive
+from viscoforce._validation import as_float_array, require_int, require_positive
 from viscoforce.exceptions import ParameterError
 
 
@@ -68,6 +68,17 @@ def lagrange_matrix(nodes: FloatArray, x: FloatArray) -> FloatArray:
     return out
 
 
+#: Most Gauss–Legendre nodes per panel.
+MAX_ORDER = 30
+
+
+def _check_order(order: int) -> int:
+    order = require_int("order", order, 2)
+    if order > MAX_ORDER:
+        raise ParameterError(f"order must be in [2, {MAX_ORDER}], got {order!r}")
+    return order
+
+
 @dataclass(frozen=True)
 class RadialGrid:
     """Panels of Gauss–Legendre nodes on [0, outer_radius].
@@ -88,16 +99,15 @@ class RadialGrid:
 
     def __post_init__(self):
         object.__setattr__(self, "outer_radius", require_positive("outer_radius", self.outer_radius))
-        require_int("n_panels", self.n_panels, 1)
-        require_int("order", self.order, 2)
-        if self.order > 30:
-            raise ParameterError(f"order must be in [2, 30], got {self.order!r}")
+        object.__setattr__(self, "n_panels", require_int("n_panels", self.n_panels, 1))
+        object.__setattr__(self, "order", _check_order(self.order))
 
     @classmethod
     def from_spacing(cls, outer_radius: float, spacing: float, order: int = 8) -> RadialGrid:
         """Grid whose mean node spacing is at most ``spacing`` [m] on [0, ``outer_radius``]."""
         outer_radius = require_positive("outer_radius", outer_radius)
         spacing = require_positive("grid_spacing", spacing)
+        order = _check_order(order)
         if spacing > outer_radius:
             raise ParameterError(
                 f"grid_spacing must be <= outer_radius ({outer_radius:g} m), got {spacing!r}")
@@ -141,8 +151,9 @@ class RadialGrid:
         return out
 
     def integrate_area(self, values: ArrayLike) -> FloatArray:
-        """2π ∫ f(r) r dr over the grid for nodal values ``values`` (last axis = nodes)."""
-        return 2.0 * np.pi * np.asarray(values) @ self.area_weights
+        """2π ∫ f(r) r dr over the grid for finite nodal values ``values`` (last axis = nodes)."""
+        values = as_float_array("values", values, size=self.size)
+        return 2.0 * np.pi * values @ self.area_weights
 
     def interpolate(self, values: ArrayLike, r: ArrayLike) -> FloatArray:
         """Evaluate the panel-wise Lagrange interpolant of nodal ``values`` at radii ``r`` [m].
@@ -150,10 +161,14 @@ class RadialGrid:
         Radii beyond ``outer_radius`` raise; radii in [0, r_max] use their panel's polynomial
         (so r = 0 is an extrapolation to the panel end, which is accurate for smooth fields).
         """
-        values = np.asarray(values, dtype=float)
-        r = np.atleast_1d(np.asarray(r, dtype=float))
+        values = as_float_array("values", values, size=self.size)
+        r = np.atleast_1d(as_float_array("r", r))
+        if r.ndim != 1:
+            raise ParameterError(f"r must be a number or a 1-D array of radii [m], got shape {r.shape}")
         if np.any(r < 0) or np.any(r > self.outer_radius * (1 + 1e-12)):
-            raise ParameterError(f"r must lie in [0, {self.outer_radius:g}] m")
+            raise ParameterError(
+                f"r must lie in [0, {self.outer_radius:g}] m (the grid), got min {float(r.min())!r}, "
+                f"max {float(r.max())!r}")
         x = r / self.panel_width
         panel = np.clip(np.floor(x).astype(int), 0, self.n_panels - 1)
         local_nodes, _ = gauss_legendre_unit(self.order)

@@ -1,316 +1,186 @@
-"""Time integration of the slowly varying deformation approximation (SVDA), paper Eqs. 17–18.
+"""The slowly varying deformation approximation (SVDA): closed forms, paper Eqs. 15–26.
 
-The SVDA replaces the deformation everywhere by its central value u(t) (Eq. 15); with the
-exponential double-layer pressure p(h) = P e^{−κh} this gives the scalar ODE (Eq. 17)
+Pure, vectorised functions of floats (SI in, SI out; numpy and scipy.special only) with the
+physical keyword names lmfit uses as parameter names: ``position`` (h0), ``E`` or ``E0``,
+``E_inf``, ``tau``, ``radius``, ``P`` (the paper's pressure amplitude, the CLI's ``--P``),
+``debye_length`` (1/κ), ``omega`` and ``eta`` (drive amplitude).
 
-    u̇ = [f ḣ0 − (u − u_∞)/τ] / (1 + f),   f = sqrt(8πκR P²/E0²) e^{−κ(h0 − u)},
-    u_∞ = −(E0/(E_inf κ)) f                                             (Eq. 18)
+The SVDA (paper Sec. II.E) replaces the deformation everywhere by its central value u(t)
+(Eq. 15); with the exponential double-layer pressure p(h) = P e^{−κh} this gives the scalar ODE
+(Eq. 17)
 
-and the force F = 2πR κ⁻¹ P e^{−κ(h0 − u)} (Eq. 22). :func:`solve_svda` integrates it for any
-drive satisfying :class:`viscoforce._typing.SeparationHistory`;
-:func:`svda_harmonic_response_ode` runs a sine drive to steady state and extracts the first
-harmonic, the time-domain check of :func:`viscoforce.closed_form.svda_harmonic_response`.
+    u̇ (1 + f) = f ḣ0 − (u − u_∞)/τ,   f = sqrt(8πκR P²/E0²) exp{−κ[h0 − u]},
+    u_∞ = −(E0/(E_inf κ)) f                                   (Eq. 18)
 
-Internally the state is y = κu (dimensionless) and the time stays in seconds; the drive is
-integrated piecewise between its breakpoints so that velocity jumps are never stepped across.
+and the Derjaguin-like force F = 2πR κ⁻¹ P exp{−κ[h0 − u]} (Eq. 22,
+:func:`viscoforce.closed_form.derjaguin_force`). This module holds its closed forms:
+
+* :func:`svda_static_deformation` — the elastic static state (Lambert W);
+* :func:`svda_ramp_deformation` — the analytic constant-speed solution, Eqs. 19–21;
+* :func:`svda_harmonic_response`, :func:`svda_complex_stiffness`,
+  :func:`svda_peak_phase_frequency` — the small-amplitude harmonic response, Eqs. 23–26 (Eq. 24
+  corrected), in the SPEC spectroscopy convention.
+
+The time integration of Eq. 17 is :func:`viscoforce.solvers.svda_ode.solve_svda`; the SVDA
+spectra (closed form and ODE + lock-in) are
+:func:`viscoforce.experiments.spectroscopy.svda_spectrum` and
+:func:`~viscoforce.experiments.spectroscopy.svda_sweep`.
+
+Conventions (as in :mod:`viscoforce.closed_form`): τ is the creep (retardation) time of Eq. 3;
+complex quantities use e^{+iωt}; position h0 is the undeformed apex separation (may be
+negative), u < 0 is flattening and the central gap is h = h0 − u. Spectroscopy (SPEC): drive
+h0(t) = h̄0 + η sin ωt, force F ≈ F̄ + |F1| sin(ωt + ψ); the relative amplitude is a = |F1|/F̄,
+the stiffness |F1|/η [N/m], and the phase χ [deg] is the angle by which the force oscillation
+LEADS the compression −(h0 − h̄0); χ > 0 for a viscoelastic solid.
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 from numpy.typing import ArrayLike
-from scipy.integrate import solve_ivp
+from scipy.special import exprel, lambertw
 
-from viscoforce._typing import FloatArray, SeparationHistory
+from viscoforce._typing import FloatArray
 from viscoforce._validation import (
     require_finite,
-    require_in_range,
-    require_increasing,
-    require_int,
     require_nonnegative,
     require_positive,
+    require_sls_moduli,
 )
 from viscoforce.closed_form import (
-    _sls_moduli,
-    _surface,
+    MAX_EXPONENT,
+    as_finite_array,
+    as_nonnegative_array,
     derjaguin_force,
-    svda_static_deformation,
+    require_exponential_law,
+    require_representable,
 )
-from viscoforce.exceptions import ConvergenceError, ParameterError
+from viscoforce.exceptions import ParameterError
 
-__all__ = ["SVDATrajectory", "solve_svda", "SVDAHarmonicSimulation",
-           "svda_harmonic_response_ode"]
-
-METHODS = ("Radau", "BDF", "LSODA")
-
-# Exponent −κh beyond which e^{−κh} is treated as an overflow (the SVDA state is then absurd).
-_MAX_EXPONENT = 700.0
-# Velocity inside a segment [a, b] is sampled at most at b − _EDGE·(b − a): the drive's velocity
-# is right-sided at kinks, so sampling at b itself would pick the NEXT segment's velocity.
-_EDGE = 1e-10
+__all__ = [
+    "svda_static_deformation",
+    "svda_ramp_deformation",
+    "SVDAHarmonicResponse",
+    "svda_harmonic_response",
+    "svda_complex_stiffness",
+    "svda_peak_phase_frequency",
+]
 
 
-@dataclass(frozen=True, eq=False)
-class SVDATrajectory:
-    """Result of :func:`solve_svda` (arrays sampled at ``time``).
+# ── SVDA statics ────────────────────────────────────────────────────────────────────────────────
 
-    Attributes
-    ----------
-    time : numpy.ndarray
-        Times [s] (the requested ``t_eval``).
-    position : numpy.ndarray
-        Drive position h0(t) [m].
-    deformation : numpy.ndarray
-        Central deformation u(t) [m] (< 0 is flattening).
-    force : numpy.ndarray
-        SVDA force, Eq. 22 [N].
-    nfev : int
-        Number of right-hand-side evaluations.
-    """
-
-    time: FloatArray
-    position: FloatArray
-    deformation: FloatArray
-    force: FloatArray
-    nfev: int
-
-    @property
-    def gap(self) -> FloatArray:
-        """Central surface separation h = h0 − u [m]."""
-        return self.position - self.deformation
+def _omega_log_w(log_x: FloatArray) -> FloatArray:
+    """Principal Lambert W of x = e^{log_x} > 0, for any log_x (no overflow of e^{log_x})."""
+    out = np.empty_like(log_x)
+    small = log_x < MAX_EXPONENT
+    out[small] = lambertw(np.exp(log_x[small]), k=0).real
+    big = ~small & np.isfinite(log_x)
+    if np.any(big):
+        # w + ln w = L; Newton from the asymptote w ≈ L − ln L converges in a few steps.
+        # w/(1 + w) first: w·(1 + L − ln w) alone overflows for L ≳ 1e154.
+        L = log_x[big]
+        w = L - np.log(L)
+        for _ in range(8):
+            w = (w / (1.0 + w)) * (1.0 + L - np.log(w))
+        out[big] = w
+    out[log_x == np.inf] = np.inf   # W(e^inf) = inf: refused by the caller
+    return out
 
 
-@dataclass(frozen=True)
-class _SVDARates:
-    """Right-hand side of Eq. 17 in y = κu, with its y-derivative, for one drive segment."""
+def svda_static_deformation(position: ArrayLike, E: float, radius: float, P: float,
+                            debye_length: float) -> FloatArray:
+    """Elastic SVDA central deformation u at a fixed position (static Eqs. 17–18) [m].
 
-    drive: SeparationHistory
-    kappa: float       # 1/m
-    f_prefactor: float  # sqrt(8πκR) P/E0 [1]
-    ratio: float       # E0/E_inf [1]
-    tau: float         # s
-    start: float       # segment start [s]
-    last: float        # latest time at which the in-segment velocity is sampled [s]
+    Solves u = −sqrt(8πR/κ)·(P/E)·exp(−κ(h0 − u)) (for P > 0: u = −sqrt(8πR P²/κ)/E ·
+    exp(−κ(h0 − u))). With x = −κu this is x e^{x} = z, z = κ sqrt(8πR/κ)(P/E) e^{−κh0}, so
+    u = −W0(z)/κ with the principal (real) branch of the Lambert W function. For a repulsion
+    (P > 0) z > 0 and the solution always exists. For an attraction (P < 0) the surfaces bulge
+    towards each other (u > 0) and a real solution exists only while z >= −1/e; beyond that the
+    elastic bodies jump into contact.
 
-    def _state(self, t: float, y: float) -> tuple[float, float]:
-        h0 = float(self.drive.position(t))
-        v = float(self.drive.velocity(min(max(t, self.start), self.last)))
-        exponent = y - self.kappa * h0
-        if not (math.isfinite(h0) and math.isfinite(v) and math.isfinite(y)):
-            raise ConvergenceError(
-                f"SVDA right-hand side is not finite at t={t!r} s (position={h0!r} m, "
-                f"velocity={v!r} m/s, kappa*u={y!r}); check the drive", time=t)
-        if exponent > _MAX_EXPONENT:
-            raise ConvergenceError(
-                f"SVDA gap collapsed at t={t!r} s: kappa*(h0 − u) = {-exponent:.4g} makes "
-                f"exp(−kappa*h) overflow; the drive is far outside the SVDA's validity", time=t)
-        return self.f_prefactor * math.exp(exponent), v
-
-    def rate(self, t: float, y: FloatArray) -> FloatArray:
-        """dy/dt = κ u̇ [1/s]."""
-        yy = float(y[0])
-        f, v = self._state(t, yy)
-        numerator = f * self.kappa * v - (yy + self.ratio * f) / self.tau
-        return np.array([numerator / (1.0 + f)])
-
-    def jacobian(self, t: float, y: FloatArray) -> FloatArray:
-        """d(dy/dt)/dy [1/s]."""
-        yy = float(y[0])
-        f, v = self._state(t, yy)
-        numerator = f * self.kappa * v - (yy + self.ratio * f) / self.tau
-        d_numerator = f * self.kappa * v - (1.0 + self.ratio * f) / self.tau
-        return np.array([[(d_numerator * (1.0 + f) - numerator * f) / (1.0 + f) ** 2]])
-
-
-def _check_solver(method: str, rtol: float, atol: float | None,
-                  debye_length: float) -> tuple[float, float]:
-    if method not in METHODS:
-        raise ParameterError(f"method must be one of {METHODS}, got {method!r}")
-    rtol_ = require_in_range("rtol", rtol, 1e-13, 0.1)
-    atol_ = 1e-12 * debye_length if atol is None else require_positive("atol", atol)
-    return rtol_, atol_
-
-
-def solve_svda(drive: SeparationHistory, *, E0: float, E_inf: float, tau: float, radius: float,
-               pressure: float, debye_length: float, t_eval: ArrayLike,
-               u_start: float | None = None, method: str = "Radau", rtol: float = 1e-8,
-               atol: float | None = None) -> SVDATrajectory:
-    """Integrate the SVDA ODE (paper Eqs. 17–18) along a prescribed drive.
-
-    The integration runs from t = 0 to ``t_eval[-1]``, piecewise between the drive's breakpoints
-    (velocity jumps are never stepped across), with scipy's ``solve_ivp`` and the analytic
-    Jacobian. It starts from the relaxed (E_inf) SVDA static state at h0(0) unless ``u_start`` is
-    given.
+    The viscoelastic SVDA rests in the static state with E = E_inf (the paper's
+    u(t0) = −E0 c/(E_inf κ)); with E = E0 it gives the instantaneous (glassy) response.
 
     Parameters
     ----------
-    drive : SeparationHistory
-        Position h0(t) [m] and velocity [m/s], with ``duration`` [s] and ``breakpoints()`` [s].
-    E0 : float
-        Instantaneous modulus [Pa], >= E_inf.
-    E_inf : float
-        Relaxed modulus [Pa], > 0.
-    tau : float
-        Creep time of Eq. 3 [s], > 0.
+    position : float or array_like
+        Position h0 [m] (undeformed apex separation; may be negative).
+    E : float
+        The paper's elastic modulus E [Pa] (2/E = Σ(1 − ν_i²)/E_i), > 0.
     radius : float
         Sphere radius R [m], > 0.
-    pressure : float
-        Double-layer pressure amplitude P [Pa], > 0.
+    P : float
+        Pressure amplitude P [Pa] of p(h) = P e^{−κh}; negative for an attraction.
     debye_length : float
         Decay length 1/κ [m], > 0.
-    t_eval : array_like
-        Output times [s], strictly increasing, >= 0.
-    u_start : float, optional
-        Central deformation at t = 0 [m]; default: the E_inf static state at h0(0).
-    method : {"Radau", "BDF", "LSODA"}
-        ``solve_ivp`` method. Radau (default) is implicit and L-stable: Eq. 17 is stiff when
-        τ is short compared with the drive time scale or f is large.
-    rtol : float
-        Relative tolerance, in [1e-13, 0.1].
-    atol : float, optional
-        Absolute tolerance on u [m], > 0; default 1e-12·debye_length.
 
     Returns
     -------
-    SVDATrajectory
-        Time, position, deformation u(t), force (Eq. 22) and the evaluation count.
+    numpy.ndarray
+        Central deformation u [m] (< 0 for a repulsion), same shape as ``position``.
 
     Raises
     ------
     ParameterError
-        If an input is out of range or ``drive`` lacks the SeparationHistory methods.
-    ConvergenceError
-        If ``solve_ivp`` fails, or the right-hand side becomes non-finite or overflows.
+        If an input is out of range, or (P < 0) no real solution exists at a position.
     """
-    if not isinstance(drive, SeparationHistory):
+    h0 = as_finite_array("position", position)
+    e = require_positive("E", E)
+    r, p, kappa = require_exponential_law(radius, P, debye_length, allow_attraction=True)
+    if p == 0.0:
+        return np.zeros_like(h0)
+    # z = prefactor e^{−κh0}, prefactor = sqrt(8πRκ)·P/E, taken in logs: it overflows a float64
+    # for a tiny E or debye_length although u stays finite.
+    log_abs_prefactor = 0.5 * math.log(8.0 * math.pi * r * kappa) + math.log(abs(p)) - math.log(e)
+    with np.errstate(over="ignore", invalid="ignore"):  # κh0 = ±inf: refused or e^{−inf} = 0
+        log_abs_z = log_abs_prefactor - kappa * h0
+    if p > 0.0:
+        with np.errstate(over="ignore", invalid="ignore"):
+            u = -_omega_log_w(log_abs_z) / kappa
+        return require_representable(u, "the SVDA static deformation u",
+                                     "position, E, radius, P, debye_length")
+    if np.any(log_abs_z > -1.0):   # z < −1/e
+        i = int(np.flatnonzero(log_abs_z.ravel() > -1.0)[0])
+        bad = float(h0.ravel()[i])
+        z = -math.exp(min(float(log_abs_z.ravel()[i]), MAX_EXPONENT))
         raise ParameterError(
-            f"drive must provide position(t), velocity(t), duration and breakpoints() "
-            f"(SeparationHistory), got {type(drive).__name__}")
-    e0, e_inf, tau_ = _sls_moduli(E0, E_inf, tau)
-    r, p, kappa = _surface(radius, pressure, debye_length)
-    lam = float(debye_length)
-    times = require_increasing("t_eval", t_eval)
-    if times[0] < 0:
-        raise ParameterError(f"t_eval must start at >= 0 s, got t_eval[0]={times[0]!r}")
-    rtol_, atol_ = _check_solver(method, rtol, atol, lam)
-    h_start = float(drive.position(0.0))
-    if u_start is None:
-        u0 = float(svda_static_deformation(h_start, e_inf, r, p, lam))
-    else:
-        u0 = require_finite("u_start", u_start)
-
-    t_end = float(times[-1])
-    inner = [float(b) for b in np.asarray(drive.breakpoints(), dtype=float).ravel()]
-    inner.append(float(drive.duration))
-    edges = np.unique(np.array([0.0, t_end] + [b for b in inner if 0.0 < b < t_end]))
-    y_out = np.empty(times.size)
-    y = kappa * u0
-    y_out[times == 0.0] = y
-    nfev = 0
-    f_prefactor = math.sqrt(8.0 * math.pi * kappa * r) * p / e0
-    for a, b in zip(edges[:-1], edges[1:], strict=True):
-        mask = (times > a) & (times <= b)
-        seg_eval = np.union1d(times[mask], [b])
-        rates = _SVDARates(drive, kappa, f_prefactor, e0 / e_inf, tau_, float(a),
-                           float(b - _EDGE * (b - a)))
-        sol = solve_ivp(rates.rate, (float(a), float(b)), [y], method=method, t_eval=seg_eval,
-                        rtol=rtol_, atol=kappa * atol_, jac=rates.jacobian)
-        nfev += int(sol.nfev)
-        if sol.status != 0 or sol.y.shape[1] != seg_eval.size:
-            t_fail = float(sol.t[-1]) if sol.t.size else float(a)
-            raise ConvergenceError(
-                f"solve_ivp ({method}) failed on the segment [{a:g}, {b:g}] s near "
-                f"t={t_fail:g} s: {sol.message}; try method='Radau' or a looser rtol",
-                time=t_fail)
-        y_out[mask] = sol.y[0, :-1] if seg_eval.size > mask.sum() else sol.y[0]
-        y = float(sol.y[0, -1])
-    u = y_out / kappa
-    position = np.asarray(drive.position(times), dtype=float)
-    force = derjaguin_force(position - u, r, p, lam)
-    return SVDATrajectory(time=times, position=position, deformation=u, force=force, nfev=nfev)
+            f"no real SVDA static solution at position={bad!r} m with modulus E={E!r} Pa: the "
+            f"attraction P={P!r} Pa beats the elastic stiffness (Lambert-W "
+            f"argument {z:.4g} < −1/e); increase position or E")
+    z = -np.exp(log_abs_z)
+    return require_representable(-lambertw(z, k=0).real / kappa, "the SVDA static deformation u",
+                                 "position, E, radius, P, debye_length")
 
 
-@dataclass(frozen=True)
-class _SineDrive:
-    """h0(t) = mean + eta sin(ωt) on [0, duration], held afterwards (internal helper)."""
+# ── SVDA ramp (Eqs. 19–21) ──────────────────────────────────────────────────────────────────────
 
-    mean: float
-    eta: float
-    omega: float
-    duration: float
+def svda_ramp_deformation(t: ArrayLike, position: float, speed: float, E0: float, E_inf: float,
+                          tau: float, radius: float, P: float,
+                          debye_length: float) -> FloatArray:
+    """Analytic SVDA deformation under a constant-speed drive, Eqs. 20–21 [m].
 
-    def position(self, t: ArrayLike) -> FloatArray:
-        tt = np.minimum(np.asarray(t, dtype=float), self.duration)
-        return self.mean + self.eta * np.sin(self.omega * tt)
+    u(t) = A [e^{−κḣt} − e^{−t/τ}] with
+    A = (κḣτ/E0 − 1/E_inf)/(1 − κḣτ) · sqrt(8πR P²/κ) e^{−κh0}, the solution of the linearised
+    Eq. 19 (f neglected against 1 in the denominator of Eq. 17, κu neglected in the exponent)
+    that vanishes at t = 0. It is written as
+    u = (κḣτ/E0 − 1/E_inf) S (t/τ) e^{−mt} exprel(−|1/τ − κḣ| t), m = min(κḣ, 1/τ),
+    S = sqrt(8πR P²/κ) e^{−κh0}, exprel(x) = (e^x − 1)/x: the same expression without
+    cancellation and finite at the removable singularity κḣτ = 1 (a retraction at speed
+    1/(κτ)), where u = (1/E0 − 1/E_inf) S (t/τ) e^{−t/τ}.
 
-    def velocity(self, t: ArrayLike) -> FloatArray:
-        tt = np.asarray(t, dtype=float)
-        v = self.eta * self.omega * np.cos(self.omega * tt)
-        return np.where((tt >= 0.0) & (tt < self.duration), v, 0.0)
-
-    def breakpoints(self) -> FloatArray:
-        return np.array([0.0, self.duration])
-
-
-@dataclass(frozen=True)
-class SVDAHarmonicSimulation:
-    """First harmonic of the simulated SVDA response to h0(t) = h̄0 + η sin ωt.
-
-    Attributes
-    ----------
-    omega : float
-        Angular frequency [rad/s].
-    nu : float
-        Deformation amplitude ν [m].
-    phi : float
-        Deformation phase φ relative to the drive [rad] (the paper's φ).
-    amplitude : float
-        Relative force amplitude a = |F1|/F̄ [1].
-    phase : float
-        Force phase χ [deg], SPEC convention (lead of the force over the compression).
-    stiffness : float
-        |F1|/η [N/m].
-    mean_force : float
-        F̄, mean force over the analysed periods [N].
-    mean_deformation : float
-        Mean central deformation over the analysed periods [m].
-    """
-
-    omega: float
-    nu: float
-    phi: float
-    amplitude: float
-    phase: float
-    stiffness: float
-    mean_force: float
-    mean_deformation: float
-
-
-def svda_harmonic_response_ode(omega: float, *, position: float, eta: float, E0: float,
-                               E_inf: float, tau: float, radius: float, pressure: float,
-                               debye_length: float, periods: int = 4,
-                               samples_per_period: int = 64, settle_time: float | None = None,
-                               method: str = "Radau", rtol: float = 1e-10,
-                               atol: float | None = None) -> SVDAHarmonicSimulation:
-    """Simulate a sine drive with the SVDA ODE and extract the first harmonic.
-
-    The drive h0(t) = h̄0 + η sin ωt starts from the E_inf static state at h̄0, runs for a whole
-    number of settling periods (at least ``settle_time``), then ``periods`` more periods are
-    sampled uniformly and projected on e^{−iωt} with the trapezoidal rule (spectrally accurate for
-    periodic samples over whole periods). The complex stiffness is the force projection divided
-    by the projection of the compression −(h0 − h̄0); its angle is the SPEC phase χ.
+    Valid at large separation (κ|u| ≪ 1 and f ≪ 1); it overestimates |u| near contact.
 
     Parameters
     ----------
-    omega : float
-        Angular frequency ω [rad/s], > 0.
+    t : float or array_like
+        Times since the start of the ramp [s], >= 0.
     position : float
-        Mean position h̄0 [m].
-    eta : float
-        Drive amplitude η [m], > 0.
+        Position h0 at t = 0 [m].
+    speed : float
+        Drive velocity ḣ [m/s]; negative when approaching (h0(t) = position + speed·t).
     E0 : float
         Instantaneous modulus [Pa], >= E_inf.
     E_inf : float
@@ -319,72 +189,299 @@ def svda_harmonic_response_ode(omega: float, *, position: float, eta: float, E0:
         Creep time of Eq. 3 [s], > 0.
     radius : float
         Sphere radius R [m], > 0.
-    pressure : float
-        Pressure amplitude P [Pa], > 0.
+    P : float
+        Pressure amplitude P [Pa] of p(h) = P e^{−κh}, > 0.
     debye_length : float
         Decay length 1/κ [m], > 0.
-    periods : int
-        Periods analysed after settling, >= 1.
-    samples_per_period : int
-        Samples per analysed period, >= 8.
-    settle_time : float, optional
-        Minimum settling time before the analysis [s], >= 0; default 20τ (the linearised SVDA
-        transient decays at least as fast as e^{−t/τ}).
-    method : {"Radau", "BDF", "LSODA"}
-        ``solve_ivp`` method.
-    rtol : float
-        Relative tolerance, in [1e-13, 0.1].
-    atol : float, optional
-        Absolute tolerance on u [m]; default 1e-12·debye_length.
 
     Returns
     -------
-    SVDAHarmonicSimulation
-        ν, φ, a, χ [deg], stiffness, mean force and mean deformation.
+    numpy.ndarray
+        Central deformation u(t) [m], same shape as ``t``.
+
+    Raises
+    ------
+    ParameterError
+        If an input is out of range, or ``t`` is so long that the exponentials overflow.
+    """
+    tt = as_nonnegative_array("t", t)
+    h0 = require_finite("position", position)
+    v = require_finite("speed", speed)
+    e0, e_inf, tau_ = require_sls_moduli(E0, E_inf, tau)
+    r, p, kappa = require_exponential_law(radius, P, debye_length)
+    lam = kappa * v
+    mu = 1.0 / tau_
+    if not (math.isfinite(lam) and math.isfinite(mu)):
+        raise ParameterError(
+            f"the inputs are outside the representable range: kappa*speed = {lam!r} 1/s or "
+            f"1/tau = {mu!r} 1/s overflows a float64 (speed={speed!r} m/s, "
+            f"debye_length={debye_length!r} m, tau={tau!r} s)")
+    # (e^{−λt} − e^{−μt})/(μ − λ) = t e^{−min(λ,μ)t} exprel(−|μ − λ|t): no cancellation, no
+    # overflow of exprel, finite at λ = μ.
+    log_s = 0.5 * math.log(8.0 * math.pi * r / kappa) + math.log(p) - kappa * h0
+    with np.errstate(over="ignore", invalid="ignore"):
+        exponent = log_s - min(lam, mu) * tt
+    if np.any(exponent > MAX_EXPONENT):
+        raise ParameterError(
+            f"t must be shorter: e^(−κ(position + speed·t)) overflows before max(t)="
+            f"{float(tt.max())!r} s (position={position!r} m, speed={speed!r} m/s); Eq. 20 is a "
+            f"large-separation approximation")
+    with np.errstate(over="ignore", invalid="ignore"):
+        u = (lam * tau_ / e0 - 1.0 / e_inf) * (tt / tau_) * np.exp(exponent) * exprel(
+            -abs(mu - lam) * tt)
+    return require_representable(u, "the SVDA ramp deformation u(t)",
+                                 "t, position, speed, E0, E_inf, tau, radius, P, debye_length")
+
+
+# ── SVDA harmonic response (Eqs. 23–26, corrected Eq. 24) ───────────────────────────────────────
+
+class SVDAHarmonicResponse(NamedTuple):
+    """Small-amplitude SVDA response to h0(t) = h̄0 + η sin ωt (arrays shaped like ``omega``).
+
+    Attributes
+    ----------
+    nu : numpy.ndarray
+        Deformation amplitude ν [m] of u(t) = u0 + ν sin(ωt + φ).
+    phi : numpy.ndarray
+        Deformation phase φ [rad] relative to the drive (the paper's φ; <= 0, u lags h0).
+    theta : numpy.ndarray
+        The paper's auxiliary angle θ [rad], tan θ = −(1 + cE0/E_inf)/(ωτ(1 + c)), θ in
+        [−π/2, 0] (θ = −π/2 at ω = 0).
+    c : float
+        The paper's c = sqrt(8πκR P²/E0²) exp{−κ[h̄0 − u0]} = −κ u0 E_inf/E0 [1].
+    u0 : float
+        Mean (static, E_inf) central deformation u(t0) [m].
+    amplitude : numpy.ndarray
+        Relative force amplitude a = |F1|/F̄ [1] (Eq. 26).
+    phase : numpy.ndarray
+        Force phase χ [deg], SPEC convention: lead of the force over the compression, >= 0.
+    stiffness : numpy.ndarray
+        |F1|/η [N/m].
+    mean_force : float
+        F̄ = 2πR κ⁻¹ P exp{−κ[h̄0 − u0]} [N] (Eq. 22 at the mean state).
+    """
+
+    nu: FloatArray
+    phi: FloatArray
+    theta: FloatArray
+    c: float
+    u0: float
+    amplitude: FloatArray
+    phase: FloatArray
+    stiffness: FloatArray
+    mean_force: float
+
+
+def _svda_mean_state(position: float, E0: float, E_inf: float, tau: float, radius: float,
+                     P: float, debye_length: float
+                     ) -> tuple[float, float, float, float, float]:
+    """Validate and return (u0 [m], c, E0/E_inf, τ [s], F̄ [N]) of the SVDA mean state."""
+    h0 = require_finite("position", position)
+    e0, e_inf, tau_ = require_sls_moduli(E0, E_inf, tau)
+    _, _, kappa = require_exponential_law(radius, P, debye_length)
+    if not math.isfinite(e0 / e_inf):
+        raise ParameterError(
+            f"the inputs are outside the representable range: E0/E_inf overflows a float64 "
+            f"(E0={E0!r} Pa, E_inf={E_inf!r} Pa)")
+    u0 = float(svda_static_deformation(h0, e_inf, radius, P, debye_length))
+    c = -kappa * u0 * e_inf / e0
+    mean_force = float(derjaguin_force(h0 - u0, radius, P, debye_length))
+    return u0, c, e0 / e_inf, tau_, mean_force
+
+
+def _svda_transfer(x: FloatArray, c: float, ratio: float) -> tuple[np.ndarray, np.ndarray]:
+    """Return (ν̂/η, k*/(F̄κ)) at x = ωτ for SVDA parameters c and ratio = E0/E_inf."""
+    denominator = (1.0 + ratio * c) + 1j * x * (1.0 + c)
+    nu_hat = c * (ratio + 1j * x) / denominator
+    return nu_hat, (1.0 + 1j * x) / denominator
+
+
+def svda_harmonic_response(omega: ArrayLike, position: float, eta: float, E0: float,
+                           E_inf: float, tau: float, radius: float, P: float,
+                           debye_length: float) -> SVDAHarmonicResponse:
+    r"""SVDA small-amplitude harmonic response, paper Eqs. 23–26 with Eq. 24 corrected.
+
+    Derivation. Eq. 17 reads u̇(1 + f) = f ḣ0 − (u − u_∞)/τ with f = c̃ e^{−κ(h0 − u)},
+    c̃ = sqrt(8πκR P²/E0²), and u_∞ = −(E0/(E_inf κ)) f (Eq. 18). The mean state (ḣ0 = 0,
+    u̇ = 0) is u0 = u_∞, i.e. u0 = −(E0/(E_inf κ)) c with c = f(h̄0 − u0): the elastic SVDA
+    static equation with E = E_inf (:func:`svda_static_deformation`), so c = −κu0 E_inf/E0.
+    Write h0 = h̄0 + η e^{iωt}, u = u0 + ν̂ e^{iωt}, r = E0/E_inf, x = ωτ. To first order
+    δf = cκ(δu − δh0) and δu_∞ = rc(δh0 − δu) (both f and u_∞ depend on h0 − u), hence
+    iωτ(1 + c)ν̂ = iωτ c η − ν̂ + rc(η − ν̂), i.e.
+
+        ν̂/η = c (r + ix) / [(1 + rc) + ix(1 + c)].
+
+    With the sine drive, ν = |ν̂| and φ = arg ν̂. Writing θ = arg[(1 + rc) + ix(1 + c)] − π/2
+    reproduces the printed tan θ = −(1 + cE0/E_inf)/(ωτ(1 + c)) and Eq. 23,
+    tan(θ + φ) = −E0/(E_inf ωτ) (θ + φ = arg(r + ix) − π/2), and then
+    |r + ix| = x / cos(θ + φ), |(1 + rc) + ix(1 + c)| = x(1 + c)/cos θ, so
+
+        printed Eq. 24:   ν = η c cos θ / [1 + c cos(θ + φ)]       (wrong)
+        corrected:        ν = η c cos θ / [(1 + c) cos(θ + φ)].
+
+    The printed form misplaces the bracket: it agrees at ω → ∞ (ν → cη/(1 + c)) but gives
+    ν → 0 as ω → 0, contradicting the paper's own limit ν → −κηu0/(1 − κu0) (= rcη/(1 + rc)),
+    which the corrected form reproduces. Eq. 23 and the θ definition are right.
+
+    Force. Eq. 22 linearised: F = F̄[1 + κ(δu − δh0)], so the complex force per unit drive is
+    F̄κ(ν̂/η − 1) and, per unit compression D̂ = −η,
+
+        k* = F̂/D̂ = F̄ κ (1 − ν̂/η) = F̄ κ (1 + ix) / [(1 + rc) + ix(1 + c)],
+
+    giving a = κ|η − ν̂| = κ sqrt(η² + ν² − 2ην cos φ) (Eq. 26) and the SPEC phase
+    χ = arg k* = atan(x) − atan(x(1 + c)/(1 + rc)) >= 0. Eq. 25, tan χ = −ν sin φ/(η − ν cos φ),
+    taken on its principal branch (η − ν cos φ > 0), is exactly this SPEC χ (the lead of the force
+    over the compression). Read literally, the paper's F = F̄[1 + a sin(ωt + χ)] with a > 0 would
+    need χ + 180° (the force rises as h0 falls); this function returns the SPEC χ.
+
+    Limits: ω → 0: φ, χ → 0, ν → −κηu0/(1 − κu0), a → κη/(1 − κu0) (the paper's printed limits);
+    ω → ∞: φ, θ, χ → 0, ν → cη/(1 + c), a → κη/(1 + c). The force phase peaks at
+    (ωτ)² = (1 + rc)/(1 + c) (:func:`svda_peak_phase_frequency`), the high/low amplitude ratio is
+    (1 + rc)/(1 + c).
+
+    Parameters
+    ----------
+    omega : float or array_like
+        Angular frequencies ω [rad/s], >= 0.
+    position : float
+        Mean position h̄0 [m].
+    eta : float
+        Drive amplitude η [m], >= 0 (the result is linear in η).
+    E0 : float
+        Instantaneous modulus [Pa], >= E_inf.
+    E_inf : float
+        Relaxed modulus [Pa], > 0.
+    tau : float
+        Creep time of Eq. 3 [s], > 0.
+    radius : float
+        Sphere radius R [m], > 0.
+    P : float
+        Pressure amplitude P [Pa] of p(h) = P e^{−κh}, > 0.
+    debye_length : float
+        Decay length 1/κ [m], > 0.
+
+    Returns
+    -------
+    SVDAHarmonicResponse
+        ν, φ, θ, c, u0, a, χ [deg], stiffness and mean force (see its attributes).
 
     Raises
     ------
     ParameterError
         If an input is out of range.
-    ConvergenceError
-        If the time integration fails.
     """
-    w = require_positive("omega", omega)
-    h_mean = require_finite("position", position)
-    eta_ = require_positive("eta", eta)
-    _, _, tau_ = _sls_moduli(E0, E_inf, tau)
-    n_periods = require_int("periods", periods, 1)
-    n_samples = require_int("samples_per_period", samples_per_period, 8)
-    settle = 20.0 * tau_ if settle_time is None else require_nonnegative("settle_time",
-                                                                          settle_time)
-    period = 2.0 * math.pi / w
-    n_settle = math.ceil(settle / period)
-    t_start = n_settle * period
-    t_stop = (n_settle + n_periods) * period
-    times = np.linspace(t_start, t_stop, n_periods * n_samples + 1)
-    drive = _SineDrive(h_mean, eta_, w, t_stop)
-    run = solve_svda(drive, E0=E0, E_inf=E_inf, tau=tau, radius=radius, pressure=pressure,
-                     debye_length=debye_length, t_eval=times, method=method, rtol=rtol,
-                     atol=atol)
-    span = t_stop - t_start
-    phasor = np.exp(-1j * w * times)
+    w = as_nonnegative_array("omega", omega)
+    eta_ = require_nonnegative("eta", eta)
+    u0, c, ratio, tau_, mean_force = _svda_mean_state(position, E0, E_inf, tau, radius,
+                                                      P, debye_length)
+    kappa = 1.0 / float(debye_length)
+    with np.errstate(over="ignore", invalid="ignore"):
+        x = w * tau_
+        nu_hat, k_rel = _svda_transfer(x, c, ratio)
+        theta = np.arctan2(x * (1.0 + c), 1.0 + ratio * c) - 0.5 * math.pi
+        response = SVDAHarmonicResponse(
+            nu=eta_ * np.abs(nu_hat),
+            phi=np.angle(nu_hat),
+            theta=theta,
+            c=c,
+            u0=u0,
+            amplitude=kappa * eta_ * np.abs(k_rel),
+            phase=np.degrees(np.angle(k_rel)),
+            stiffness=mean_force * kappa * np.abs(k_rel),
+            mean_force=mean_force,
+        )
+    for value in response:
+        require_representable(value, "the SVDA harmonic response",
+                              "omega, position, eta, E0, E_inf, tau, radius, P, debye_length")
+    return response
 
-    def project(x: FloatArray) -> complex:
-        return complex(2.0 / span * np.trapezoid(x * phasor, times))
 
-    mean_force = float(np.trapezoid(run.force, times) / span)
-    mean_u = float(np.trapezoid(run.deformation, times) / span)
-    z_drive = project(run.position - h_mean)
-    z_force = project(run.force - mean_force)
-    z_u = project(run.deformation - mean_u)
-    stiffness = z_force / -z_drive
-    return SVDAHarmonicSimulation(
-        omega=w,
-        nu=abs(z_u),
-        phi=float(np.angle(z_u / z_drive)),
-        amplitude=abs(z_force) / mean_force,
-        phase=float(np.degrees(np.angle(stiffness))),
-        stiffness=abs(z_force) / eta_,
-        mean_force=mean_force,
-        mean_deformation=mean_u,
-    )
+def svda_complex_stiffness(omega: ArrayLike, position: float, E0: float, E_inf: float,
+                           tau: float, radius: float, P: float,
+                           debye_length: float) -> np.ndarray:
+    """SVDA complex stiffness k*(ω) = F̂/D̂ per unit compression [N/m].
+
+    k* = F̄ κ (1 + iωτ)/[(1 + rc) + iωτ(1 + c)], r = E0/E_inf, c = −κu0/r (see
+    :func:`svda_harmonic_response` for the derivation). |k*| is the SPEC stiffness |F1|/η and
+    arg k* the SPEC phase χ (force leading the compression, >= 0). It is real and equal to
+    F̄κ/(1 − κu0) at ω = 0 and to F̄κ/(1 + c) at ω → ∞.
+
+    Parameters
+    ----------
+    omega : float or array_like
+        Angular frequencies ω [rad/s], >= 0 (the independent variable of the lmfit model).
+    position : float
+        Mean position h̄0 [m].
+    E0 : float
+        Instantaneous modulus [Pa], >= E_inf.
+    E_inf : float
+        Relaxed modulus [Pa], > 0.
+    tau : float
+        Creep time of Eq. 3 [s], > 0.
+    radius : float
+        Sphere radius R [m], > 0.
+    P : float
+        Pressure amplitude P [Pa] of p(h) = P e^{−κh}, > 0.
+    debye_length : float
+        Decay length 1/κ [m], > 0.
+
+    Returns
+    -------
+    numpy.ndarray
+        Complex stiffness [N/m], same shape as ``omega``.
+
+    Raises
+    ------
+    ParameterError
+        If an input is out of range.
+    """
+    w = as_nonnegative_array("omega", omega)
+    _, c, ratio, tau_, mean_force = _svda_mean_state(position, E0, E_inf, tau, radius, P,
+                                                     debye_length)
+    with np.errstate(over="ignore", invalid="ignore"):
+        _, k_rel = _svda_transfer(w * tau_, c, ratio)
+        k = (mean_force / float(debye_length)) * k_rel
+    return require_representable(k, "the SVDA complex stiffness",
+                                 "omega, position, E0, E_inf, tau, radius, P, debye_length")
+
+
+def svda_peak_phase_frequency(position: float, E0: float, E_inf: float, tau: float,
+                              radius: float, P: float, debye_length: float) -> float:
+    """Frequency ω0 [rad/s] of the SVDA force-phase maximum, (ω0τ)² = (1 + cE0/E_inf)/(1 + c).
+
+    This is the maximum of the FORCE phase χ(ω) = atan(ωτ) − atan(ωτ(1 + c)/(1 + rc)) (r =
+    E0/E_inf); the deformation phase φ peaks elsewhere, at (ωτ)² = r(1 + rc)/(1 + c). The peak
+    value is tan χ_max = (1 − q)/(2 sqrt q), q = (1 + c)/(1 + rc).
+
+    Parameters
+    ----------
+    position : float
+        Mean position h̄0 [m].
+    E0 : float
+        Instantaneous modulus [Pa], >= E_inf.
+    E_inf : float
+        Relaxed modulus [Pa], > 0.
+    tau : float
+        Creep time of Eq. 3 [s], > 0.
+    radius : float
+        Sphere radius R [m], > 0.
+    P : float
+        Pressure amplitude P [Pa] of p(h) = P e^{−κh}, > 0.
+    debye_length : float
+        Decay length 1/κ [m], > 0.
+
+    Returns
+    -------
+    float
+        ω0 [rad/s].
+
+    Raises
+    ------
+    ParameterError
+        If an input is out of range.
+    """
+    _, c, ratio, tau_, _ = _svda_mean_state(position, E0, E_inf, tau, radius, P,
+                                            debye_length)
+    omega0 = math.sqrt((1.0 + c * ratio) / (1.0 + c)) / tau_
+    return require_representable(omega0, "the peak-phase frequency",
+                                 "position, E0, E_inf, tau, radius, P, debye_length")

@@ -68,18 +68,15 @@ Units are case-sensitive (``mN`` is not ``MN``); both micro signs (U+00B5 ``µ``
 and ASCII ``u`` are accepted; ``A`` is not accepted for ångström (it is the ampere), write
 ``Å`` or ``angstrom``.
 
-For argparse, :func:`quantity_type` makes a ``type=`` callable and
-:func:`normalize_negative_args` lets ``--h0 -5nm`` through (argparse alone takes ``-5nm`` for an
-option).
+The command line reads its flags with these functions; its argparse helpers (``type=``
+callables, negative values such as ``--h0 -5nm``) live in :mod:`viscoforce.cli._args`.
 """
 
 from __future__ import annotations
 
-import argparse
 import math
 import numbers
 import re
-from collections.abc import Callable, Iterable
 from dataclasses import dataclass
 from decimal import Decimal
 
@@ -89,9 +86,7 @@ __all__ = [
     "DIMENSIONS",
     "accepted_units",
     "format_quantity",
-    "normalize_negative_args",
     "parse_quantity",
-    "quantity_type",
     "unit_factor",
 ]
 
@@ -205,6 +200,15 @@ def _dimension(dimension: str) -> _Dimension:
             f"dimension must be one of {', '.join(DIMENSIONS)}; got {dimension!r}") from None
 
 
+def _require_unit_text(name: str, unit: object) -> str:
+    """Return ``unit`` unchanged, raising ParameterError unless it is a string."""
+    if not isinstance(unit, str):
+        shown = "None" if unit is None else f"{type(unit).__name__} {unit!r:.60}"
+        raise ParameterError(
+            f"{name} must be a unit string (see accepted_units()), got {shown}")
+    return unit
+
+
 def _unit_list(dimension: str) -> str:
     """Human list of accepted units, e.g. ``m, cm, mm, um/µm, nm, pm, Å/angstrom``."""
     if dimension == "dimensionless":
@@ -261,11 +265,12 @@ def unit_factor(dimension: str, unit: str) -> float:
     Raises
     ------
     ParameterError
-        If ``dimension`` is unknown.
+        If ``dimension`` is unknown or ``unit`` is not a string.
     UnitError
         If ``unit`` is not accepted for ``dimension``.
     """
     _dimension(dimension)
+    _require_unit_text("unit", unit)
     return _lookup_unit(dimension, unit, repr(unit), None).factor
 
 
@@ -351,9 +356,13 @@ def parse_quantity(text: str | float, dimension: str, *, name: str | None = None
         a decimal comma (``"1,5nm"``), garbage (``"nm5"``, ``"--5nm"``, ``"5 n m"``), an unknown
         unit, a unit of another dimension (``"5nm"`` for a time), or a value that overflows.
     ParameterError
-        If ``dimension`` is unknown, or ``text`` is not a string or a finite real number.
+        If ``dimension`` is unknown, ``text`` is not a string or a finite real number, or
+        ``name`` is not a string or None.
     """
     spec = _dimension(dimension)
+    if name is not None and not isinstance(name, str):
+        raise ParameterError(
+            f"name must be a string or None, got {type(name).__name__} {name!r:.60}")
     prefix = f"{name}: " if name else ""
     if not isinstance(text, str):
         value = _real(text, f"{prefix}expected {spec.phrase} as a string or real number")
@@ -415,8 +424,8 @@ def format_quantity(value: float, dimension: str, unit: str | None = None, *, di
     Raises
     ------
     ParameterError
-        If ``dimension`` is unknown, ``value`` is not a real number or ``digits`` is not an
-        integer in [1, 17].
+        If ``dimension`` is unknown, ``value`` is not a real number, ``digits`` is not an
+        integer in [1, 17], ``unit`` is not a string or None, or ``ascii_only`` is not a bool.
     UnitError
         If ``unit`` is not accepted for ``dimension``.
     """
@@ -424,7 +433,12 @@ def format_quantity(value: float, dimension: str, unit: str | None = None, *, di
     x = _real(value, "value must be a real number")
     if isinstance(digits, bool) or not isinstance(digits, int) or not 1 <= digits <= 17:
         raise ParameterError(f"digits must be an integer in [1, 17], got {digits!r}")
+    if not isinstance(ascii_only, bool):
+        raise ParameterError(
+            f"ascii_only must be True or False, got {type(ascii_only).__name__} "
+            f"{ascii_only!r:.60}")
     if unit is not None:
+        _require_unit_text("unit", unit)
         chosen, factor = unit, _lookup_unit(dimension, unit, repr(unit), "unit").factor
     elif x == 0.0 or not math.isfinite(x):
         chosen, factor = _si_symbol(dimension), 1.0
@@ -448,119 +462,3 @@ def format_quantity(value: float, dimension: str, unit: str | None = None, *, di
 def _si_symbol(dimension: str) -> str:
     """Return the SI unit spelling of ``dimension`` (the first unit, factor 1)."""
     return "" if dimension == "dimensionless" else _DIMENSIONS[dimension].units[0][0]
-
-
-class _QuantityType:
-    """argparse ``type=`` callable returned by :func:`quantity_type`."""
-
-    def __init__(self, dimension: str) -> None:
-        _dimension(dimension)
-        self.dimension = dimension
-        self.__name__ = dimension.replace("_", " ")
-
-    def __call__(self, text: str) -> float:
-        try:
-            return parse_quantity(text, self.dimension)
-        except (UnitError, ParameterError) as exc:
-            raise argparse.ArgumentTypeError(str(exc)) from exc
-
-    def __repr__(self) -> str:
-        return f"quantity_type({self.dimension!r})"
-
-
-def quantity_type(dimension: str) -> Callable[[str], float]:
-    """Make an argparse ``type=`` callable that reads a quantity of ``dimension`` into SI.
-
-    Parameters
-    ----------
-    dimension : str
-        One of :data:`DIMENSIONS`.
-
-    Returns
-    -------
-    callable
-        ``f(text) -> float`` (SI). On bad input it raises :class:`argparse.ArgumentTypeError`
-        carrying the :class:`~viscoforce.exceptions.UnitError` message, so argparse prints
-        ``argument --h0: <message>`` and exits with status 2. Its ``__name__`` is the dimension
-        (``"angular frequency"``) and its repr ``quantity_type('length')``.
-
-    Raises
-    ------
-    ParameterError
-        If ``dimension`` is unknown (raised at once, not at parse time).
-
-    Examples
-    --------
-    >>> import argparse
-    >>> parser = argparse.ArgumentParser()
-    >>> _ = parser.add_argument("--h0", type=quantity_type("length"))
-    >>> parser.parse_args(normalize_negative_args(["--h0", "-5nm"], {"--h0"})).h0
-    -5e-09
-    """
-    return _QuantityType(dimension)
-
-
-_NEGATIVE_VALUE_RE = re.compile(r"-[0-9.]")
-
-
-def _looks_negative(token: str) -> bool:
-    return _NEGATIVE_VALUE_RE.match(token) is not None
-
-
-def normalize_negative_args(argv: Iterable[str], value_options: Iterable[str],
-                            multi_value_options: Iterable[str] = ()) -> list[str]:
-    """Rewrite ``argv`` so that argparse accepts negative quantities such as ``-5nm``.
-
-    argparse takes any token that starts with ``-`` and is not a plain negative number
-    (``-5``, ``-.5``) for an option, so ``--h0 -5nm`` fails with "expected one argument".
-    A token "looks negative" here when it starts with ``-`` followed by a digit or ``.``
-    (``-5nm``, ``-.5nm``, ``-1e-9``, ``-3``).
-
-    * For an option in ``value_options`` (one value) followed by such a token, the pair is
-      joined: ``["--h0", "-5nm"]`` → ``["--h0=-5nm"]`` (a one-dash option ``-x`` becomes
-      ``-x-5nm``). ``--h0=-5nm`` is left alone.
-    * For an option in ``multi_value_options`` (``nargs="+"``/``"*"``), every following token up
-      to the next option is a value; each that looks negative gets a leading space
-      (``["--omega", "1", "-2kHz"]`` → ``["--omega", "1", " -2kHz"]``). argparse treats a token
-      that does not start with ``-`` as a value, and :func:`parse_quantity` strips the space.
-      (``--omega=-2`` cannot work for ``nargs="+"``: it gives that single value.)
-
-    Everything after a bare ``--`` is left untouched. Option names are matched exactly: give the
-    full names (argparse's prefix abbreviations such as ``--ome`` are not recognised here).
-    The scheme assumes that no option of the parser itself looks like a negative number.
-
-    Parameters
-    ----------
-    argv : iterable of str
-        Command-line tokens without the program name (``sys.argv[1:]``).
-    value_options : iterable of str
-        Option strings that take exactly one value (``{"--h0", "--from", "--to"}``).
-    multi_value_options : iterable of str, optional
-        Option strings that take one or more values (``{"--omega"}``).
-
-    Returns
-    -------
-    list of str
-        A new token list; ``argv`` is not modified.
-    """
-    single = set(value_options)
-    multi = set(multi_value_options)
-    tokens = list(argv)
-    out: list[str] = []
-    i = 0
-    while i < len(tokens):
-        token = tokens[i]
-        if token == "--":
-            out.extend(tokens[i:])
-            break
-        out.append(token)
-        i += 1
-        if token in multi:
-            while i < len(tokens) and (not tokens[i].startswith("-") or _looks_negative(tokens[i])):
-                out.append(" " + tokens[i] if _looks_negative(tokens[i]) else tokens[i])
-                i += 1
-        elif token in single and i < len(tokens) and _looks_negative(tokens[i]):
-            joiner = "=" if token.startswith("--") else ""
-            out[-1] = f"{token}{joiner}{tokens[i]}"
-            i += 1
-    return out

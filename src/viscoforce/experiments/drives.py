@@ -11,6 +11,12 @@ Every drive is a frozen dataclass that satisfies :class:`viscoforce._typing.Sepa
   velocity of the piece that starts there) and it is 0 outside [0, duration);
 - ``breakpoints()`` lists the times [s] in [0, duration] where the velocity may jump (always
   including 0 and ``duration``), so that a time stepper can land on them;
+- ``min_steps()`` -> int is a cheap lower bound on the number of time steps any accurate stepper
+  needs over [0, duration], computed without building anything (solvers refuse runs beyond their
+  effort limits up front with it): the number of breakpoints for the piecewise-linear drives
+  (``Hold``, ``Ramp``, ``Step``, ``Triangle``; the number of samples for ``MeasuredTrace``, also
+  when smooth), plus ``STEPS_PER_PERIOD`` (8) per period for ``Sinusoid``, and the sum over the
+  segments for ``Sequence``;
 - ``start_position`` / ``end_position`` [m], ``extent()`` -> (min, max) position over
   [0, duration] [m] (solvers size the radial grid on the deepest position), and ``describe()``,
   a one-line summary with units.
@@ -47,6 +53,9 @@ __all__ = ["Hold", "Ramp", "Step", "Triangle", "Sinusoid", "Sequence", "Measured
 _ABS_TOL = 1e-15
 _REL_TOL = 1e-9
 
+#: Fewest time steps per period of a sinusoid any accurate stepper takes (used by min_steps).
+STEPS_PER_PERIOD = 8
+
 _PREFIXES = ((1e3, "k"), (1.0, ""), (1e-3, "m"), (1e-6, "µ"), (1e-9, "n"), (1e-12, "p"),
              (1e-15, "f"))
 
@@ -67,10 +76,14 @@ def _si(value: float, unit: str) -> str:
 
 def _as_time(t: ArrayLike) -> FloatArray:
     """Return ``t`` [s] as a float array (0-d for a scalar); raise unless all entries are finite."""
+    bad = t is None or isinstance(t, dict | str | bytes)
     try:
+        bad = bad or np.iscomplexobj(t)  # a complex time would lose its imaginary part
         arr = np.asarray(t, dtype=float)
     except (TypeError, ValueError):
-        raise ParameterError(f"t must be real times [s], got {t!r}") from None
+        bad = True
+    if bad:
+        raise ParameterError(f"t must be real times [s], got {t!r}")
     if not np.all(np.isfinite(arr)):
         raise ParameterError(f"t must be finite, got {t!r}")
     return arr
@@ -111,6 +124,13 @@ class _Drive(ABC):
     @abstractmethod
     def extent(self) -> tuple[float, float]:
         """Return the smallest and largest position (min, max) [m] over [0, duration]."""
+
+    def min_steps(self) -> int:
+        """Return a lower bound on the time steps any accurate stepper needs over [0, duration].
+
+        Piecewise-linear drives: the number of breakpoints (a stepper lands on every one).
+        """
+        return int(np.asarray(self.breakpoints()).size)
 
     @abstractmethod
     def describe(self) -> str:
@@ -508,6 +528,10 @@ class Sinusoid(_Drive):
         """Return the kink times [s]: 0 and duration (jumps from/to the holds around it)."""
         return _endpoints(self.duration)
 
+    def min_steps(self) -> int:
+        """Return the breakpoints (2) plus ``STEPS_PER_PERIOD`` (8) steps per period played."""
+        return 2 + math.ceil(STEPS_PER_PERIOD * self.periods)
+
     def extent(self) -> tuple[float, float]:
         """Return the (min, max) position [m]: h0 ∓ eta (>= one full period is played)."""
         return (self.h0 - self.eta, self.h0 + self.eta)
@@ -624,6 +648,10 @@ class Sequence(_Drive):
         merged[-1] = self.duration
         return merged
 
+    def min_steps(self) -> int:
+        """Return the sum of the segments' :meth:`min_steps`."""
+        return sum(seg.min_steps() for seg in self.segments)
+
     def extent(self) -> tuple[float, float]:
         """Return the (min, max) position over [0, duration] [m], over all segments."""
         lows, highs = zip(*(seg.extent() for seg in self.segments), strict=True)
@@ -719,6 +747,10 @@ class MeasuredTrace(_Drive):
         if self.smooth:
             return _endpoints(self.duration)
         return np.array(self.time)
+
+    def min_steps(self) -> int:
+        """Return the number of samples (one step per sample interval, smooth or not)."""
+        return int(self.time.size)
 
     def extent(self) -> tuple[float, float]:
         """Return the (min, max) position over [0, duration] [m]: the extreme samples."""

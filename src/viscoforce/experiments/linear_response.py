@@ -17,8 +17,9 @@ import numpy as np
 import xarray as xr
 from numpy.typing import ArrayLike
 
-from viscoforce._validation import as_float_1d, require_finite, require_positive
-from viscoforce.exceptions import ParameterError
+from viscoforce._limits import MAX_SAMPLES, check_effort
+from viscoforce._validation import require_finite, require_positive
+from viscoforce.experiments._checks import require_frequencies, require_number, require_problem
 from viscoforce.problem import ContactProblem
 from viscoforce.schema import make_spectrum
 from viscoforce.solvers.static import equilibrium_gap
@@ -38,12 +39,28 @@ def linear_stiffness(problem: ContactProblem, position: float, omega: ArrayLike)
     position : float
         Mean position h̄0 [m].
     omega : array_like
-        Angular frequencies [rad/s], ≥ 0.
+        Angular frequencies [rad/s], ≥ 0, at most :data:`viscoforce._limits.MAX_SAMPLES`.
+
+    Returns
+    -------
+    k : numpy.ndarray
+        Complex stiffness k* = F̂/D̂ per unit compression [N/m], shaped like ``omega``.
+    mean_force : float
+        Static E_inf load at ``position`` [N].
+
+    Raises
+    ------
+    ParameterError
+        If an argument is missing or out of range (the message names it and the range).
+    EffortError
+        If more than ``MAX_SAMPLES`` frequencies are requested (refused before solving).
     """
-    position = require_finite("position (h0)", position)
-    omega = as_float_1d("omega", omega)
-    if np.any(omega < 0):
-        raise ParameterError(f"omega must be >= 0 rad/s, got min {float(omega.min())!r}")
+    problem = require_problem(problem)
+    position = require_number("position", position, require_finite,
+                              "finite [m] (h0, the undeformed apex separation)")
+    omega = require_frequencies(omega, allow_zero=True)
+    check_effort(f"frequencies of linear_stiffness ({omega.size} requested)", omega.size,
+                 MAX_SAMPLES, hint="request fewer frequencies")
     problem.check_covers(position)
     material = problem.material
     sol = equilibrium_gap(problem, position, material.relaxed_modulus)
@@ -76,18 +93,26 @@ def linear_response(problem: ContactProblem, position: float, eta: float,
     position : float
         Mean position h̄0 [m].
     eta : float
-        Drive amplitude η [m] (only scales ``force_amplitude`` and ``amplitude``).
+        Drive amplitude η [m], > 0 (only scales ``force_amplitude`` and ``amplitude``).
     omega : array_like
-        Angular frequencies [rad/s].
+        Angular frequencies [rad/s], ≥ 0.
 
     Returns
     -------
     xarray.Dataset
         Spectrum (see :mod:`viscoforce.schema`) with ``method = "linear"``.
+
+    Raises
+    ------
+    ParameterError
+        If an argument is missing or out of range (the message names it and the range).
+    EffortError
+        If more than ``MAX_SAMPLES`` frequencies are requested (refused before solving).
     """
-    eta = require_positive("eta", eta)
+    problem = require_problem(problem)
+    eta = require_number("eta", eta, require_positive, "> 0 [m] (finite)")
+    omega = require_frequencies(omega, allow_zero=True)
     k, mean = linear_stiffness(problem, position, omega)
     attrs = dict(problem.parameters())
-    attrs.update({"method": "linear", "position": float(position), "eta": eta,
-                  "phase_convention": "force leads compression, degrees"})
-    return make_spectrum(as_float_1d("omega", omega), k, mean, eta, attrs=attrs)
+    attrs.update({"method": "linear", "position": float(position), "eta": eta})
+    return make_spectrum(omega, k, mean, eta, attrs=attrs)

@@ -13,14 +13,19 @@ import numpy as np
 import pandas as pd
 
 from viscoforce._typing import FloatArray
+from viscoforce._validation import require_path
 from viscoforce.exceptions import ParameterError, UnitError
 from viscoforce.units import unit_factor
 
 _HEADER = re.compile(r"^\s*([A-Za-z_][\w ]*?)\s*\(\s*([^)]*)\s*\)\s*$")
+#: Suffix pandas appends to a repeated header ("time (s)" twice → "time (s).1").
+_MANGLED = re.compile(r"\.\d+$")
 
 
 def _read(path: str | Path) -> pd.DataFrame:
-    path = Path(path)
+    path = require_path("path", path)
+    if path.is_dir():
+        raise ParameterError(f"{path} is a directory, not a CSV file")
     if not path.is_file():
         raise ParameterError(f"file not found: {path}")
     try:
@@ -34,7 +39,13 @@ def _read(path: str | Path) -> pd.DataFrame:
 
 def _column(df: pd.DataFrame, path: Path, name: str, dimension: str, *,
             allow_missing: bool = False) -> FloatArray:
-    """SI values of the column ``name (unit)`` (the unit must be present)."""
+    """SI values of the column ``name (unit)`` (the unit must be present, the values finite)."""
+    same = [h for h in df.columns
+            if (m := _HEADER.match(_MANGLED.sub("", str(h)))) and m.group(1).strip().lower() == name]
+    if len(same) > 1:
+        raise ParameterError(
+            f"{path}: {len(same)} columns named '{name} (<unit>)' ({', '.join(map(str, same))}); "
+            "keep one")
     for header in df.columns:
         m = _HEADER.match(str(header))
         if m and m.group(1).strip().lower() == name:
@@ -50,6 +61,12 @@ def _column(df: pd.DataFrame, path: Path, name: str, dimension: str, *,
                 raise ParameterError(
                     f"{path}: column '{header}' row {row + 1} is not a number "
                     f"({df[header].iloc[row]!r}); decimal commas are not accepted")
+            infinite = np.isinf(values)
+            if np.any(infinite):
+                row = int(np.flatnonzero(infinite)[0])
+                raise ParameterError(
+                    f"{path}: column '{header}' row {row + 1} is not a finite number "
+                    f"({df[header].iloc[row]!r})")
             return values * factor
         if str(header).strip().lower() == name:
             raise UnitError(f"{path}: column '{header}' has no unit; write e.g. '{name} (SI unit)'")

@@ -27,7 +27,12 @@ from numpy.typing import ArrayLike
 
 from viscoforce import closed_form
 from viscoforce._typing import FloatArray
-from viscoforce._validation import as_float_1d, require_positive, require_sls_moduli
+from viscoforce._validation import (
+    as_float_1d,
+    as_real_array,
+    require_positive,
+    require_sls_moduli,
+)
 from viscoforce.exceptions import ParameterError
 
 
@@ -83,12 +88,14 @@ class ViscoelasticMaterial(ABC):
 
     def creep_compliance(self, t: ArrayLike) -> FloatArray:
         """Creep compliance C(t) [1/Pa] at times ``t`` [s] ≥ 0."""
+        t = as_real_array("t", t)  # complex or text is refused here; the range in closed_form
         p = self.prony()
         return closed_form.prony_creep_compliance(t, p.glassy_compliance,
                                                   np.array(p.delta_compliances), np.array(p.taus))
 
     def complex_compliance(self, omega: ArrayLike) -> np.ndarray:
         """Complex compliance C*(ω) [1/Pa] at angular frequency ``omega`` [rad/s]."""
+        omega = as_real_array("omega", omega)
         p = self.prony()
         return closed_form.prony_complex_compliance(omega, p.glassy_compliance,
                                                     np.array(p.delta_compliances), np.array(p.taus))

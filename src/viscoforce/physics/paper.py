@@ -9,6 +9,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+from viscoforce._validation import require_positive, require_sls_moduli
 from viscoforce.physics.materials import StandardLinearSolid
 from viscoforce.physics.particle import Sphere
 from viscoforce.physics.surface_forces import DoubleLayer, SoftWall, SumOfLaws
@@ -46,6 +47,14 @@ class PaperParameters:
     E0: float = 1e10  # noqa: N815
     E_inf: float = 1e9  # noqa: N815
     tau: float = 1e-3
+
+    def __post_init__(self):
+        for name in ("R", "P", "debye_length", "Pw", "z0"):
+            object.__setattr__(self, name, require_positive(name, getattr(self, name)))
+        e0, e_inf, tau = require_sls_moduli(self.E0, self.E_inf, self.tau)
+        object.__setattr__(self, "E0", e0)
+        object.__setattr__(self, "E_inf", e_inf)
+        object.__setattr__(self, "tau", tau)
 
     def sphere(self) -> Sphere:
         """The sphere of radius R."""

@@ -8,7 +8,8 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from viscoforce._typing import FloatArray
-from viscoforce._validation import require_positive
+from viscoforce._validation import as_float_array, require_finite, require_positive
+from viscoforce.exceptions import ParameterError
 
 
 @dataclass(frozen=True)
@@ -35,10 +36,15 @@ class Sphere:
         return cls(r1 * r2 / (r1 + r2))
 
     def undeformed_gap(self, position: float, r: ArrayLike) -> FloatArray:
-        """h0(r) = h0 + r²/2R [m] for apex position ``position`` [m] at radii ``r`` [m]."""
-        r = np.asarray(r, dtype=float)
+        """h0(r) = h0 + r²/2R [m] for apex position ``position`` [m] at radii ``r`` [m] (finite, ≥ 0)."""
+        position = require_finite("position (h0)", position)
+        r = as_float_array("r", r)
+        if np.any(r < 0):
+            raise ParameterError(f"r must be >= 0 m, got min {float(np.min(r))!r}")
         return position + r * r / (2.0 * self.radius)
 
     def radius_at_gap(self, position: float, gap: float) -> float:
-        """Radius [m] where the undeformed gap equals ``gap`` (0 if it is already below)."""
+        """Radius [m] where the undeformed gap equals ``gap`` [m] (0 if it is already below)."""
+        position = require_finite("position (h0)", position)
+        gap = require_finite("gap", gap)
         return float(np.sqrt(max(2.0 * self.radius * (gap - position), 0.0)))

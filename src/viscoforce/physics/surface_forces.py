@@ -10,14 +10,42 @@ Sign convention: p > 0 is repulsion; the gap h must stay > 0 for the soft wall.
 from __future__ import annotations
 
 from abc import ABC, abstractmethod
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import ArrayLike
 
 from viscoforce._typing import FloatArray
-from viscoforce._validation import require_positive
+from viscoforce._validation import (
+    as_float_array,
+    as_real_array,
+    require_in_range,
+    require_positive,
+)
 from viscoforce.exceptions import ParameterError
+
+#: Largest exponent of e^x that stays finite in float64 (e^709.78 = 1.8e308), with a margin.
+_MAX_EXPONENT = 700.0
+#: Gaps beyond ± this many Debye lengths are clipped before e^{−h/λ} (the result is unchanged).
+_CLIP_DECAY_LENGTHS = 1000.0
+#: Gaps below this multiple of z0 may overflow (z0/h)^9 (or (z0/h)^9/h) in float64.
+_OVERFLOW_RATIO = 1e-30
+
+
+def _as_gap(gap: ArrayLike) -> FloatArray:
+    """Gap [m] as a float array (NaN is caught by the laws' single reduction, see _reject_nan)."""
+    return as_real_array("gap", gap)
+
+
+def _reject_nan(h: FloatArray) -> None:
+    """Raise the standard message if ``h`` holds a NaN (+inf is allowed: p(∞) = 0)."""
+    as_float_array("gap", h, allow_inf=True)
+
+
+def _as_rtol(rtol: float) -> float:
+    """Relative pressure level of :meth:`SurfaceForceLaw.negligible_gap`, in (0, 1)."""
+    return require_in_range("rtol", rtol, 0.0, 1.0, inclusive=(False, False))
 
 
 class SurfaceForceLaw(ABC):
@@ -90,8 +118,17 @@ class DoubleLayer(SurfaceForceLaw):
                            require_positive("debye_length", self.debye_length))
 
     def pressure(self, gap):
-        """Pressure [Pa] at gap [m]."""
-        return self.P * np.exp(-np.asarray(gap, dtype=float) / self.debye_length)
+        """Pressure [Pa] at gap [m] (+inf where e^{−h/λ} overflows, h < −709 λ)."""
+        h = _as_gap(gap)
+        # clipping at ±1000 λ changes nothing (e^{−1000} is 0 in float64, e^{+1000} overflows)
+        # and keeps h/λ from overflowing for absurd gaps; NaN passes through to the check below
+        limit = _CLIP_DECAY_LENGTHS * self.debye_length
+        x = np.clip(h, -limit, limit) / -self.debye_length
+        if x.size and not x.max() <= _MAX_EXPONENT:  # one reduction: NaN, or overflowing e^x
+            _reject_nan(h)
+            with np.errstate(over="ignore"):  # absurdly overlapping bodies: an honest +inf
+                return self.P * np.exp(x)
+        return self.P * np.exp(x)
 
     def pressure_derivative(self, gap):
         """dp/dh [Pa/m] at gap [m]."""
@@ -107,8 +144,8 @@ class DoubleLayer(SurfaceForceLaw):
         return self.debye_length
 
     def negligible_gap(self, rtol: float) -> float:
-        """Gap [m] where p = rtol × P."""
-        return self.debye_length * np.log(1.0 / rtol)
+        """Gap [m] where p = rtol × P, for 0 < rtol < 1."""
+        return float(self.debye_length * np.log(1.0 / _as_rtol(rtol)))
 
 
 @dataclass(frozen=True)
@@ -130,26 +167,32 @@ class SoftWall(SurfaceForceLaw):
         object.__setattr__(self, "Pw", require_positive("Pw (soft-wall pressure)", self.Pw))
         object.__setattr__(self, "z0", require_positive("z0 (soft-wall length)", self.z0))
 
-    def _check_gap(self, gap) -> FloatArray:
-        h = np.asarray(gap, dtype=float)
-        if np.any(h <= 0):
-            raise ParameterError(
-                f"gap must be > 0 for the soft wall, got min {float(np.min(h)):g} m")
-        return h
+    def _evaluate(self, gap, formula: Callable[[FloatArray], FloatArray]) -> FloatArray:
+        """``formula(h)`` for gaps [m] that must be > 0; overflow near h = 0 gives +inf quietly."""
+        h = _as_gap(gap)
+        if not h.size:
+            return formula(h)
+        low = h.min()
+        if not low >= _OVERFLOW_RATIO * self.z0:  # one reduction: NaN, h ≤ 0 or overflow
+            _reject_nan(h)
+            if low <= 0:
+                raise ParameterError(
+                    f"gap must be > 0 for the soft wall, got min {float(low):g} m")
+            with np.errstate(over="ignore"):  # (z0/h)^9 overflows: an honest +inf
+                return formula(h)
+        return formula(h)
 
     def pressure(self, gap):
-        """Pressure [Pa] at gap [m]."""
-        return self.Pw * (self.z0 / self._check_gap(gap)) ** 9
+        """Pressure [Pa] at gap [m] (> 0; +inf where (z0/h)^9 overflows)."""
+        return self._evaluate(gap, lambda h: self.Pw * (self.z0 / h) ** 9)
 
     def pressure_derivative(self, gap):
-        """dp/dh [Pa/m] at gap [m]."""
-        h = self._check_gap(gap)
-        return -9.0 * self.Pw * (self.z0 / h) ** 9 / h
+        """dp/dh [Pa/m] at gap [m] (< 0)."""
+        return self._evaluate(gap, lambda h: -9.0 * self.Pw * (self.z0 / h) ** 9 / h)
 
     def energy(self, gap):
-        """Energy per area [J/m²] at gap [m]."""
-        h = self._check_gap(gap)
-        return self.Pw * self.z0 * (self.z0 / h) ** 8 / 8.0
+        """Energy per area [J/m²] at gap [m] (> 0)."""
+        return self._evaluate(gap, lambda h: self.Pw * self.z0 * (self.z0 / h) ** 8 / 8.0)
 
     @property
     def decay_length(self) -> float:
@@ -157,8 +200,8 @@ class SoftWall(SurfaceForceLaw):
         return self.z0 / 9.0
 
     def negligible_gap(self, rtol: float) -> float:
-        """Gap [m] where p = rtol × P_w."""
-        return self.z0 * rtol ** (-1.0 / 9.0)
+        """Gap [m] where p = rtol × P_w, for 0 < rtol < 1."""
+        return float(self.z0 * _as_rtol(rtol) ** (-1.0 / 9.0))
 
 
 @dataclass(frozen=True)
@@ -177,15 +220,18 @@ class SumOfLaws(SurfaceForceLaw):
 
     def pressure(self, gap):
         """Pressure [Pa] at gap [m]."""
-        return sum(t.pressure(gap) for t in self.terms)
+        h = _as_gap(gap)
+        return sum(t.pressure(h) for t in self.terms)
 
     def pressure_derivative(self, gap):
         """dp/dh [Pa/m] at gap [m]."""
-        return sum(t.pressure_derivative(gap) for t in self.terms)
+        h = _as_gap(gap)
+        return sum(t.pressure_derivative(h) for t in self.terms)
 
     def energy(self, gap):
         """Energy per area [J/m²] at gap [m]."""
-        return sum(t.energy(gap) for t in self.terms)
+        h = _as_gap(gap)
+        return sum(t.energy(h) for t in self.terms)
 
     @property
     def decay_length(self) -> float:
@@ -193,7 +239,8 @@ class SumOfLaws(SurfaceForceLaw):
         return max(t.decay_length for t in self.terms)
 
     def negligible_gap(self, rtol: float) -> float:
-        """The largest negligible gap of the terms [m]."""
+        """The largest negligible gap of the terms [m], for 0 < rtol < 1."""
+        rtol = _as_rtol(rtol)
         return max(t.negligible_gap(rtol) for t in self.terms)
 
     def values(self) -> dict[str, float]:

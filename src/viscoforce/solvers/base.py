@@ -31,6 +31,7 @@ from typing import ClassVar
 import numpy as np
 
 from viscoforce._typing import FloatArray, SeparationHistory
+from viscoforce._validation import require_finite, require_instance, require_positive
 from viscoforce.problem import ContactProblem
 from viscoforce.solvers.static import equilibrium_gap
 
@@ -102,7 +103,7 @@ class TimeStepper(ABC):
     adaptive: ClassVar[bool]
 
     def __init__(self, problem: ContactProblem):
-        self.problem = problem
+        self.problem = require_instance("problem", problem, ContactProblem)
         prony = problem.material.prony()
         self.c_glassy = 2.0 * prony.glassy_compliance
         self.c_modes = 2.0 * np.asarray(prony.delta_compliances, dtype=float)
@@ -116,6 +117,8 @@ class TimeStepper(ABC):
 
     def relaxed_state(self, time: float, position: float) -> State:
         """Static E_inf equilibrium at ``position`` [m]: every mode at rest."""
+        time = require_finite("time", time)
+        position = require_finite("position (h0)", position)
         e_inf = self.problem.material.relaxed_modulus
         sol = equilibrium_gap(self.problem, position, e_inf)
         q = self.response(sol.pressure)
@@ -126,3 +129,13 @@ class TimeStepper(ABC):
     @abstractmethod
     def step(self, state: State, drive: SeparationHistory, dt: float) -> StepOutcome:
         """Advance ``state`` by ``dt`` [s] along ``drive``."""
+
+    @staticmethod
+    def check_step(state: State, drive: SeparationHistory, dt: float) -> float:
+        """Validate ``state`` and ``dt`` of :meth:`step`; return ``dt`` [s] as a float > 0.
+
+        The drive is not checked here (a protocol check costs ~20 µs a step): :func:`simulate`
+        checks it once.
+        """
+        require_instance("state", state, State)
+        return require_positive("dt", dt)

@@ -24,7 +24,8 @@ import numpy as np
 import scipy.linalg
 
 from viscoforce._typing import FloatArray
-from viscoforce.exceptions import ConvergenceError, GapClosureError
+from viscoforce._validation import as_float_array, require_instance, require_int, require_positive
+from viscoforce.exceptions import ConvergenceError, GapClosureError, ParameterError
 from viscoforce.problem import ContactProblem
 
 #: Smallest factor by which one Newton step may shrink a gap.
@@ -82,10 +83,21 @@ def solve_gap(problem: ContactProblem, base: FloatArray, coupling: float, initia
         No convergence within ``max_iter`` iterations.
     GapClosureError
         The line search cannot reduce the residual while keeping the gap open.
+    ParameterError
+        Inputs of the wrong type, shape or sign (non-finite gaps, coupling ≤ 0, ...).
     """
+    require_instance("problem", problem, ContactProblem)
+    n = problem.grid.size
+    base = as_float_array("base", base, size=n)
+    initial = as_float_array("initial", initial, size=n)
+    if base.ndim != 1 or initial.ndim != 1:
+        raise ParameterError(f"base and initial must be 1-D with {n} values (one per node), got "
+                             f"shapes {base.shape} and {initial.shape}")
+    coupling = require_positive("coupling", coupling)
+    xtol = require_positive("xtol", xtol)
+    max_iter = require_int("max_iter", max_iter, 1)
     law = problem.surface_force
     a_mat = problem.influence
-    n = base.size
     where = "" if time is None else f" at t = {time:.6g} s"
     if np.any(initial <= 0):
         raise GapClosureError(f"initial gap must be > 0 everywhere{where}", time=time)

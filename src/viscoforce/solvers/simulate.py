@@ -14,10 +14,18 @@ from dataclasses import dataclass
 import numpy as np
 import xarray as xr
 
+from viscoforce._limits import MAX_MEMORY_BYTES, MAX_SAMPLES, MAX_STEPS, check_effort
 from viscoforce._typing import FloatArray, SeparationHistory
-from viscoforce._validation import require_increasing, require_int, require_positive
+from viscoforce._validation import (
+    describe_value,
+    require_increasing,
+    require_instance,
+    require_int,
+    require_positive,
+)
 from viscoforce.exceptions import ConvergenceError, GapClosureError, ParameterError, StabilityError
-from viscoforce.problem import ContactProblem, contact_radius
+from viscoforce.problem import ContactProblem, check_half_space, contact_radius
+from viscoforce.schema import make_trajectory
 from viscoforce.solvers.base import State, TimeStepper
 from viscoforce.solvers.steppers import DEFAULT_METHOD, METHODS
 
@@ -51,6 +59,9 @@ def _resolve_stepper(stepper: str | type[TimeStepper]) -> type[TimeStepper]:
 
 def default_end_time(problem: ContactProblem, drive: SeparationHistory) -> float:
     """Drive end plus five times the longest creep time [s]."""
+    require_instance("problem", problem, ContactProblem)
+    if not isinstance(drive, SeparationHistory):
+        raise ParameterError(f"drive must be a drive (e.g. Triangle), got {describe_value(drive)}")
     taus = problem.material.prony().taus
     return float(drive.duration) + 5.0 * (max(taus) if taus else 0.0)
 
@@ -111,6 +122,15 @@ def simulate(problem: ContactProblem, drive: SeparationHistory, *, t_end: float 
     GapClosureError, ConvergenceError
         The gap went through zero or Newton failed at the smallest step.
     """
+    if not isinstance(problem, ContactProblem):
+        raise ParameterError(f"problem must be a ContactProblem, got {type(problem).__name__}")
+    if not isinstance(drive, SeparationHistory):
+        raise ParameterError(
+            "drive must be a drive with position(t), velocity(t), duration and breakpoints() "
+            f"(e.g. viscoforce.experiments.Triangle), got {type(drive).__name__}")
+    for name, flag in (("output_kinks", output_kinks), ("progress", progress)):
+        if not (isinstance(flag, bool | np.bool_) or (name == "progress" and flag is None)):
+            raise ParameterError(f"{name} must be True or False, got {flag!r}")
     stepper = _resolve_stepper(stepper)(problem)
     law = problem.surface_force
     t_end = default_end_time(problem, drive) if t_end is None else require_positive("t_end", t_end)
@@ -126,16 +146,42 @@ def simulate(problem: ContactProblem, drive: SeparationHistory, *, t_end: float 
     threshold = (law.decay_length if contact_threshold is None
                  else require_positive("contact_threshold", contact_threshold))
     control = _step_control(problem, stepper, t_end, dt, tol, max_step)
+    _check_effort(problem, drive, stepper, t_eval, t_end, control, profiles)
     if initial_state is None:
         state = stepper.relaxed_state(0.0, float(drive.position(0.0)))
     else:
         state = _checked_initial_state(problem, stepper, drive, initial_state)
     records, counters = _march(stepper, drive, state, t_eval, t_end, control,
                                _progress(progress, t_end))
-    return _trajectory_dataset(problem, drive, stepper, records, profiles, threshold, counters,
-                               {"dt": control.dt if control.fixed else 0.0,
-                                "tol": 0.0 if control.fixed else control.tol,
-                                "t_end": t_end, "max_step": control.max_step})
+    ds = _trajectory_dataset(problem, drive, stepper, records, profiles, threshold, counters,
+                             {"dt": control.dt if control.fixed else 0.0,
+                              "tol": 0.0 if control.fixed else control.tol,
+                              "t_end": t_end, "max_step": control.max_step})
+    check_half_space(problem.sphere.radius, ds.u_center.values, ds.contact_radius.values,
+                     where=f"along {_describe(drive)}", stacklevel=2)
+    return ds
+
+
+def _check_effort(problem: ContactProblem, drive: SeparationHistory, stepper: TimeStepper,
+                  t_eval: FloatArray, t_end: float, control: _StepControl, profiles: int) -> None:
+    """Refuse a run beyond the effort limits before any step is taken (estimates in the message)."""
+    check_effort("output times of simulate", t_eval.size, MAX_SAMPLES,
+                 hint="request fewer output samples")
+    kinks = int(np.count_nonzero(np.asarray(drive.breakpoints(), dtype=float) < t_end))
+    if control.fixed:
+        steps = t_end / control.dt
+        hint = "raise dt or shorten t_end"
+    else:
+        min_steps = getattr(drive, "min_steps", None)
+        steps = max(t_end / control.max_step, float(min_steps()) if callable(min_steps) else 0.0)
+        hint = "shorten the drive (fewer periods) or t_end"
+    check_effort("time steps of simulate", steps + kinks + t_eval.size, MAX_STEPS, hint=hint)
+    n = problem.grid.size
+    per_output = 8.0 * n * (3 + stepper.c_modes.size)  # gap, pressure, deformation + memory
+    per_profile = 8.0 * 3 * n if profiles else 0.0
+    stored = t_eval.size * per_output + (t_eval.size / max(profiles, 1)) * per_profile
+    check_effort("memory of the stored states", stored, MAX_MEMORY_BYTES, unit="bytes",
+                 hint="request fewer output samples or profiles")
 
 
 @dataclass(frozen=True)
@@ -262,44 +308,25 @@ def _trajectory_dataset(problem: ContactProblem, drive: SeparationHistory, stepp
     states = [s for _, s in records]
     position = np.array([s.position for s in states])
     gaps = np.array([s.gap for s in states])
-    force = problem.load(np.array([s.pressure for s in states]))
     u_center = np.array([s.u_center for s in states])
     h_center = position - u_center
     radius = np.array([contact_radius(problem.grid, g, hc, threshold)
                        for g, hc in zip(gaps, h_center, strict=True)])
-
-    def series(values, units, name):
-        return xr.DataArray(values, dims="time", attrs={"units": units, "long_name": name})
-
-    data = {
-        "position": series(position, "m", "apex position h0"),
-        "force": series(force, "N", "load F"),
-        "u_center": series(u_center, "m", "central deformation u(0)"),
-        "h_center": series(h_center, "m", "central gap h(0)"),
-        "contact_radius": series(radius, "m", f"radius where the gap < {threshold:g} m"),
-    }
-    coords = {"time": xr.DataArray(times, dims="time", attrs={"units": "s", "long_name": "time"})}
+    profile = {}
     if profiles:
         pick = np.arange(0, len(states), profiles)
-        coords["profile_time"] = xr.DataArray(times[pick], dims="profile_time",
-                                              attrs={"units": "s", "long_name": "profile time"})
-        coords["r"] = xr.DataArray(problem.grid.r, dims="r",
-                                   attrs={"units": "m", "long_name": "radial coordinate"})
-        dims = ("profile_time", "r")
-        data["gap"] = xr.DataArray(gaps[pick], dims=dims,
-                                   attrs={"units": "m", "long_name": "local gap h(r, t)"})
-        data["deformation"] = xr.DataArray(
-            np.array([states[i].deformation[:-1] for i in pick]), dims=dims,
-            attrs={"units": "m", "long_name": "deformation u(r, t)"})
-        data["pressure"] = xr.DataArray(
-            np.array([states[i].pressure for i in pick]), dims=dims,
-            attrs={"units": "Pa", "long_name": "pressure p(r, t)"})
+        profile = {"profile_time": times[pick], "r": problem.grid.r, "gap": gaps[pick],
+                   "deformation": np.array([states[i].deformation[:-1] for i in pick]),
+                   "pressure": np.array([states[i].pressure for i in pick])}
     attrs = dict(problem.parameters())
     attrs.update(settings)
     attrs.update({"stepper": stepper.name, "drive": _describe(drive),
                   "contact_threshold": threshold, "steps": counters.steps,
                   "rejected_steps": counters.rejected, "newton_iterations": counters.newton})
-    return xr.Dataset(data, coords=coords, attrs=attrs)
+    return make_trajectory(times, position=position,
+                           force=problem.load(np.array([s.pressure for s in states])),
+                           u_center=u_center, h_center=h_center, contact_radius=radius,
+                           contact_threshold=threshold, attrs=attrs, **profile)
 
 
 def _describe(drive: SeparationHistory) -> str:

@@ -5,9 +5,11 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 
-from viscoforce._validation import require_finite, require_positive
-from viscoforce.problem import ContactProblem, contact_radius
+from viscoforce._validation import require_finite, require_instance, require_positive
+from viscoforce.problem import ContactProblem, check_half_space, contact_radius
+from viscoforce.schema import SIGN_CONVENTION, make_equilibrium
 from viscoforce.solvers.newton import NewtonResult, solve_gap
+from viscoforce.units import format_quantity
 
 #: Newton tolerance on the gap update, in units of the surface force's decay length.
 STATIC_XTOL = 1e-9
@@ -28,6 +30,8 @@ def equilibrium_gap(problem: ContactProblem, position: float, modulus: float, *,
     initial : ndarray, optional
         Starting gaps [m]; default max(h0(r), λ) with λ the decay length of the law.
     """
+    require_instance("problem", problem, ContactProblem)
+    modulus = require_positive("modulus (E)", modulus)
     base = problem.undeformed_gap(position)
     if initial is None:
         initial = np.maximum(base, problem.surface_force.decay_length)
@@ -64,7 +68,16 @@ def static_equilibrium(problem: ContactProblem, position: float, *, modulus: flo
         Bad position/modulus or a grid too small for the position.
     ConvergenceError
         Newton failed (never returns a partial result).
+    ModelValidityError
+        The result lies far outside the half-space model (contact radius or deformation not small
+        against R; :func:`~viscoforce.problem.check_half_space`).
+
+    Warns
+    -----
+    ModelValidityWarning
+        The contact radius or deformation approaches R (the model degrades).
     """
+    require_instance("problem", problem, ContactProblem)
     position = require_finite("position (h0)", position)
     modulus = (problem.material.relaxed_modulus if modulus is None
                else require_positive("modulus (E)", modulus))
@@ -77,37 +90,19 @@ def static_equilibrium(problem: ContactProblem, position: float, *, modulus: flo
 
 def equilibrium_dataset(problem: ContactProblem, position: float, modulus: float,
                         sol: NewtonResult, threshold: float) -> xr.Dataset:
-    """Package one equilibrium as a Dataset (shared by the static and dynamic entry points)."""
+    """Package one equilibrium as a Dataset (:func:`viscoforce.schema.make_equilibrium`)."""
     base = problem.undeformed_gap(position)
-    deformation = base - sol.gap
     u_center = float(-(2.0 / modulus) * problem.center_row @ sol.pressure)
     h_center = position - u_center
-    a = contact_radius(problem.grid, sol.gap, h_center, threshold)
-    attrs = {k: v for k, v in problem.parameters().items()}
+    attrs = dict(problem.parameters())
     attrs.update({"modulus": modulus, "contact_threshold": threshold,
                   "newton_iterations": sol.iterations, "newton_update_norm": sol.update_norm,
-                  "sign_convention": "u < 0 is flattening; gap = h0 + r^2/2R - u; force > 0 repels"})
-    r = xr.DataArray(problem.grid.r, dims="r", attrs={"units": "m", "long_name": "radial coordinate"})
-
-    def prof(values, units, name):
-        return xr.DataArray(values, dims="r", attrs={"units": units, "long_name": name})
-
-    def scal(value, units, name):
-        return xr.DataArray(value, attrs={"units": units, "long_name": name})
-
-    return xr.Dataset(
-        {
-            "gap": prof(sol.gap, "m", "local surface separation h(r)"),
-            "deformation": prof(deformation, "m", "surface deformation u(r)"),
-            "pressure": prof(sol.pressure, "Pa", "surface pressure p(h(r))"),
-            "undeformed_gap": prof(base, "m", "undeformed separation h0 + r^2/2R"),
-            "position": scal(position, "m", "apex position h0"),
-            "force": scal(float(problem.load(sol.pressure)), "N", "load F"),
-            "force_rigid": scal(problem.rigid_load(position), "N", "load between rigid bodies"),
-            "u_center": scal(u_center, "m", "central deformation u(0)"),
-            "h_center": scal(h_center, "m", "central gap h(0)"),
-            "contact_radius": scal(a, "m", f"radius where the gap < {threshold:g} m"),
-        },
-        coords={"r": r},
-        attrs=attrs,
-    )
+                  "sign_convention": SIGN_CONVENTION})
+    radius = contact_radius(problem.grid, sol.gap, h_center, threshold)
+    check_half_space(problem.sphere.radius, u_center, radius,
+                     where=f"at h0 = {format_quantity(position, 'length')}", stacklevel=4)
+    return make_equilibrium(
+        problem.grid.r, gap=sol.gap, deformation=base - sol.gap, pressure=sol.pressure,
+        undeformed_gap=base, position=position, force=float(problem.load(sol.pressure)),
+        force_rigid=problem.rigid_load(position), u_center=u_center, h_center=h_center,
+        contact_radius=radius, contact_threshold=threshold, attrs=attrs)

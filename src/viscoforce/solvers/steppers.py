@@ -76,6 +76,7 @@ class _Exponential(TimeStepper):
 
     def step(self, state: State, drive: SeparationHistory, dt: float) -> StepOutcome:
         """One implicit exponential step of length ``dt`` [s]."""
+        dt = self.check_step(state, drive, dt)
         problem = self.problem
         n = problem.grid.size
         t_new = state.time + dt
@@ -146,6 +147,7 @@ class ExplicitEuler(TimeStepper):
 
     def step(self, state: State, drive: SeparationHistory, dt: float) -> StepOutcome:
         """One explicit step of length ``dt`` [s]."""
+        dt = self.check_step(state, drive, dt)
         problem = self.problem
         n = problem.grid.size
         limit = self.stability_limit(state)

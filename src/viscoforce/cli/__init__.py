@@ -1,0 +1,136 @@
+"""Command-line interface: ``viscoforce <command> [flags]`` (also ``python -m viscoforce``).
+
+The CLI parses flags (SI or unit-suffixed quantities), calls the public API and prints or writes
+results; it holds no physics. Exit status: 0 success, 2 user error (one message on stderr, no
+traceback), 1 internal error. ``--json`` prints one JSON object in SI units.
+
+Commands are rows of :data:`COMMANDS`: a name, the module of this package that implements it and
+a one-line help. A command module holds a ``SUBCOMMANDS`` mapping, name → (function adding the
+command's flags to its parser, function running the parsed arguments and returning the exit
+status). Only the module of the command being run is imported, so start-up pays for that command
+alone; adding a command is one row here and one entry in its module.
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+import sys
+import traceback
+import warnings
+from collections.abc import Sequence
+from typing import NamedTuple
+
+from viscoforce import __version__
+from viscoforce.cli._args import check_outputs, normalize_negative_args, value_options
+from viscoforce.exceptions import ModelValidityWarning, ViscoforceError
+
+__all__ = ["COMMANDS", "Command", "main"]
+
+
+class Command(NamedTuple):
+    """One row of the command table.
+
+    Attributes
+    ----------
+    name : str
+        The command (``viscoforce <name>``).
+    module : str
+        The module of :mod:`viscoforce.cli` whose ``SUBCOMMANDS[name]`` implements it.
+    help : str
+        The one-line help ``viscoforce --help`` shows.
+    """
+
+    name: str
+    module: str
+    help: str
+
+
+#: The commands, in the order ``viscoforce --help`` lists them.
+COMMANDS: tuple[Command, ...] = (
+    Command("static", "model", "static elastic equilibrium at one position"),
+    Command("simulate", "model", "viscoelastic response along a drive h0(t)"),
+    Command("spectrum", "model", "force spectroscopy: stiffness and phase vs omega"),
+)
+
+_DESCRIPTION = ("Viscoelastic particles with finite-ranged surface forces (SI or unit suffixes: "
+                "-5nm, 10um, 1e9Pa, 0.1ms, 5um/s).")
+
+
+def _requested(argv: Sequence[str]) -> Command | None:
+    """The command named by the first non-option token of ``argv`` (None if there is none)."""
+    for token in argv:
+        if token == "--" or not token.startswith("-"):
+            return next((c for c in COMMANDS if c.name == token), None)
+    return None
+
+
+def _build_parser(command: Command | None) -> tuple[argparse.ArgumentParser,
+                                                    argparse.ArgumentParser | None]:
+    """The parser, with the flags of ``command`` only (the other commands are names and help)."""
+    parser = argparse.ArgumentParser(prog="viscoforce", description=_DESCRIPTION)
+    parser.add_argument("--version", action="version", version=f"viscoforce {__version__}")
+    sub = parser.add_subparsers(dest="command", metavar="command", required=True)
+    selected = None
+    for c in COMMANDS:
+        p = sub.add_parser(c.name, help=c.help, description=c.help)
+        if c is command:
+            module = importlib.import_module(f"{__name__}.{c.module}")
+            add_arguments, run = module.SUBCOMMANDS[c.name]
+            add_arguments(p)
+            p.set_defaults(run_=run)
+            selected = p
+    return parser, selected
+
+
+def _message(exc: BaseException) -> str:
+    if isinstance(exc, OSError) and exc.strerror and exc.filename is not None:
+        return f"{exc.strerror}: {exc.filename}"
+    return str(exc)
+
+
+def _run(args: argparse.Namespace) -> int:
+    name = args.command
+
+    def show(message, category, filename, lineno, file=None, line=None):  # noqa: ARG001
+        print(f"viscoforce {name}: warning: {message}", file=sys.stderr)
+
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("always", ModelValidityWarning)  # shown once per result, not raised
+            warnings.showwarning = show
+            check_outputs(args)
+            return int(args.run_(args))
+    except (ViscoforceError, OSError) as exc:
+        print(f"viscoforce {name}: error: {_message(exc)}", file=sys.stderr)
+        return 2
+    except Exception as exc:  # a bug: say so, with the traceback for the report
+        print(f"viscoforce {name}: internal error ({type(exc).__name__}: {exc}); please report "
+              "it with the traceback below", file=sys.stderr)
+        traceback.print_exc()
+        return 1
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Run the command line; return the exit status.
+
+    Parameters
+    ----------
+    argv : sequence of str, optional
+        The arguments without the program name (default ``sys.argv[1:]``).
+
+    Returns
+    -------
+    int
+        0 success (also ``--help`` and ``--version``), 2 user error (a bad flag or value, a file
+        that cannot be read or written, any :class:`~viscoforce.exceptions.ViscoforceError`:
+        one message on stderr, no traceback), 1 internal error (message and traceback).
+    """
+    argv = list(sys.argv[1:] if argv is None else argv)
+    parser, selected = _build_parser(_requested(argv))
+    single, multi = value_options(parser, *([selected] if selected is not None else []))
+    try:
+        args = parser.parse_args(normalize_negative_args(argv, single, multi))
+    except SystemExit as exc:  # argparse printed the help, the version or its error message
+        return 0 if exc.code is None else exc.code if isinstance(exc.code, int) else 2
+    return _run(args)

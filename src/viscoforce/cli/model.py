@@ -1,0 +1,395 @@
+"""Model commands: ``static``, ``simulate`` and ``spectrum`` (the solver side of the CLI).
+
+Each command is a pair in :data:`SUBCOMMANDS`: a function that adds its flags to a parser and a
+function that runs it on the parsed arguments (returning the exit status). The library is
+imported inside the run functions, so that building a parser (``--help``) stays cheap and each
+command loads only what it uses.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from typing import TYPE_CHECKING
+
+from viscoforce._limits import MAX_SAMPLES
+from viscoforce.cli._args import (
+    FIGURE,
+    MATERIAL_FLAGS,
+    NETCDF,
+    NUMERICS_FLAGS,
+    SYSTEM_FLAGS,
+    Flag,
+    FlagGroup,
+    OmegaList,
+    OmegaRange,
+    Output,
+    UsageError,
+    add_flags,
+    add_outputs,
+    integer_type,
+    quantity_type,
+    real_type,
+)
+from viscoforce.cli._output import print_json, print_table, print_written
+from viscoforce.physics.materials import Elastic, PronySeries, StandardLinearSolid
+from viscoforce.physics.paper import PAPER, paper_pressure_law
+
+if TYPE_CHECKING:
+    from viscoforce._typing import SeparationHistory
+    from viscoforce.physics.materials import ViscoelasticMaterial
+    from viscoforce.problem import ContactProblem
+
+__all__ = ["SUBCOMMANDS", "material_from_args", "problem_from_args"]
+
+_JSON = "print one JSON object (SI units)"
+_PROGRESS = "progress bar (default: when stderr is a terminal)"
+
+
+# ── from flags to library objects (shared by the commands) ───────────────────────────────────────
+
+def material_from_args(args: argparse.Namespace) -> ViscoelasticMaterial:
+    """The material of the :data:`~viscoforce.cli._args.MATERIAL_FLAGS` (default: the paper's).
+
+    Raises
+    ------
+    UsageError
+        If more than one material is given.
+    """
+    sls = (args.E0, args.E_inf, args.tau)
+    given = [name for name, v in (("--E", args.E), ("--prony", args.prony)) if v is not None]
+    if any(v is not None for v in sls):
+        given.append("--E0/--E-inf/--tau")
+    if len(given) > 1:
+        raise UsageError(f"give one material: {' or '.join(given)} were all given")
+    if args.E is not None:
+        return Elastic(args.E)
+    if args.prony is not None:
+        from viscoforce.io.tables import read_prony_moduli
+
+        return PronySeries.from_moduli(*read_prony_moduli(args.prony))
+    defaults = (PAPER.E0, PAPER.E_inf, PAPER.tau)
+    e0, e_inf, tau = (d if v is None else v for v, d in zip(sls, defaults, strict=True))
+    return StandardLinearSolid(E0=e0, E_inf=e_inf, tau=tau)
+
+
+def problem_from_args(args: argparse.Namespace, material: ViscoelasticMaterial,
+                      deepest: float) -> ContactProblem:
+    """The contact problem of the system and numerics flags, sized for ``deepest`` [m]."""
+    from viscoforce.physics.particle import Sphere
+    from viscoforce.problem import ContactProblem
+
+    law = paper_pressure_law(args.P, args.debye_length, args.Pw, args.z0)
+    return ContactProblem.create(sphere=Sphere(args.R), surface_force=law, material=material,
+                                 deepest_position=deepest, grid_spacing=args.grid_spacing,
+                                 outer_radius=args.outer_radius)
+
+
+def _save_figure(handle, path: str) -> None:
+    import matplotlib.pyplot as plt
+
+    try:
+        handle.figure.savefig(path, dpi=120, bbox_inches="tight")
+    finally:
+        plt.close(handle.figure)
+
+
+# ── static ───────────────────────────────────────────────────────────────────────────────────────
+
+STATIC_FLAGS = FlagGroup(None, (
+    Flag("--h0", "length", None, "LENGTH",
+         "apex position h0 (may be negative, e.g. --h0=-5nm or --h0 -5nm)", required=True),
+    Flag("--E", "pressure", None, "PRESSURE",
+         "elastic modulus E in the paper's convention (2/E = sum (1-nu^2)/E_i)", required=True),
+    Flag("--contact-threshold", "length", None, "LENGTH",
+         "gap below which surfaces count as in contact (default 1/kappa)"),
+))
+
+
+def add_static(parser: argparse.ArgumentParser) -> None:
+    """Flags of ``viscoforce static``."""
+    add_flags(parser, STATIC_FLAGS)
+    add_outputs(parser, [Output("--out", NETCDF, "FILE.nc", "write the profiles (netCDF)")])
+    parser.add_argument("--json", action="store_true", help=_JSON)
+    add_flags(parser, SYSTEM_FLAGS)
+    add_flags(parser, NUMERICS_FLAGS)
+
+
+def run_static(args: argparse.Namespace) -> int:
+    """Static elastic equilibrium at ``--h0``; prints the loads, deformation, contact radius."""
+    from viscoforce.solvers.static import static_equilibrium
+
+    problem = problem_from_args(args, Elastic(args.E), args.h0)
+    ds = static_equilibrium(problem, args.h0, contact_threshold=args.contact_threshold)
+    if args.out:
+        ds.to_netcdf(args.out, engine="scipy")
+    result = {
+        "h0": float(ds.position),
+        "force": float(ds.force),
+        "force_rigid": float(ds.force_rigid),  # +inf where the undeformed bodies overlap: null
+        "u_center": float(ds.u_center),
+        "h_center": float(ds.h_center),
+        "contact_radius": float(ds.contact_radius),
+        "newton_iterations": int(ds.attrs["newton_iterations"]),
+        "grid_nodes": int(problem.grid.size),
+    }
+    if args.json:
+        print_json(result)
+        return 0
+    print_table([
+        ("position h0", result["h0"], "length"),
+        ("load F", result["force"], "force"),
+        ("rigid load", result["force_rigid"], "force"),
+        ("central deformation u(0)", result["u_center"], "length"),
+        ("central gap h(0)", result["h_center"], "length"),
+        ("contact radius", result["contact_radius"], "length"),
+    ])
+    print(f"({result['newton_iterations']} Newton iterations on {result['grid_nodes']} nodes)")
+    print_written(args.out)
+    return 0
+
+
+# ── simulate ─────────────────────────────────────────────────────────────────────────────────────
+
+DRIVE_FLAGS = FlagGroup("drive", (
+    Flag("--from", "length", None, "LENGTH", "start position (step, ramp) or top (triangle)",
+         dest="from_"),
+    Flag("--to", "length", None, "LENGTH",
+         "end position (step, ramp) or turning point (triangle)"),
+    Flag("--duration", "time", None, "TIME", "ramp duration, or step rise time (default 0.1ms)"),
+    Flag("--speed", "speed", None, "SPEED", "drive speed (ramp, triangle), e.g. 5um/s"),
+    Flag("--h0", "length", None, "LENGTH", "sine mean position"),
+    Flag("--eta", "length", None, "LENGTH", "sine amplitude"),
+    Flag("--omega", "angular_frequency", None, "FREQ",
+         "sine angular frequency (rad/s, or e.g. 100Hz)"),
+    Flag("--periods", real_type(1.0), 10.0, "N", "sine periods, a finite number >= 1 (default 10)"),
+    Flag("--trace", None, None, "FILE.csv",
+         "measured trace: CSV with 'time (s)' and 'position (nm)' columns"),
+))
+
+SIMULATE_FLAGS = FlagGroup(None, (
+    Flag("--t-end", "time", None, "TIME", "total simulated time (default: drive end plus 5 tau)"),
+    Flag("--samples", integer_type(2, MAX_SAMPLES, what="output samples"), 401, "N",
+         "output samples, an integer >= 2 (default 401)"),
+    Flag("--profiles", integer_type(0), 0, "K",
+         "store h(r), u(r), p(r) every K-th sample in --out (0: none)"),
+    Flag("--dt", "time", None, "TIME",
+         "fixed time step (default: adaptive; euler: 0.1 tau E_inf/E0)"),
+    Flag("--tol", "length", None, "LENGTH",
+         "local error tolerance of adaptive steps (default 1e-5 debye lengths)"),
+))
+
+
+def add_simulate(parser: argparse.ArgumentParser) -> None:
+    """Flags of ``viscoforce simulate``."""
+    from viscoforce.solvers.steppers import DEFAULT_METHOD, METHODS
+
+    parser.add_argument("--drive", required=True, choices=["step", "ramp", "triangle", "sine",
+                                                           "trace"])
+    add_flags(parser, SIMULATE_FLAGS)
+    parser.add_argument("--method", default=DEFAULT_METHOD, choices=sorted(METHODS),
+                        help=f"time stepper (default {DEFAULT_METHOD})")
+    add_outputs(parser, [
+        Output("--out", NETCDF, "FILE.nc", "write the dataset (netCDF)"),
+        Output("--plot", FIGURE, "FILE.png", "write the force-position (hysteresis) plot"),
+    ])
+    parser.add_argument("--progress", action=argparse.BooleanOptionalAction, default=None,
+                        help=_PROGRESS)
+    parser.add_argument("--json", action="store_true", help=_JSON)
+    add_flags(parser, DRIVE_FLAGS)
+    add_flags(parser, MATERIAL_FLAGS)
+    add_flags(parser, SYSTEM_FLAGS)
+    add_flags(parser, NUMERICS_FLAGS)
+
+
+def drive_from_args(args: argparse.Namespace) -> SeparationHistory:
+    """The drive of ``--drive`` and the drive flags.
+
+    Raises
+    ------
+    UsageError
+        If a flag the drive needs is missing.
+    """
+    from viscoforce.experiments.drives import MeasuredTrace, Ramp, Sinusoid, Step, Triangle
+
+    kind = args.drive
+
+    def need(*names: str) -> None:
+        missing = [f"--{n.replace('_', '-').rstrip('-')}" for n in names
+                   if getattr(args, n) is None]
+        if missing:
+            raise UsageError(f"--drive {kind} needs {', '.join(missing)}")
+
+    if kind in ("step", "ramp"):
+        need("from_", "to")
+        if kind == "step":
+            return Step(args.from_, args.to, 1e-4 if args.duration is None else args.duration)
+        if args.duration is not None:
+            return Ramp(args.from_, args.to, args.duration)
+        need("speed")
+        return Ramp.from_speed(args.from_, args.to, args.speed)
+    if kind == "triangle":
+        need("from_", "to", "speed")
+        return Triangle(args.from_, args.to, args.speed)
+    if kind == "sine":
+        need("h0", "eta", "omega")
+        return Sinusoid(args.h0, args.eta, args.omega, periods=args.periods)
+    need("trace")
+    from viscoforce.io.tables import read_trace
+
+    time, position = read_trace(args.trace)
+    return MeasuredTrace(time, position)
+
+
+def run_simulate(args: argparse.Namespace) -> int:
+    """Viscoelastic response along the drive; prints a summary, writes --out and --plot."""
+    import numpy as np
+
+    from viscoforce.solvers.simulate import default_end_time, simulate
+
+    drive = drive_from_args(args)
+    material = material_from_args(args)
+    problem = problem_from_args(args, material, float(drive.extent()[0]))
+    t_end = default_end_time(problem, drive) if args.t_end is None else args.t_end
+    t_eval = np.linspace(0.0, t_end, args.samples)
+    ds = simulate(problem, drive, t_end=t_end, t_eval=t_eval, stepper=args.method, dt=args.dt,
+                  tol=args.tol, profiles=args.profiles, progress=args.progress)
+    if args.out:
+        ds.to_netcdf(args.out, engine="scipy")
+    if args.plot:
+        from viscoforce.plotting import hysteresis_plot
+
+        handle = hysteresis_plot(ds, label=f"{type(material).__name__}")
+        handle.ax.set_title(str(ds.attrs["drive"]), fontsize="small")
+        _save_figure(handle, args.plot)
+    settings = dict(ds.attrs)
+    if args.json:
+        print_json({name: ds[name].values for name in ("time", "position", "force", "u_center",
+                                                        "contact_radius")} | {"settings": settings})
+        return 0
+    print(f"{settings['drive']}; {type(material).__name__}; stepper {settings['stepper']}: "
+          f"{settings['steps']} steps ({settings['rejected_steps']} rejected), "
+          f"{settings['newton_iterations']} Newton iterations")
+    i = int(np.argmax(ds.force.values))
+    print_table([
+        ("peak force", float(ds.force[i]), "force"),
+        ("at position", float(ds.position[i]), "length"),
+        ("final force", float(ds.force[-1]), "force"),
+        ("final u(0)", float(ds.u_center[-1]), "length"),
+        ("max contact radius", float(ds.contact_radius.max()), "length"),
+    ])
+    print_written(args.out, args.plot)
+    return 0
+
+
+# ── spectrum ─────────────────────────────────────────────────────────────────────────────────────
+
+SPECTRUM_FLAGS = FlagGroup(None, (
+    Flag("--h0", "length", None, "LENGTH", "mean position", required=True),
+    Flag("--eta", "length", None, "LENGTH", "drive amplitude eta", required=True),
+))
+
+TIME_DOMAIN_FLAGS = FlagGroup("time-domain method", (
+    Flag("--periods", integer_type(1), 4, "N",
+         "demodulated periods after settling (default 4)"),
+    Flag("--jobs", integer_type(1), 1, "N", "worker processes (default 1)"),
+))
+
+
+def add_spectrum(parser: argparse.ArgumentParser) -> None:
+    """Flags of ``viscoforce spectrum``."""
+    add_flags(parser, SPECTRUM_FLAGS)
+    parser.add_argument("--omega", type=quantity_type("angular_frequency"), nargs="+",
+                        action=OmegaList, default=None, metavar="FREQ",
+                        help="angular frequencies (rad/s, or with Hz/kHz)")
+    parser.add_argument("--omega-range", nargs=3, action=OmegaRange, default=None,
+                        metavar=("LO", "HI", "N"),
+                        help="N log-spaced frequencies from LO to HI (N a plain integer >= 1)")
+    parser.add_argument("--method", default="linear",
+                        choices=["linear", "time-domain", "svda", "auto"],
+                        help="exact frequency-domain (default), time-domain simulation + "
+                             "lock-in, SVDA closed form, or auto (cheapest adequate)")
+    add_outputs(parser, [
+        Output("--out", NETCDF, "FILE.nc", "write the spectrum (netCDF)"),
+        Output("--plot", FIGURE, "FILE.png", "write a Bode plot"),
+    ])
+    parser.add_argument("--progress", action=argparse.BooleanOptionalAction, default=None,
+                        help=_PROGRESS)
+    parser.add_argument("--json", action="store_true", help=_JSON)
+    add_flags(parser, TIME_DOMAIN_FLAGS)
+    add_flags(parser, MATERIAL_FLAGS)
+    add_flags(parser, SYSTEM_FLAGS)
+    add_flags(parser, NUMERICS_FLAGS)
+
+
+def _omega(args: argparse.Namespace):
+    import numpy as np
+
+    if (args.omega is None) == (args.omega_range is None):
+        raise UsageError("give either --omega W [W ...] or --omega-range LO HI N")
+    if args.omega is not None:
+        return np.array(args.omega, dtype=float)
+    lo, hi, n = args.omega_range  # validated (and n bounded) by OmegaRange
+    return np.geomspace(lo, hi, n)
+
+
+def _linear_note(problem: ContactProblem, eta: float) -> str:
+    """A warning when ``--method linear`` is used where ``auto`` would not choose it."""
+    from viscoforce.experiments.spectroscopy import choose_spectrum_method
+
+    chosen, reason = choose_spectrum_method(problem, eta)
+    if chosen == "linear":
+        return ""
+    return (f"note: {reason.split(':')[0]}: the small-amplitude spectrum may differ from the "
+            "finite-amplitude response by several percent; use --method time-domain")
+
+
+def _print_spectrum(result: dict) -> None:
+    if result.get("explanation"):
+        print(f"method {result['method']}: {result['explanation']}")
+    print(f"{'omega [rad/s]':>14} {'stiffness [N/m]':>16} {'amplitude a':>12} {'phase [deg]':>12}"
+          f" {'mean force [N]':>15}")
+    for row in zip(result["omega"], result["stiffness"], result["amplitude"],
+                   result["phase_deg"], result["mean_force"], strict=True):
+        print(f"{row[0]:14.5g} {row[1]:16.6g} {row[2]:12.6g} {row[3]:12.4f} {row[4]:15.6g}")
+
+
+def run_spectrum(args: argparse.Namespace) -> int:
+    """Force spectrum by the chosen method (``auto``: the library's choice, with its reason)."""
+    from viscoforce.experiments.spectroscopy import spectrum
+
+    omega = _omega(args)
+    problem = problem_from_args(args, material_from_args(args), args.h0 - args.eta)
+    note = _linear_note(problem, args.eta) if args.method == "linear" else ""
+    options = {}
+    if args.method in ("time-domain", "auto"):  # auto drops them unless it simulates
+        options = {"n_jobs": args.jobs, "progress": args.progress, "periods": args.periods}
+    ds = spectrum(problem, args.h0, args.eta, omega, method=args.method, **options)
+    if args.out:
+        ds.to_netcdf(args.out, engine="scipy")
+    if args.plot:
+        from viscoforce.plotting import bode_plot
+
+        _save_figure(bode_plot(ds), args.plot)
+    result = {"omega": ds.omega.values.tolist(), "amplitude": ds.amplitude.values.tolist(),
+              "stiffness": ds.stiffness.values.tolist(), "phase_deg": ds.phase.values.tolist(),
+              "mean_force": ds.mean_force.values.tolist(), "method": str(ds.attrs["method"])}
+    if ds.attrs.get("explanation"):
+        result["explanation"] = str(ds.attrs["explanation"])
+    if note:
+        result["note"] = note
+        print(f"viscoforce spectrum: {note}", file=sys.stderr)
+    if args.json:
+        print_json(result)
+        return 0
+    _print_spectrum(result)
+    print_written(args.out, args.plot)
+    return 0
+
+
+#: The commands of this module: name → (add the flags to a parser, run the parsed arguments).
+SUBCOMMANDS = {
+    "static": (add_static, run_static),
+    "simulate": (add_simulate, run_simulate),
+    "spectrum": (add_spectrum, run_spectrum),
+}

@@ -1,0 +1,578 @@
+"""Native reader of JPK ``.jpk-force`` / ``.jpk-force-map`` archives and of zips of them.
+
+An archive is a zip of Java properties headers and big-endian raw channels: ``header.properties``,
+``shared-data/header.properties`` (calibrations ``lcd-info.<L>.*`` and segment settings
+``force-segment-header-info.<N>.*`` that segment headers refer to), and per segment
+``[index/<n>/]segments/<s>/segment-header.properties`` plus ``channels/<channel>.dat``. Older
+archives keep the calibration in the segment header (``channel.<ch>.data.encoder.*``); both work.
+
+Decoding, in SI at this boundary: raw -> ``encoder.scaling`` -> base slot (V, or m for the height
+sensors) -> each ``conversion-set`` slot up to the wanted one, following ``base-calibration-slot``.
+Channels: ``vDeflection`` [m] (slot ``distance``), ``force`` [N] (slot ``force``), ``height`` [m]
+(piezo, slot ``calibrated``), ``measuredHeight`` / ``strainGaugeHeight`` / ``capacitiveSensorHeight``
+[m] (slot ``nominal``); any other channel in its default slot if defined, else its base slot, unit
+in :attr:`JPKSegment.units`. Signs are the file's: height grows away from the sample, deflection
+and force are positive for repulsion; nothing is baseline-corrected. The file is opened read-only
+and never modified; curves are decoded one at a time, on request.
+"""
+
+from __future__ import annotations
+
+import io
+import operator
+import re
+import zipfile
+import zlib
+from collections.abc import Iterator
+from contextlib import contextmanager
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from viscoforce._typing import FloatArray
+from viscoforce.exceptions import InstrumentFormatError
+from viscoforce.io._properties import (
+    HeaderError,
+    convert,
+    encoder_prefix,
+    get,
+    group_blocks,
+    number,
+    parse_properties,
+    require_linear,
+    resolve_references,
+    slot_unit,
+)
+
+__all__ = ["InstrumentFormatError", "JPKArchive", "JPKCurve", "JPKGrid", "JPKModulation", "JPKSegment",
+           "read_jpk"]
+
+
+#: encoder.type -> big-endian numpy dtype of the raw samples
+_ENCODERS = {"signedshort": ">i2", "unsignedshort": ">u2", "signedinteger": ">i4",
+             "unsignedinteger": ">u4", "signedlong": ">i8", "float": ">f4", "double": ">f8"}
+#: lcd-info type of channels stored without an encoder (already in the base unit)
+_UNENCODED = {"float-data": ">f4", "double-data": ">f8"}
+#: channel in the file -> (name in JPKSegment.channels, calibration slot, SI unit) it yields
+_SI_SLOTS = {
+    "vDeflection": (("vDeflection", "distance", "m"), ("force", "force", "N")),
+    "height": (("height", "calibrated", "m"),),
+    "measuredHeight": (("measuredHeight", "nominal", "m"),),
+    "strainGaugeHeight": (("strainGaugeHeight", "nominal", "m"),),
+    "capacitiveSensorHeight": (("capacitiveSensorHeight", "nominal", "m"),),
+}
+_KINDS = {"force-scan-series": "force", "force-scan-map": "force-map"}
+_JPK_SUFFIXES = (".jpk-force", ".jpk-force-map")
+_SHARED = "shared-data/header.properties"
+_SEG = "force-segment-header."
+_SETTINGS = "force-segment-header.settings.segment-settings."
+_POSITION = "force-scan-series.header.position."
+_COUNT = "force-scan-series.force-segments.count"
+_GRID = "force-scan-map.position-pattern.grid."
+#: [index/<n>/]header.properties and [index/<n>/]segments/<s>/segment-header.properties
+_HEADER = re.compile(r"^((?:index/\d+/)?)(?:segments/(\d+)/segment-)?header\.properties$")
+_ZIP_ERRORS = (zipfile.BadZipFile, zipfile.LargeZipFile, zlib.error, EOFError, NotImplementedError)
+
+
+@dataclass(frozen=True)
+class JPKGrid:
+    """Position grid of a force map (``force-scan-map.position-pattern.grid.*``).
+
+    Parameters
+    ----------
+    ilength, jlength : int
+        Number of points along the fast (u) and slow (v) axes.
+    ulength, vlength : float
+        Side lengths of the scanned area [m].
+    xcenter, ycenter : float
+        Centre of the area in the scanner's frame [m].
+    """
+
+    ilength: int
+    jlength: int
+    ulength: float
+    vlength: float
+    xcenter: float
+    ycenter: float
+
+
+@dataclass(frozen=True)
+class JPKModulation:
+    """Nominal drive of a modulation segment (``settings.segment-settings.*``).
+
+    Parameters
+    ----------
+    frequency : float
+        Drive frequency [Hz].
+    amplitude : float
+        Nominal piezo drive amplitude [m]; the calibrated piezo and the height sensor move less.
+    start_phase : float or None
+        ``start-phase`` as the file gives it; the file states no unit (0.0 in every file seen).
+        None when the file does not give it.
+    """
+
+    frequency: float
+    amplitude: float
+    start_phase: float | None
+
+
+@dataclass(frozen=True, eq=False)
+class JPKSegment:
+    """One segment of a force curve, in SI.
+
+    Parameters
+    ----------
+    index : int
+        Segment number in the curve (0, 1, ...).
+    style : str
+        ``settings.style`` as the file says: ``extend``, ``retract``, ``pause``, ``modulation``.
+    type : str
+        ``settings.segment-settings.type``, e.g. ``z-extend-height``, ``constant-force-pause``,
+        ``sine-z-modulation-segment-settings``; classify segments by this, not by position.
+    start_time : float
+        Sum of the earlier segments' durations [s].
+    duration : float
+        Actual duration ``force-segment-header.duration`` [s].
+    num_points : int
+        Actual number of samples ``force-segment-header.num-points``.
+    channels : dict of str to ndarray
+        SI samples (see the module docstring): ``force`` [N], ``vDeflection`` [m], ``height`` [m], ...
+    units : dict of str to str
+        Unit of each channel as the file names it (``N``, ``m``, or ``V`` for uncalibrated ones).
+    time : ndarray
+        ``start_time + i * duration / num_points`` [s].
+    modulation : JPKModulation or None
+        Drive of a modulation segment, else None.
+    baseline : float or None
+        ``baseline.baseline`` (free-cantilever deflection [V]) converted to force [N]; None when not
+        measured or the segment has no vDeflection. Not subtracted from ``force``.
+    settings : dict of str to str
+        The segment header with its shared-data references resolved.
+    """
+
+    index: int
+    style: str
+    type: str
+    start_time: float
+    duration: float
+    num_points: int
+    channels: dict[str, FloatArray]
+    units: dict[str, str]
+    time: FloatArray
+    modulation: JPKModulation | None
+    baseline: float | None
+    settings: dict[str, str] = field(repr=False)
+
+
+@dataclass(frozen=True, eq=False)
+class JPKCurve:
+    """One force curve: its segments in time order and its cantilever calibration.
+
+    Parameters
+    ----------
+    index : int
+        Position of the curve in the archive (0 ... n_curves - 1).
+    source : str
+        Where it lives: ``""`` (a single curve), ``"index/<n>/"`` (a map), prefixed by
+        ``"<member>!"`` inside a zip of archives.
+    x, y : float
+        Position ``force-scan-series.header.position.{x,y}`` [m]; NaN when the file gives none.
+    segments : tuple of JPKSegment
+        The segments, ``segments[k].index == k``.
+    spring_constant : float
+        Cantilever spring constant [N/m]: the vDeflection ``force`` slot multiplier.
+    sensitivity : float
+        Deflection sensitivity [m/V]: the vDeflection ``distance`` slot multiplier.
+    metadata : dict of str to str
+        The curve header (``index/<n>/header.properties`` in a map).
+    """
+
+    index: int
+    source: str
+    x: float
+    y: float
+    segments: tuple[JPKSegment, ...]
+    spring_constant: float
+    sensitivity: float
+    metadata: dict[str, str] = field(repr=False)
+
+
+@dataclass(frozen=True)
+class _Where:
+    """File (``label``) and archive member an error message names."""
+
+    label: str
+    member: str | None = None
+
+    def at(self, member: str) -> _Where:
+        return _Where(self.label, member)
+
+    def error(self, what: str) -> InstrumentFormatError:
+        place = f"{self.label}: {self.member}" if self.member else self.label
+        return InstrumentFormatError(f"{place}: {what}")
+
+
+@dataclass(frozen=True)
+class _Layout:
+    """The curves of one JPK archive (the file itself, or ``member`` of a zip of archives)."""
+
+    where: _Where
+    member: str | None
+    kind: str
+    header: dict[str, str]
+    blocks: dict[str, dict[str, str]]
+    curves: tuple[tuple[str, tuple[int, ...]], ...]  # (curve directory, segment numbers)
+
+
+@dataclass(frozen=True, eq=False)
+class JPKArchive:
+    """A JPK archive opened by :func:`read_jpk`; curves are decoded on request.
+
+    Parameters
+    ----------
+    path : Path
+        The file.
+    kind : str
+        ``"force"`` (one curve), ``"force-map"``, or ``"zip"`` (a zip of such archives).
+    n_curves : int
+        Number of curves.
+    grid : JPKGrid or None
+        The map's grid (None for single curves, zips and non-grid maps).
+    metadata : dict of str to str
+        The top-level ``header.properties`` (empty for a zip of archives).
+    """
+
+    path: Path
+    kind: str
+    n_curves: int
+    grid: JPKGrid | None
+    metadata: dict[str, str] = field(repr=False)
+    _layouts: tuple[_Layout, ...] = field(repr=False, default=())
+
+    def curve(self, i: int) -> JPKCurve:
+        """Decode curve ``i`` (0 <= i < n_curves; negative counts from the end).
+
+        Parameters
+        ----------
+        i : int
+            Curve index.
+
+        Returns
+        -------
+        JPKCurve
+            The decoded curve.
+
+        Raises
+        ------
+        IndexError
+            If ``i`` is out of range.
+        InstrumentFormatError
+            If the curve's members are missing, corrupt or inconsistent.
+        """
+        i = operator.index(i)
+        if not -self.n_curves <= i < self.n_curves:
+            raise IndexError(f"curve index {i} out of range for {self.n_curves} curves in {self.path}")
+        owners = [(layout, local) for layout in self._layouts for local in range(len(layout.curves))]
+        layout, local = owners[i]
+        with _open_layout(self.path, layout) as zf:
+            return _read_curve(zf, layout, local, i % self.n_curves)
+
+    def curves(self) -> Iterator[JPKCurve]:
+        """Decode the curves one after the other (the file stays open while iterating).
+
+        Yields
+        ------
+        JPKCurve
+            Curve 0, 1, ... n_curves - 1.
+        """
+        i = 0
+        for layout in self._layouts:
+            with _open_layout(self.path, layout) as zf:
+                for local in range(len(layout.curves)):
+                    yield _read_curve(zf, layout, local, i)
+                    i += 1
+
+
+def read_jpk(path: str | Path) -> JPKArchive:
+    """Open a ``.jpk-force`` / ``.jpk-force-map`` archive, or a zip of them, read-only.
+
+    Only the headers and the member list are read here; :meth:`JPKArchive.curve` decodes a curve.
+
+    Parameters
+    ----------
+    path : str or Path
+        The file.
+
+    Returns
+    -------
+    JPKArchive
+        Kind, number of curves, grid and top-level header.
+
+    Raises
+    ------
+    InstrumentFormatError
+        If the file is missing, empty, truncated or corrupt, is not a JPK force archive, or is a
+        zip without a JPK member; the message names the file, the member and what is wrong.
+    """
+    path = Path(path)
+    where = _Where(str(path))
+    if not path.is_file():
+        raise where.error("no such file")
+    with _open_zip(path, where) as zf:
+        if "header.properties" in zf.namelist():
+            layouts = (_scan(zf, where, None),)
+        else:
+            layouts = _scan_zip(zf, where)
+    if len(layouts) == 1 and layouts[0].member is None:
+        kind, metadata = layouts[0].kind, layouts[0].header
+        with _located(where.at("header.properties")):
+            grid = _grid(metadata) if kind == "force-map" else None
+    else:
+        kind, metadata, grid = "zip", {}, None
+    return JPKArchive(path=path, kind=kind, n_curves=sum(len(layout.curves) for layout in layouts),
+                      grid=grid, metadata=metadata, _layouts=layouts)
+
+
+# ── archive access ──────────────────────────────────────────────────────────────────────────
+
+
+@contextmanager
+def _open_zip(source: Path | io.BytesIO, where: _Where) -> Iterator[zipfile.ZipFile]:
+    """Open a zip read-only; a bad one raises InstrumentFormatError (only the opening is guarded)."""
+    try:
+        zf = zipfile.ZipFile(source, mode="r")
+    except (*_ZIP_ERRORS, ValueError) as exc:
+        size = source.stat().st_size if isinstance(source, Path) else len(source.getbuffer())
+        what = "is empty (0 bytes)" if size == 0 else f"is not a readable zip archive ({exc})"
+        raise where.error(f"{what}; a JPK archive is a zip file — is it truncated or corrupt?") from None
+    with zf:
+        yield zf
+
+
+@contextmanager
+def _open_layout(path: Path, layout: _Layout) -> Iterator[zipfile.ZipFile]:
+    """The zip holding ``layout``'s members: the file itself or a member of it."""
+    with _open_zip(path, _Where(str(path))) as outer:
+        if layout.member is None:
+            yield outer
+            return
+        data = _read_member(outer, layout.member, _Where(str(path)))
+    with _open_zip(io.BytesIO(data), layout.where) as inner:
+        yield inner
+
+
+def _read_member(zf: zipfile.ZipFile, name: str, where: _Where) -> bytes:
+    try:
+        return zf.read(name)
+    except KeyError:
+        raise where.at(name).error("missing from the archive") from None
+    except (*_ZIP_ERRORS, OSError) as exc:
+        raise where.at(name).error(f"cannot be read ({exc}); the archive is truncated or corrupt") from None
+
+
+def _read_props(zf: zipfile.ZipFile, name: str, where: _Where,
+                blocks: dict[str, dict[str, str]] | None = None) -> dict[str, str]:
+    """Parse header ``name``, resolving its shared-data references when ``blocks`` is given."""
+    data = _read_member(zf, name, where)
+    try:
+        props = parse_properties(data)
+        return resolve_references(props, blocks) if blocks is not None else props
+    except HeaderError as exc:
+        raise where.at(name).error(str(exc)) from None
+
+
+def _scan(zf: zipfile.ZipFile, where: _Where, member: str | None) -> _Layout:
+    """Kind, headers and curve/segment directories of one archive (nothing is decoded)."""
+    header = _read_props(zf, "header.properties", where)
+    kind = _KINDS.get(header.get("type", ""))
+    if kind is None:
+        raise where.at("header.properties").error(
+            f"type={header.get('type')!r} is not a JPK force curve or force map "
+            f"(expected one of {', '.join(_KINDS)})")
+    names = zf.namelist()
+    blocks = group_blocks(_read_props(zf, _SHARED, where)) if _SHARED in names else {}
+    segments: dict[str, set[int]] = {}
+    for found in filter(None, map(_HEADER.match, names)):
+        segments.setdefault(found.group(1), set()).update(
+            () if found.group(2) is None else (int(found.group(2)),))
+    dirs = [""] if kind == "force" else sorted(filter(None, segments), key=lambda d: int(d[6:-1]))
+    if not dirs:
+        raise where.error("the force map holds no curve (no index/<n>/header.properties)")
+    curves = tuple((d, _contiguous(segments.get(d, set()), where.at(d + "segments/"))) for d in dirs)
+    return _Layout(where=where, member=member, kind=kind, header=header, blocks=blocks, curves=curves)
+
+
+def _contiguous(numbers: set[int], where: _Where) -> tuple[int, ...]:
+    ordered = tuple(sorted(numbers))
+    if ordered != tuple(range(len(ordered))) or not ordered:
+        missing = sorted(set(range(max(ordered, default=0) + 1)) - numbers)
+        raise where.error(f"segment(s) {missing} missing (found {list(ordered)})")
+    return ordered
+
+
+def _scan_zip(zf: zipfile.ZipFile, where: _Where) -> tuple[_Layout, ...]:
+    members = [n for n in zf.namelist()
+               if n.lower().endswith(_JPK_SUFFIXES) and not n.startswith("__MACOSX/")]
+    if not members:
+        raise where.error("neither a JPK archive (no header.properties) nor a zip of "
+                          ".jpk-force / .jpk-force-map archives (no such member)")
+    layouts = []
+    for member in members:
+        inner_where = _Where(f"{where.label}!{member}")
+        with _open_zip(io.BytesIO(_read_member(zf, member, where)), inner_where) as inner:
+            if "header.properties" not in inner.namelist():
+                raise inner_where.error("not a JPK archive (no header.properties)")
+            layouts.append(_scan(inner, inner_where, member))
+    return tuple(layouts)
+
+
+# ── curves and segments ─────────────────────────────────────────────────────────────────────
+
+
+@contextmanager
+def _located(where: _Where) -> Iterator[None]:
+    """Turn a HeaderError raised inside the block into an InstrumentFormatError naming ``where``."""
+    try:
+        yield
+    except HeaderError as exc:
+        raise where.error(str(exc)) from None
+
+
+def _read_curve(zf: zipfile.ZipFile, layout: _Layout, local: int, index: int) -> JPKCurve:
+    curve_dir, numbers = layout.curves[local]
+    header = (layout.header if not curve_dir
+              else _read_props(zf, f"{curve_dir}header.properties", layout.where, layout.blocks))
+    with _located(where := layout.where.at(f"{curve_dir}header.properties")):
+        count = number(header, _COUNT, int, default=str(len(numbers)))
+        x, y = (number(header, _POSITION + axis, default="nan") for axis in "xy")
+    if count != len(numbers):
+        raise where.error(f"{_COUNT}={count} but the archive holds {len(numbers)} segment(s): "
+                          "truncated or incomplete archive")
+    segments: list[JPKSegment] = []
+    start = 0.0
+    for s in numbers:
+        segments.append(_read_segment(zf, layout, f"{curve_dir}segments/{s}/", s, start))
+        start += segments[-1].duration
+    with_deflection = [seg for seg in segments if "vDeflection" in seg.channels]
+    if not with_deflection:
+        raise layout.where.at(curve_dir or "segments/").error(
+            "no segment has a vDeflection channel: spring constant and sensitivity unknown")
+    first = with_deflection[0]
+    with _located(layout.where.at(f"{curve_dir}segments/{first.index}/segment-header.properties")):
+        spring_constant, sensitivity = _calibration(first.settings)
+    return JPKCurve(index=index, source=f"{layout.member}!{curve_dir}" if layout.member else curve_dir,
+                    x=x, y=y, segments=tuple(segments), spring_constant=spring_constant,
+                    sensitivity=sensitivity, metadata=header)
+
+
+def _read_segment(zf: zipfile.ZipFile, layout: _Layout, seg_dir: str, seg_index: int,
+                  start_time: float) -> JPKSegment:
+    props = _read_props(zf, f"{seg_dir}segment-header.properties", layout.where, layout.blocks)
+    with _located(where := layout.where.at(f"{seg_dir}segment-header.properties")):
+        n = number(props, _SEG + "num-points", int)
+        duration = number(props, _SEG + "duration")
+        if n < 0 or not duration >= 0:
+            raise HeaderError(f"num-points={n}, duration={duration}: must be >= 0")
+        channels: dict[str, FloatArray] = {}
+        units: dict[str, str] = {}
+        for name in get(props, "channels.list").split():
+            base = _decode_raw(zf, props, name, seg_dir, n, where)
+            for out, slot, unit in _outputs(props, name):
+                channels[out] = convert(props, name, slot, base)
+                units[out] = slot_unit(props, name, slot)
+                if unit is not None and units[out] != unit:
+                    raise HeaderError(f"channel '{name}' slot '{slot}' is in {units[out]!r}, "
+                                      f"expected {unit!r}")
+        return JPKSegment(index=seg_index, style=get(props, _SEG + "settings.style"),
+                          type=get(props, _SETTINGS + "type"), start_time=start_time,
+                          duration=duration, num_points=n, channels=channels, units=units,
+                          time=start_time + np.arange(n) * (duration / max(n, 1)),
+                          modulation=_modulation(props), baseline=_baseline(props), settings=props)
+
+
+def _decode_raw(zf: zipfile.ZipFile, props: dict[str, str], name: str, seg_dir: str, n: int,
+                where: _Where) -> FloatArray:
+    """Samples of channel ``name`` in its base slot (raw * encoder multiplier + offset)."""
+    pre, enc = f"channel.{name}.", encoder_prefix(props, name)
+    fmt = props.get(pre + "data.file.format", "raw")
+    if fmt != "raw":
+        raise HeaderError(f"channel '{name}': data file format '{fmt}' is not supported (only 'raw')")
+    if enc + "type" in props:
+        dtype = _ENCODERS.get(props[enc + "type"])
+        if dtype is None:
+            raise HeaderError(f"{enc}type={props[enc + 'type']!r} is an unknown encoder "
+                              f"(known: {', '.join(_ENCODERS)})")
+    else:
+        data_type = props.get(pre + "type", props.get(pre + "data.type", ""))
+        dtype = _UNENCODED.get(data_type)
+        if dtype is None:
+            raise HeaderError(f"channel '{name}': unknown encoder (no {enc}type, and data type "
+                              f"{data_type!r} is not one of {', '.join(_UNENCODED)})")
+    member = seg_dir + get(props, pre + "data.file.name")
+    data = _read_member(zf, member, where)
+    size = np.dtype(dtype).itemsize
+    declared = props.get(pre + "data.num-points")
+    if len(data) != n * size or (declared is not None and declared.strip() != str(n)):
+        raise where.at(member).error(
+            f"holds {len(data)} bytes = {len(data) / size:g} samples of {dtype}, but the segment header "
+            f"says num-points={n} (channel num-points={declared}): truncated or inconsistent")
+    values = np.frombuffer(data, dtype=dtype).astype(np.float64)
+    if enc + "type" not in props:
+        return values
+    require_linear(props, enc + "scaling.")
+    return values * number(props, enc + "scaling.multiplier") + number(props, enc + "scaling.offset")
+
+
+def _outputs(props: dict[str, str], name: str) -> tuple[tuple[str, str, str | None], ...]:
+    """(output name, calibration slot, required unit or None) for channel ``name``."""
+    if name in _SI_SLOTS:
+        return _SI_SLOTS[name]
+    conv = f"channel.{name}.conversion-set."
+    base = get(props, conv + "conversions.base")
+    default = props.get(conv + "conversions.default", base)
+    defined = props.get(f"{conv}conversion.{default}.defined") == "true"
+    return ((name, default if defined else base, None),)
+
+
+def _modulation(props: dict[str, str]) -> JPKModulation | None:
+    if _SETTINGS + "frequency" not in props:
+        seg_type = props.get(_SETTINGS + "type", "")
+        if "modulation" in seg_type or props.get(_SEG + "settings.style") == "modulation":
+            raise HeaderError(f"modulation segment ({seg_type}) without {_SETTINGS}frequency")
+        return None
+    phase = None if _SETTINGS + "start-phase" not in props else number(props, _SETTINGS + "start-phase")
+    return JPKModulation(frequency=number(props, _SETTINGS + "frequency"),
+                         amplitude=number(props, _SETTINGS + "amplitude"), start_phase=phase)
+
+
+def _baseline(props: dict[str, str]) -> float | None:
+    """``baseline.baseline`` [V] through the vDeflection chain to force [N]."""
+    key = _SEG + "baseline.baseline"
+    if (key not in props or props.get(_SEG + "baseline.measured") == "false"
+            or "vDeflection" not in props.get("channels.list", "").split()):
+        return None
+    return float(convert(props, "vDeflection", "force", np.array([number(props, key)]))[0])
+
+
+def _calibration(props: dict[str, str]) -> tuple[float, float]:
+    """Spring constant [N/m] and sensitivity [m/V] of a segment header with vDeflection."""
+    conv = "channel.vDeflection.conversion-set."
+    base = get(props, conv + "conversions.base")
+    chain = (props.get(conv + "conversion.force.base-calibration-slot"),
+             props.get(conv + "conversion.distance.base-calibration-slot"))
+    if chain != ("distance", base):
+        raise HeaderError(f"vDeflection slots force <- {chain[0]}, distance <- {chain[1]}: "
+                          f"expected force <- distance <- {base}")
+    return (number(props, conv + "conversion.force.scaling.multiplier"),
+            number(props, conv + "conversion.distance.scaling.multiplier"))
+
+
+def _grid(header: dict[str, str]) -> JPKGrid | None:
+    if _GRID + "ilength" not in header:
+        return None
+    if (unit := header.get(_GRID + "unit.unit", "m")) != "m":
+        raise HeaderError(f"{_GRID}unit.unit={unit!r}, expected 'm'")
+    lengths = {key: number(header, _GRID + key) for key in ("ulength", "vlength", "xcenter", "ycenter")}
+    return JPKGrid(ilength=number(header, _GRID + "ilength", int),
+                   jlength=number(header, _GRID + "jlength", int), **lengths)

@@ -1,0 +1,323 @@
+"""Shared machinery of the dataset contracts: variable specs, attribute cleaning, generic checks.
+
+Pure: imports only numpy, xarray and :mod:`viscoforce.exceptions`.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable, Mapping
+from typing import Any, NamedTuple
+
+import numpy as np
+import xarray as xr
+
+from viscoforce.exceptions import SchemaError
+
+#: Placeholder in :attr:`VariableSpec.dims` for a dataset's extra dims (``curve``, ``y``, ``x``, …).
+EXTRA = "..."
+
+_INT32 = np.iinfo(np.int32)
+
+
+class VariableSpec(NamedTuple):
+    """Contract of one variable (or coordinate) of a dataset kind.
+
+    Attributes
+    ----------
+    units : str
+        CF/UDUNITS unit string in ``attrs["units"]`` (``""`` for text, which carries none).
+    long_name : str
+        Default CF ``long_name``.
+    dims : tuple of str
+        Dimensions in order; :data:`EXTRA` stands for the dataset's extra dims.
+    dtype : {"f", "i", "U"}
+        Real floating point, integer (netCDF3: int8/int32) or text.
+    required : bool
+        Whether :func:`validate` requires it by default.
+    broadcast : bool
+        The variable may span any subset of ``dims`` (e.g. a scalar drive amplitude).
+    """
+
+    units: str
+    long_name: str
+    dims: tuple[str, ...]
+    dtype: str = "f"
+    required: bool = True
+    broadcast: bool = False
+
+
+def describe(value: Any) -> str:
+    """Short text for a rejected value in a message: ``None``, ``str 'abc'``, ``list [1, 2]``."""
+    if value is None:
+        return "None"
+    text = repr(value)
+    return f"{type(value).__name__} {text if len(text) <= 60 else text[:57] + '...'}"
+
+
+def as_mapping(name: str, value: Any) -> Mapping[Any, Any]:
+    """Return ``value`` (``{}`` for None), raising unless it is a mapping (a dict)."""
+    if value is None:
+        return {}
+    if not isinstance(value, Mapping):
+        raise SchemaError(f"{name} must be a mapping (dict) or None, got {describe(value)}")
+    return value
+
+
+def as_names(name: str, value: Any, *, unique: bool = True) -> tuple[str, ...] | None:
+    """Return ``value`` as a tuple of strings, distinct if ``unique`` (None stays None).
+
+    A single string is refused (``("omega",)``, not ``"omega"``): iterating it would give its
+    characters.
+    """
+    if value is None:
+        return None
+    if isinstance(value, str | bytes) or not isinstance(value, Iterable):
+        raise SchemaError(
+            f"{name} must be a tuple or list of names (strings), e.g. ('omega',), or None; got "
+            f"{describe(value)}")
+    names = tuple(value)
+    bad = [v for v in names if not isinstance(v, str)]
+    if bad:
+        raise SchemaError(f"{name} must hold names (strings), got {describe(bad[0])} in "
+                          f"{describe(value)}")
+    if unique and len(set(names)) != len(names):
+        raise SchemaError(f"{name} must not repeat a name, got {names}")
+    return tuple(str(v) for v in names)
+
+
+def as_flag(name: str, value: Any, *, allow_none: bool = False) -> bool | None:
+    """Return ``value`` as a bool, raising unless it is True or False (or None if allowed)."""
+    if value is None and allow_none:
+        return None
+    if not isinstance(value, bool | np.bool_):
+        allowed = "True, False or None" if allow_none else "True or False"
+        raise SchemaError(f"{name} must be {allowed}, got {describe(value)}")
+    return bool(value)
+
+
+def as_text(name: str, value: Any, *, allow_none: bool = False) -> str | None:
+    """Return ``value``, raising unless it is a string (or None if allowed)."""
+    if value is None and allow_none:
+        return None
+    if not isinstance(value, str):
+        allowed = "a string or None" if allow_none else "a string"
+        raise SchemaError(f"{name} must be {allowed}, got {describe(value)}")
+    return str(value)
+
+
+def require_values(name: str, arr: np.ndarray, *, allow_nan: bool = False,
+                   minimum: float | None = None, strict: bool = False,
+                   nan_hint: str = "") -> np.ndarray:
+    """Return ``arr``, raising if it holds ±inf or NaN, or is below ``minimum``.
+
+    ``allow_nan`` lets NaN (an unknown value) pass; ``strict`` refuses ``minimum`` itself.
+    ``nan_hint`` is appended to the message about a non-finite entry.
+    """
+    bad = np.isinf(arr) if allow_nan else ~np.isfinite(arr)
+    if np.any(bad):
+        i = int(np.flatnonzero(bad.ravel())[0])
+        what = "must not be infinite" if allow_nan else "must be finite"
+        raise SchemaError(f"{name} {what}; entry {i} is {float(arr.ravel()[i])!r}{nan_hint}")
+    if minimum is not None:
+        with np.errstate(invalid="ignore"):
+            low = (arr <= minimum) if strict else (arr < minimum)
+        if np.any(low):
+            i = int(np.flatnonzero(low.ravel())[0])
+            op = ">" if strict else ">="
+            raise SchemaError(f"{name} must be {op} {minimum:g}; entry {i} is "
+                              f"{float(arr.ravel()[i])!r}")
+    return arr
+
+
+def clean_attrs(attrs: Mapping[str, Any] | None) -> dict[str, Any]:
+    """Return ``attrs`` with every value netCDF3-serialisable (raise :class:`SchemaError` if not).
+
+    Strings, finite or non-finite floats and int32 integers pass; booleans become 0/1, numpy
+    scalars Python numbers, numeric sequences 1-D arrays. None, mappings, text sequences and
+    integers beyond int32 raise, naming the attribute; ``attrs`` itself must be a mapping or
+    None.
+    """
+    out: dict[str, Any] = {}
+    for key, value in as_mapping("attrs", attrs).items():
+        if not isinstance(key, str):
+            raise SchemaError(f"attribute names must be strings, got {key!r}")
+        out[key] = _attr_value(key, value)
+    return out
+
+
+def _attr_value(key: str, value: Any) -> Any:
+    if isinstance(value, str):
+        return value
+    if isinstance(value, bool | np.bool_):
+        return int(value)
+    if isinstance(value, int | np.integer):
+        if not _INT32.min <= value <= _INT32.max:
+            raise SchemaError(f"attribute {key!r} = {value!r} does not fit netCDF3's int32; "
+                              "store it as a float or a string")
+        return int(value)
+    if isinstance(value, float | np.floating):
+        return float(value)
+    if isinstance(value, np.ndarray | list | tuple):
+        arr = np.asarray(value)
+        if arr.ndim == 1 and arr.dtype.kind in "biuf":
+            return arr.astype(np.int32 if arr.dtype.kind in "biu" else np.float64)
+    raise SchemaError(f"attribute {key!r} of type {type(value).__name__} is not netCDF-"
+                      "serialisable (use a string, a number or a 1-D numeric array)")
+
+
+def variable(values: Any, dims: tuple[str, ...], spec: VariableSpec, *, name: str = "",
+             long_name: str | None = None, attrs: Mapping[str, Any] | None = None) -> xr.DataArray:
+    """DataArray with the spec's units, long_name (or ``long_name``) and dtype."""
+    dtype = {"f": np.float64, "i": np.int32, "U": np.str_}[spec.dtype]
+    if spec.dtype == "i":
+        raw = np.asarray(values)
+        if raw.dtype.kind not in "biu":
+            raise SchemaError(f"{name or spec.long_name} must be integers, got {raw!r}")
+    data = np.asarray(values, dtype=dtype)
+    meta = {"long_name": long_name or spec.long_name}
+    if spec.units:
+        meta = {"units": spec.units, **meta}
+    meta.update(attrs or {})
+    return xr.DataArray(data, dims=dims, attrs=meta)
+
+
+def as_float(name: str, values: Any) -> np.ndarray:
+    """``values`` as a float array (raise naming ``name`` if they are not real numbers).
+
+    None, text, mappings, booleans and complex numbers are refused (numpy would turn them into
+    NaN, parse them, or drop the imaginary part with a warning).
+    """
+    if values is None or isinstance(values, str | bytes | Mapping):
+        raise SchemaError(f"{name} must be real numbers, got {values!r}")
+    try:
+        raw = np.asarray(values)
+        if raw.dtype.kind in "bcSUV":
+            raise TypeError
+        arr = raw.astype(float, copy=False)
+    except (TypeError, ValueError):
+        raise SchemaError(f"{name} must be real numbers, got {values!r}") from None
+    return arr
+
+
+def per_point(name: str, values: Any, shape: tuple[int, ...], dims: tuple[str, ...],
+              *, keep_scalar: bool = False) -> tuple[np.ndarray, tuple[str, ...]]:
+    """Broadcast ``values`` to ``shape`` (or keep a scalar as a scalar with ``keep_scalar``)."""
+    arr = as_float(name, values)
+    if keep_scalar and arr.ndim == 0:
+        return arr, ()
+    try:
+        return np.broadcast_to(arr, shape).copy(), dims
+    except ValueError:
+        sizes = dict(zip(dims, shape, strict=True))
+        raise SchemaError(f"{name} of shape {arr.shape} does not broadcast to {sizes}") from None
+
+
+def shaped(name: str, values: Any, shape: tuple[int, ...], dims: tuple[str, ...]) -> np.ndarray:
+    """``values`` as a float array of exactly ``shape`` (raise naming ``name`` and the dims)."""
+    arr = as_float(name, values)
+    if arr.shape != shape:
+        raise SchemaError(f"{name} must have shape {shape} over {dims}, got {arr.shape}")
+    return arr
+
+
+def coordinate(name: str, values: Any) -> np.ndarray:
+    """A 1-D float coordinate (raise naming it if not 1-D)."""
+    arr = as_float(name, values)
+    if arr.ndim != 1:
+        raise SchemaError(f"{name} must be 1-D, got shape {arr.shape}")
+    return arr
+
+
+def require_dataset(ds: Any, kind: str) -> xr.Dataset:
+    """Raise unless ``ds`` is an :class:`xarray.Dataset`."""
+    if not isinstance(ds, xr.Dataset):
+        raise SchemaError(f"{kind} must be an xarray.Dataset, got {type(ds).__name__}")
+    return ds
+
+
+def _label(name: str, table: Mapping[str, VariableSpec]) -> str:
+    spec = table.get(name)
+    return f"'{name}' [{spec.units}]" if spec is not None and spec.units else f"'{name}'"
+
+
+def check_present(ds: xr.Dataset, kind: str, table: Mapping[str, VariableSpec],
+                  require: Iterable[str] | None, hint: str = "") -> None:
+    """Raise naming every required variable that ``ds`` lacks (default: the table's required)."""
+    given = as_names("require", require)
+    names = [n for n, s in table.items() if s.required] if given is None else list(given)
+    missing = [n for n in names if n not in ds.variables]
+    if missing:
+        raise SchemaError(f"{kind} is missing {', '.join(_label(n, table) for n in missing)}"
+                          + (f" {hint}" if hint else ""))
+
+
+def check_variables(ds: xr.Dataset, kind: str, table: Mapping[str, VariableSpec],
+                    extra: tuple[str, ...] = ()) -> None:
+    """Units, dtype and dims of every table variable present, and of their ``_stderr`` twins."""
+    for name, spec in table.items():
+        if name in ds.variables:
+            check_one(ds, kind, name, spec, extra)
+    for name in ds.variables:
+        base = str(name).removesuffix("_stderr")
+        if base != name and base in table:
+            check_one(ds, kind, str(name), table[base]._replace(broadcast=True), extra)
+
+
+def check_one(ds: xr.Dataset, kind: str, name: str, spec: VariableSpec,
+              extra: tuple[str, ...] = ()) -> None:
+    """Raise if variable ``name`` has the wrong units, dtype or dims."""
+    var = ds[name]
+    unit = var.attrs.get("units")
+    if spec.units and unit != spec.units:
+        raise SchemaError(f"{kind}: '{name}' must have units {spec.units!r}, got {unit!r}")
+    dkind = var.dtype.kind
+    ok = {"f": dkind == "f", "i": dkind in "iu", "U": dkind in "USO"}[spec.dtype]
+    if not ok:
+        want = {"f": "real floats", "i": "integers", "U": "text"}[spec.dtype]
+        raise SchemaError(f"{kind}: '{name}' must hold {want}, got dtype {var.dtype}")
+    expected = expand_dims(spec.dims, extra)
+    if spec.broadcast:
+        if not set(var.dims) <= set(expected):
+            raise SchemaError(
+                f"{kind}: '{name}' must have dims within {expected}, got {var.dims}")
+    elif var.dims != expected:
+        raise SchemaError(f"{kind}: '{name}' must have dims {expected}, got {var.dims}")
+
+
+def expand_dims(dims: tuple[str, ...], extra: tuple[str, ...]) -> tuple[str, ...]:
+    """Replace the :data:`EXTRA` placeholder of a spec's dims by the dataset's extra dims."""
+    out: list[str] = []
+    for d in dims:
+        out.extend(extra if d == EXTRA else (d,))
+    return tuple(out)
+
+
+def check_attrs(ds: xr.Dataset, kind: str) -> None:
+    """Raise if a dataset attribute would not survive netCDF3."""
+    try:
+        clean_attrs(ds.attrs)
+    except SchemaError as exc:
+        raise SchemaError(f"{kind}: {exc}") from None
+
+
+def check_flags(ds: xr.Dataset, kind: str, name: str) -> None:
+    """A CF flag variable: integer, ``flag_values``/``flag_meanings`` set, values among them."""
+    var = ds[name]
+    values = var.attrs.get("flag_values")
+    meanings = var.attrs.get("flag_meanings")
+    if values is None or not isinstance(meanings, str):
+        raise SchemaError(f"{kind}: '{name}' needs the CF attributes flag_values and flag_meanings")
+    values = np.atleast_1d(np.asarray(values))
+    if len(meanings.split()) != values.size:
+        raise SchemaError(f"{kind}: '{name}' has {values.size} flag_values but "
+                          f"{len(meanings.split())} flag_meanings")
+    bad = np.setdiff1d(np.unique(np.asarray(var.values)), values)
+    if bad.size:
+        raise SchemaError(f"{kind}: '{name}' holds {bad.tolist()}, not among its flag_values "
+                          f"{values.tolist()}")
+
+
+def flag_attrs(flags: Mapping[int, str], dtype: type = np.int8) -> dict[str, Any]:
+    """CF ``flag_values`` and ``flag_meanings`` of a code → meaning table."""
+    return {"flag_values": np.array(list(flags), dtype=dtype),
+            "flag_meanings": " ".join(flags.values())}
