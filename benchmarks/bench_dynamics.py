@@ -59,8 +59,8 @@ from _common import (  # noqa: E402
 )
 
 # the paper's Fig. 5 system and loop
-RADIUS = 10e-6  # sphere radius [m]
-E0, E_INF, TAU = 1e10, 1e9, 1e-3  # glassy and relaxed moduli [Pa], creep time [s]
+RADIUS = vf.PAPER.R  # sphere radius [m]
+E0, E_INF, TAU = vf.PAPER.E0, vf.PAPER.E_inf, vf.PAPER.tau  # glassy and relaxed moduli [Pa], creep time [s]
 TOP, TURN, SPEED = 10e-9, -10e-9, 5e-6  # drive [m], [m], [m/s]
 N_OUTPUTS = 81  # output times of the benchmarked loop
 N_OUTPUTS_DENSE = 401  # for the output-count effect (81 outputs are every 5th of these)

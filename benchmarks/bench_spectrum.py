@@ -70,8 +70,8 @@ from _common import (  # noqa: E402
 )
 
 # the paper's system
-RADIUS = 10e-6  # sphere radius [m]
-E0, E_INF, TAU = 1e10, 1e9, 1e-3  # glassy and relaxed moduli [Pa], creep time [s]
+RADIUS = vf.PAPER.R  # sphere radius [m]
+E0, E_INF, TAU = vf.PAPER.E0, vf.PAPER.E_inf, vf.PAPER.tau  # glassy and relaxed moduli [Pa], creep time [s]
 #: scene name -> (mean position h̄0 [m], the paper's drive amplitude η [m])
 SCENES = {"Fig. 3": (2e-9, 0.1e-9), "Fig. 4": (-5e-9, 1e-9)}
 PAPER_PEAK_DEG, PAPER_PEAK_OMEGA = 38.0, 2.0 / TAU  # Fig. 4 text: 38° at ω = 2/τ [rad/s]

@@ -57,7 +57,7 @@ from _common import (  # noqa: E402
     write_json,
 )
 
-RADIUS = 10e-6  # sphere radius [m]
+RADIUS = vf.PAPER.R  # sphere radius [m]
 MODULI = (1e9, 1e10)  # E [Pa], paper convention
 POSITIONS_NM = (-10.0, -7.0, -5.0, -3.0, 0.0, 2.0, 5.0, 10.0)  # h0 [nm]
 REFINE = 4  # default-table reference: spacing / REFINE, same order

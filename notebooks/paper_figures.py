@@ -45,12 +45,13 @@ from viscoforce.solvers.svda_ode import solve_svda  # noqa: E402
 from viscoforce.svda import svda_ramp_deformation  # noqa: E402
 
 # ── parameters (the paper's Fig. 1 values) ──────────────────────────────────────────────────────
-RADIUS = 10e-6          # R [m]
-PRESSURE = 1e7          # P = Pw [Pa]
-DEBYE_LENGTH = 1e-9     # 1/κ [m]
-E0 = 1e10               # instantaneous modulus [Pa]
-E_INF = 1e9             # relaxed modulus [Pa]
-TAU = 1e-3              # creep time τ [s]
+PAPER = vf.PAPER
+RADIUS = PAPER.R                # R [m]
+PRESSURE = PAPER.P              # P = Pw [Pa]
+DEBYE_LENGTH = PAPER.debye_length  # 1/κ [m]
+E0 = PAPER.E0                   # instantaneous modulus [Pa]
+E_INF = PAPER.E_inf             # relaxed modulus [Pa]
+TAU = PAPER.tau                 # creep time τ [s]
 NM, UM, MS, UN = 1e-9, 1e-6, 1e-3, 1e-6
 
 STEP_START = -5 * NM                      # Fig. 1: equilibrated here

@@ -32,7 +32,7 @@ def make_problem(paper_law):
     import viscoforce as vf
 
     def factory(material, deepest_position, **kw):
-        return vf.ContactProblem.create(sphere=vf.Sphere(10e-6), surface_force=paper_law,
+        return vf.ContactProblem.create(sphere=vf.PAPER.sphere(), surface_force=paper_law,
                                         material=material, deepest_position=deepest_position, **kw)
 
     return factory

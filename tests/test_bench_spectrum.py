@@ -82,7 +82,7 @@ def test_linear_method_is_accurate_on_the_default_grid(quick):
         assert default["nodes"] > coarse["nodes"]
         assert default["complex_rel_error"] < 1e-6
         assert default["complex_rel_error"] < coarse["complex_rel_error"]
-        assert default["repeats"] >= 10 and default["time_median_s"] > 0
+        assert default["repeats"] >= 10 and "time_median_s" in default  # no wall-time asserts
     assert report["summary"]["error_passed"] is True
 
 

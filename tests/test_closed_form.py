@@ -441,3 +441,85 @@ def test_validation_helpers_accept_and_return():
 def test_validation_helpers_raise(call, match):
     with pytest.raises(ParameterError, match=match):
         call()
+
+
+# ── representable range: never a NaN, a ComplexWarning or an overflow RuntimeWarning ───────────
+
+_OUT_OF_RANGE = "the inputs are outside the representable range"
+
+
+def _silently(call):
+    """Run ``call`` with every warning turned into an error."""
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        return call()
+
+
+@pytest.mark.parametrize(("call", "match"), [
+    (lambda: sls_creep_compliance(np.array([0.0, 1j]), **MATERIAL), "t must be real numbers"),
+    (lambda: sls_complex_compliance(np.array([1 + 1j]), **MATERIAL), "omega must be real numbers"),
+    (lambda: prony_creep_compliance(np.array([1j]), 1e-10, [1e-10], [1e-3]),
+     "t must be real numbers"),
+    (lambda: prony_complex_compliance(np.array([1j]), 1e-10, [1e-10], [1e-3]),
+     "omega must be real numbers"),
+    (lambda: prony_creep_compliance(0.0, 1e-10, np.array([1e-10 + 0j]), [1e-3]),
+     "delta_compliances must be a 1-D array of real numbers"),
+    (lambda: derjaguin_force(np.array([1e-9 + 1e-9j]), **SURFACE), "gap must be real numbers"),
+    (lambda: svda_static_deformation(np.array([1e-9 + 0j]), E_INF, R, P, DEBYE),
+     "position must be real numbers"),
+    (lambda: svda_harmonic_response(np.array([1j]), H_FIG3, ETA_FIG3, **MATERIAL, **SURFACE),
+     "omega must be real numbers"),
+    (lambda: svda_complex_stiffness(np.array([1j]), H_FIG3, **MATERIAL, **SURFACE),
+     "omega must be real numbers"),
+    (lambda: svda_ramp_deformation([0.0, 1e-4], 1e-9, 1e300, **MATERIAL, **SURFACE),
+     rf"{_OUT_OF_RANGE}: kappa\*speed = inf 1/s .*speed=1e\+300 m/s"),
+    (lambda: svda_static_deformation(-1e300, E_INF, R, P, DEBYE),
+     f"{_OUT_OF_RANGE}: the SVDA static deformation u overflows"),
+    (lambda: svda_harmonic_response(1.0, H_FIG3, ETA_FIG3, E0=E0, E_inf=1e-300, tau=TAU,
+                                    **SURFACE), rf"{_OUT_OF_RANGE}: E0/E_inf overflows"),
+    (lambda: svda_harmonic_response(1.0, H_FIG3, 1e300, **MATERIAL, **SURFACE),
+     f"{_OUT_OF_RANGE}: the SVDA harmonic response overflows"),
+    (lambda: svda_complex_stiffness(1e300, H_FIG3, E0=E0, E_inf=E_INF, tau=1e10, **SURFACE),
+     f"{_OUT_OF_RANGE}: the SVDA complex stiffness overflows"),
+    (lambda: sls_creep_compliance(0.0, E0=1e-310, E_inf=1e-311, tau=TAU),
+     rf"{_OUT_OF_RANGE}: C\(t\) overflows"),
+    (lambda: prony_complex_compliance(1.0, 1e308, [1e308], [1e-3]),
+     rf"{_OUT_OF_RANGE}: C\*\(omega\) overflows"),
+    (lambda: derjaguin_force(0.0, radius=1e300, P=1e300, debye_length=DEBYE),
+     f"{_OUT_OF_RANGE}: the Derjaguin force overflows"),
+], ids=["sls-creep-complex", "sls-complex-complex", "prony-creep-complex",
+        "prony-complex-complex", "prony-modes-complex", "derjaguin-complex", "static-complex",
+        "harmonic-complex", "stiffness-complex", "ramp-huge-speed", "static-huge-negative",
+        "harmonic-tiny-E_inf", "harmonic-huge-eta", "stiffness-huge-omega-tau",
+        "sls-subnormal-moduli", "prony-huge-compliance", "derjaguin-huge"])
+def test_out_of_range_inputs_raise_parameter_error(call, match):
+    with pytest.raises(ParameterError, match=match):
+        _silently(call)
+
+
+def test_extreme_but_representable_inputs_give_finite_results_quietly():
+    h0 = np.array([-1e-9, 2e-9])
+    # E or debye_length of 1e-300: the Lambert-W argument overflows a float64, u does not
+    soft = _silently(lambda: svda_static_deformation(h0, 1e-300, R, P, DEBYE))
+    assert np.all(np.isfinite(soft)) and np.all(soft < -6e-7)
+    b = math.sqrt(8 * math.pi * R / KAPPA) * P / 1e-300  # u = −b e^{−κ(h0 − u)}, in logs
+    np.testing.assert_allclose(np.log(-soft), math.log(b) - KAPPA * (h0 - soft), rtol=1e-12)
+    thin = _silently(lambda: svda_static_deformation(h0, E_INF, R, P, 1e-300))
+    np.testing.assert_allclose(thin, [-1e-9, 0.0], atol=1e-290)  # gap → 0 (contact) or u → 0
+    big = _silently(lambda: svda_static_deformation(h0, E_INF, 1e300, P, DEBYE))
+    assert np.all(np.isfinite(big))
+    # position 1e300: no deformation, no force (e^{−κh} underflows to 0, honestly)
+    assert _silently(lambda: float(svda_static_deformation(1e300, E_INF, R, P, DEBYE))) == 0.0
+    assert _silently(lambda: float(derjaguin_force(1e300, **SURFACE))) == 0.0
+    far = _silently(lambda: svda_harmonic_response([1e3], 1e300, ETA_FIG3, **MATERIAL, **SURFACE))
+    assert far.mean_force == 0.0 and far.stiffness[0] == 0.0
+    assert _silently(lambda: svda_peak_phase_frequency(1e300, E0, E_INF, TAU, **SURFACE)) == (
+        pytest.approx(1 / TAU))
+    # ω = 1e300: the glassy limit, no warning
+    high = _silently(lambda: svda_harmonic_response([1e300], H_FIG3, ETA_FIG3, **MATERIAL,
+                                                    **SURFACE))
+    assert high.phase[0] == pytest.approx(0.0, abs=1e-200)
+    np.testing.assert_allclose(_silently(lambda: sls_complex_compliance(1e300, **MATERIAL)),
+                               1 / E0, rtol=1e-12)

@@ -12,7 +12,7 @@ from viscoforce.solvers.simulate import simulate
 
 pytestmark = pytest.mark.slow
 
-SLS = vf.StandardLinearSolid(E0=1e10, E_inf=1e9, tau=1e-3)
+SLS = vf.PAPER.material()
 DRIVE = Triangle(10e-9, -10e-9, 5e-6)
 T_EVAL = np.linspace(0, DRIVE.duration, 81)
 

@@ -10,7 +10,7 @@ import viscoforce as vf
 from viscoforce.experiments import Hold, Ramp, Sequence, Step, Triangle
 from viscoforce.solvers.simulate import simulate
 
-SLS = vf.StandardLinearSolid(E0=1e10, E_inf=1e9, tau=1e-3)
+SLS = vf.PAPER.material()
 
 
 def loop(make_problem, speed, turn=-10e-9, n=161, material=SLS, **kw):

@@ -412,3 +412,58 @@ def test_lockin_filter_raises(kwargs, match):
 def test_settling_time_raises(args, match):
     with pytest.raises(ParameterError, match=match):
         settling_time(*args)
+
+
+# ---------------------------------------------------------------- bad input (robustness probe)
+
+_DA_OK = xr.DataArray(X_OK, dims="time", coords={"time": T_OK})
+
+
+@pytest.mark.parametrize(("call", "match"), [
+    (lambda: demodulate(X_OK, T_OK, OMEGA, detrend=np.array([])),
+     r"detrend must be None or 'linear', got ndarray array\(\[\]"),
+    (lambda: demodulate(X_OK, T_OK, OMEGA, detrend=True),
+     "detrend must be None or 'linear', got bool True"),
+    (lambda: demodulate(X_OK, T_OK, OMEGA, detrend=["linear"]),
+     r"detrend must be None or 'linear', got list \['linear'\]"),
+    (lambda: harmonics(X_OK, T_OK, OMEGA, 2, detrend=np.array([])),
+     "detrend must be None or 'linear'"),
+    (lambda: demodulate_dataarray(_DA_OK, OMEGA, detrend=np.array([])),
+     "detrend must be None or 'linear'"),
+    (lambda: demodulate_dataarray(_DA_OK, OMEGA, detrend={}),
+     "detrend must be None or 'linear', got dict"),
+    (lambda: demodulate_dataarray(_DA_OK, OMEGA, dim=np.array([])),
+     r"dim must be one of the dimensions \('time',\), got ndarray"),
+    (lambda: demodulate_dataarray(_DA_OK, OMEGA, dim=["time"]),
+     r"dim must be one of the dimensions \('time',\), got list"),
+], ids=["detrend-empty", "detrend-bool", "detrend-list", "harmonics-detrend-empty",
+        "dataarray-detrend-empty", "dataarray-detrend-dict", "dataarray-dim-empty",
+        "dataarray-dim-list"])
+def test_flags_must_be_what_they_say(call, match):
+    with pytest.raises(ParameterError, match=match):
+        call()
+
+
+@pytest.mark.parametrize("function", [sin_phase, amplitude_phase_from_complex])
+@pytest.mark.parametrize(("value", "match"), [
+    (None, "amplitude must be a complex number or an array of complex numbers, got None"),
+    ("1+1j", "amplitude must be a complex number .* got str '1\\+1j'"),
+    (["a", "b"], "amplitude must be a complex number .* got list"),
+    ({}, "amplitude must be a complex number .* got dict"),
+    (object(), "amplitude must be a complex number .* got object"),
+    (True, "amplitude must be a complex number .* got bool"),
+    (float("nan"), r"amplitude must be finite \(no NaN/inf\); entry 0 is \(nan\+0j\)"),
+    ([1j, float("nan")], r"amplitude must be finite \(no NaN/inf\); entry 1 is \(nan\+0j\)"),
+    (np.array([1 + 1j, complex(np.inf, 0)]), r"amplitude must be finite .* entry 1 is \(inf\+0j\)"),
+], ids=["None", "str", "strlist", "dict", "object", "bool", "nan", "with-nan", "with-inf"])
+def test_complex_amplitude_conversions_reject_bad_input(function, value, match):
+    with pytest.raises(ParameterError, match=match):
+        function(value)
+
+
+def test_complex_amplitude_conversions_accept_real_and_integer_input():
+    assert sin_phase(1.0) == pytest.approx(math.pi / 2)
+    modulus, phase = amplitude_phase_from_complex(np.array([2, -2]))
+    np.testing.assert_allclose(modulus, [2.0, 2.0])
+    np.testing.assert_allclose(phase, [math.pi / 2, -math.pi / 2])
+    assert sin_phase(np.array([])).shape == (0,)

@@ -89,3 +89,26 @@ def test_material_validation():
     with pytest.raises(vf.ParameterError, match="radius \\(R\\) must be > 0"):
         vf.Sphere(0.0)
     assert vf.Sphere.effective(10e-6, 10e-6).radius == pytest.approx(5e-6)
+
+
+def test_sum_of_two_double_layers_records_every_term_in_attrs(make_problem):
+    """The issue's defect: DoubleLayer(1e7, 1 nm) + DoubleLayer(2e7, 3 nm) recorded one term."""
+    law = vf.DoubleLayer(1e7, 1e-9) + vf.DoubleLayer(2e7, 3e-9) + vf.SoftWall(1e7, 0.5e-9)
+    params = law.parameters()
+    assert params["P_1"] == 1e7 and params["debye_length_1"] == 1e-9
+    assert params["P_2"] == 2e7 and params["debye_length_2"] == 3e-9
+    assert params["Pw"] == 1e7 and params["z0"] == 0.5e-9
+    assert params["surface_force"] == ("DoubleLayer(P=1e+07, debye_length=1e-09) + "
+                                       "DoubleLayer(P=2e+07, debye_length=3e-09) + "
+                                       "SoftWall(Pw=1e+07, z0=5e-10)")
+    problem = vf.ContactProblem.create(sphere=vf.Sphere(10e-6), surface_force=law,
+                                       material=vf.Elastic(1e9), deepest_position=2e-9)
+    ds = vf.static_equilibrium(problem, 2e-9)
+    for name in ("P_1", "debye_length_1", "P_2", "debye_length_2", "Pw", "z0", "surface_force"):
+        assert ds.attrs[name] == params[name]
+
+
+def test_paper_parameters_have_one_home():
+    assert vf.paper_pressure_law() == vf.PAPER.pressure_law()
+    assert vf.PAPER.material() == vf.StandardLinearSolid(E0=1e10, E_inf=1e9, tau=1e-3)
+    assert vf.PAPER.sphere() == vf.Sphere(10e-6)

@@ -378,3 +378,76 @@ def test_trajectory_plots_check_units(trajectory):
         hysteresis_plot(bad)
     with pytest.raises(SchemaError, match="force_time_plot: trajectory is missing 'time'"):
         force_time_plot(trajectory.drop_vars("time"))
+
+
+# ── bad option types (robustness probe): ParameterError naming the option ───────────────────────
+
+_EMPTY = np.array([])
+
+
+@pytest.mark.parametrize(("plot", "kwargs", "match"), [
+    (hysteresis_plot, {"label": ["a", "b"]}, r"label must be a string or None, got list"),
+    (hysteresis_plot, {"label": {}}, r"label must be a string or None, got dict"),
+    (hysteresis_plot, {"label": 3.0}, r"label must be a string or None, got float 3.0"),
+    (contact_radius_plot, {"label": ["a"]}, r"label must be a string or None, got list"),
+    (force_time_plot, {"label": _EMPTY}, r"label must be a string or None, got ndarray"),
+    (hysteresis_plot, {"force_unit": ["uN"]}, r"force_unit must be one of 'N', .* got list"),
+    (hysteresis_plot, {"force_unit": {}}, r"force_unit must be one of .* got dict"),
+    (force_time_plot, {"force_unit": _EMPTY}, r"force_unit must be one of .* got ndarray"),
+    (force_time_plot, {"time_unit": ["ms"]}, r"time_unit must be one of .* got list"),
+    (contact_radius_plot, {"radius_unit": {}}, r"radius_unit must be one of .* got dict"),
+    (profile_plot, {"radius_unit": ["nm"]}, r"radius_unit must be one of .* got list"),
+    (profile_plot, {"cmap": ["viridis"]}, r"cmap must be a matplotlib colormap name .* got list"),
+    (profile_plot, {"cmap": {}}, r"cmap must be a matplotlib colormap name .* got dict"),
+    (profile_plot, {"r_max": 1e300}, r"r_max must be at most .* m to be shown in nm, got 1e\+300"),
+    (profile_plot, {"gap_max": 1e300}, r"gap_max must be at most .* to be shown in nm"),
+    (hysteresis_plot, {"line_kw": "red"}, r"line_kw must be a mapping of matplotlib line "
+                                          r"properties .* got str 'red'"),
+    (hysteresis_plot, {"line_kw": [("color", "r")]}, r"line_kw must be a mapping .* got list"),
+    (contact_radius_plot, {"line_kw": 3.0}, r"line_kw must be a mapping .* got float 3.0"),
+    (force_time_plot, {"line_kw": True}, r"line_kw must be a mapping .* got bool True"),
+    (force_time_plot, {"line_kw": {1: "r"}}, r"line_kw keys must be property names"),
+    (hysteresis_plot, {"line_kw": {"colour": "r"}},
+     r"line_kw holds an invalid matplotlib line property"),
+    (force_time_plot, {"line_kw": {"linewidth": "thick"}},
+     r"line_kw holds an invalid matplotlib line property"),
+    (hysteresis_plot, {"log": _EMPTY}, r"log must be True or False, got ndarray"),
+    (hysteresis_plot, {"log": "yes"}, r"log must be True or False, got str 'yes'"),
+    (force_time_plot, {"log": None}, r"log must be True or False, got None"),
+])
+def test_trajectory_plots_reject_bad_options(trajectory, plot, kwargs, match):
+    with pytest.raises(ParameterError, match=match):
+        plot(trajectory, **kwargs)
+
+
+@pytest.mark.parametrize(("kwargs", "match"), [
+    ({"ax": [1.0, 2.0]}, r"ax must be None or a pair of matplotlib Axes .* got list \[1.0, 2.0\]"),
+    ({"ax": object()}, r"ax must be None or a pair of matplotlib Axes .* got object"),
+    ({"ax": 3.0}, r"ax must be None or a pair of matplotlib Axes .* got float 3.0"),
+    ({"ax": "ab"}, r"ax must be None or a pair of matplotlib Axes .* got str 'ab'"),
+    ({"magnitude": ["stiffness"]}, r"magnitude must be one of 'stiffness', 'amplitude', got list"),
+    ({"magnitude": {}}, r"magnitude must be one of .* got dict"),
+    ({"magnitude": _EMPTY}, r"magnitude must be one of .* got ndarray"),
+    ({"frequency_unit": _EMPTY}, r"frequency_unit must be one of 'rad/s', 'Hz', got ndarray"),
+    ({"frequency_unit": ["Hz"]}, r"frequency_unit must be one of .* got list"),
+    ({"markers": _EMPTY}, r"markers must be True, False or None, got ndarray"),
+    ({"markers": "o"}, r"markers must be True, False or None, got str 'o'"),
+    ({"title": _EMPTY}, r"title must be a string or None, got ndarray"),
+    ({"title": 3}, r"title must be a string or None, got int 3"),
+])
+def test_bode_plot_rejects_bad_options(kwargs, match):
+    from viscoforce.plotting import bode_plot
+
+    with pytest.raises(ParameterError, match=match):
+        bode_plot(_spectrum(), **kwargs)
+
+
+def test_bode_plot_accepts_a_pair_of_axes_and_a_numpy_bool():
+    import matplotlib.pyplot as plt
+
+    from viscoforce.plotting import bode_plot
+
+    pair = plt.subplots(2, 1)[1]
+    handle = bode_plot(_spectrum(), ax=list(pair), markers=np.True_, title="t")
+    assert handle.axes == (pair[0], pair[1])
+    plt.close("all")

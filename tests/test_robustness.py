@@ -26,7 +26,7 @@ from viscoforce.solvers.steppers import ExponentialTrapezoidal
 NM = 1e-9
 SPHERE = vf.Sphere(10e-6)
 LAW = vf.paper_pressure_law()
-SLS = vf.StandardLinearSolid(E0=1e10, E_inf=1e9, tau=1e-3)
+SLS = vf.PAPER.material()
 GRID = RadialGrid(1e-7, 4, 8)  # 32 nodes, cheap
 PROBLEM = vf.ContactProblem(SPHERE, LAW, vf.Elastic(1e9), GRID)
 GAPS = np.full(GRID.size, 2 * NM)
@@ -290,3 +290,73 @@ def test_describe_value_in_messages_is_short():
         _create(sphere=list(range(1000)))
     assert len(str(info.value)) < 120
     assert re.search(r"got list \[0, 1, 2, 3, 4, 5, \.\.\.\]", str(info.value))
+
+
+# ── lock-in, units, closed forms, SVDA ODE, plotting (probe of issue 11, second pass) ─────────
+
+def _more_cases():
+    from viscoforce import lockin, plotting, svda, units
+    from viscoforce.experiments.drives import Triangle
+    from viscoforce.solvers.svda_ode import solve_svda
+
+    t = np.linspace(0.0, 4 * 2 * np.pi / 1e3, 257)
+    x = np.sin(1e3 * t)
+    svda_params = {"E0": 1e10, "E_inf": 1e9, "tau": 1e-3, "radius": 10e-6, "P": 1e7,
+                   "debye_length": 1e-9, "t_eval": np.linspace(0.0, 2e-4, 11)}
+    tri = Triangle(2e-9, -2e-9, 4e-5)
+    return [
+        ("demodulate-detrend-array", lambda: lockin.demodulate(x, t, 1e3, detrend=np.array([])),
+         r"detrend must be None or 'linear'"),
+        ("sin-phase-None", lambda: lockin.sin_phase(None), r"amplitude must be a complex number"),
+        ("sin-phase-inf", lambda: lockin.sin_phase([complex(INF, 0)]), r"amplitude must be finite"),
+        ("amplitude-phase-str", lambda: lockin.amplitude_phase_from_complex("1j"),
+         r"amplitude must be a complex number"),
+        ("unit-factor-list", lambda: units.unit_factor("length", ["nm"]),
+         r"unit must be a unit string"),
+        ("format-ascii-array", lambda: units.format_quantity(1.0, "length",
+                                                             ascii_only=np.array([])),
+         r"ascii_only must be True or False"),
+        ("svda-ramp-huge-speed",
+         lambda: svda.svda_ramp_deformation([0.0, 1e-4], 1e-9, 1e300, 1e10, 1e9, 1e-3, 10e-6,
+                                            1e7, 1e-9), r"outside the representable range"),
+        ("svda-static-complex",
+         lambda: svda.svda_static_deformation(np.array([1e-9 + 0j]), 1e9, 10e-6, 1e7, 1e-9),
+         r"position must be real numbers"),
+        ("solve-svda-tiny-tau", lambda: solve_svda(tri, **{**svda_params, "tau": 1e-300}),
+         r"outside the representable range"),
+        ("solve-svda-huge-u-start", lambda: solve_svda(tri, **svda_params, u_start=1e300),
+         r"u_start is outside the representable range"),
+        ("bode-ax-object", lambda: plotting.bode_plot(None, ax=object()),
+         r"ax must be None or a pair of matplotlib Axes"),
+        ("bode-magnitude-list", lambda: plotting.bode_plot(None, magnitude=["stiffness"]),
+         r"magnitude must be one of"),
+    ]
+
+
+_MORE = _more_cases()
+
+
+@pytest.mark.parametrize(("call", "match"), [c[1:] for c in _MORE], ids=[c[0] for c in _MORE])
+def test_more_bad_input_raises_parameter_error_quietly(call, match):
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # no ComplexWarning or overflow RuntimeWarning either
+        with pytest.raises(ParameterError, match=match):
+            call()
+
+
+@pytest.mark.parametrize(("kwargs", "match"), [
+    ({"mean_force": None}, "mean_force must be real numbers, got None"),
+    ({"mean_force": NAN}, "mean_force must be finite; entry 0 is nan"),
+    ({"attrs": "abc"}, r"attrs must be a mapping \(dict\) or None"),
+    ({"dims": object()}, "dims must be a tuple or list of names"),
+    ({"amplitude": np.array([])}, "amplitude must be True, False or None"),
+], ids=["mean-None", "mean-nan", "attrs-str", "dims-object", "amplitude-array"])
+def test_make_spectrum_bad_input_raises_schema_error(kwargs, match):
+    from viscoforce.exceptions import SchemaError
+    from viscoforce.schema import make_spectrum
+
+    args = {"mean_force": 1e-7, **kwargs}
+    with pytest.raises(SchemaError, match=match):
+        make_spectrum([1.0, 2.0], [1 + 1j, 2 + 1j], args.pop("mean_force"), 1e-9, **args)

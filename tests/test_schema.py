@@ -593,3 +593,137 @@ def test_every_validator_refuses_attrs_netcdf_cannot_store(build, validate, kind
     assert validate(ds) is ds
     with pytest.raises(SchemaError, match=f"^{kind}: attribute 'settings' of type dict"):
         validate(ds.assign_attrs(settings={"dt": 1e-6}))
+
+
+# ── bad arguments (robustness probe): SchemaError naming the argument, never a NaN ──────────────
+
+_W3 = np.array([1.0, 2.0, 3.0])
+_K3 = np.array([1 + 1j, 2 + 1j, 3 + 1j])
+
+
+def _spec3(**kw):
+    args = {"omega": _W3, "complex_stiffness": _K3, "mean_force": 1e-7, "eta": 1e-9}
+    args.update(kw)
+    return make_spectrum(args.pop("omega"), args.pop("complex_stiffness"),
+                         args.pop("mean_force"), args.pop("eta"), **args)
+
+
+_COMPUTED = r"\(a computed spectrum must be finite everywhere"
+
+
+@pytest.mark.parametrize(("kwargs", "match"), [
+    ({"mean_force": None}, "mean_force must be real numbers, got None"),
+    ({"mean_force": np.nan}, f"mean_force must be finite; entry 0 is nan {_COMPUTED}"),
+    ({"mean_force": [1.0, np.inf, 1.0]}, "mean_force must be finite; entry 1 is inf"),
+    ({"mean_force": [1.0, np.inf, 1.0], "source": "csv"},
+     "mean_force must not be infinite; entry 1 is inf"),
+    ({"mean_force": np.array([1.0, 2.0, 3.0]) + 0j}, "mean_force must be real numbers"),
+    ({"mean_force": True}, "mean_force must be real numbers, got True"),
+    ({"eta": None}, "eta must be real numbers, got None"),
+    ({"eta": np.nan}, "eta must be finite; entry 0 is nan"),
+    ({"eta": np.inf}, "eta must be finite; entry 0 is inf"),
+    ({"eta": 0.0}, "eta must be > 0; entry 0 is 0.0"),
+    ({"eta": -1e-9}, "eta must be > 0"),
+    ({"complex_stiffness": None}, "complex_stiffness must be numbers, got None"),
+    ({"complex_stiffness": [1.0, np.nan, 1.0]},
+     rf"complex_stiffness \(its modulus\) must be finite; entry 1 is nan {_COMPUTED}"),
+    ({"complex_stiffness": [1.0, complex(np.inf, 1), 1.0], "source": "csv"},
+     r"complex_stiffness \(its modulus\) must not be infinite"),
+    ({"mean_indentation": np.nan}, f"mean_indentation must be finite; entry 0 is nan {_COMPUTED}"),
+    ({"mean_indentation": np.inf, "source": "jpk-force"}, "mean_indentation must not be infinite"),
+    ({"attrs": "abc"}, "attrs must be a mapping \\(dict\\) or None, got str 'abc'"),
+    ({"attrs": [("a", 1)]}, r"attrs must be a mapping \(dict\) or None, got list"),
+    ({"attrs": 0.0}, r"attrs must be a mapping \(dict\) or None, got float 0.0"),
+    ({"attrs": np.array([])}, r"attrs must be a mapping \(dict\) or None, got ndarray"),
+    ({"stderr": "abc"}, r"stderr must be a mapping \(dict\) or None, got str"),
+    ({"stderr": ["phase"]}, r"stderr must be a mapping \(dict\) or None, got list"),
+    ({"stderr": np.array([])}, r"stderr must be a mapping \(dict\) or None, got ndarray"),
+    ({"stderr": {"phase": -0.1}}, "phase_stderr must be >= 0; entry 0 is -0.1"),
+    ({"stderr": {"phase": np.nan}}, f"phase_stderr must be finite; entry 0 is nan {_COMPUTED}"),
+    ({"stderr": {3: 0.1}}, "stderr given for 3"),
+    ({"coords": "abc"}, r"coords must be a mapping \(dict\) or None, got str"),
+    ({"coords": ["x"]}, r"coords must be a mapping \(dict\) or None, got list"),
+    ({"coords": np.array([])}, r"coords must be a mapping \(dict\) or None, got ndarray"),
+    ({"coords": {"x": ("omega", [1.0, 2.0])}}, "coords must map names to DataArrays"),
+    ({"coords": {"x": object()}}, "spectrum: 'x' must hold real floats, got dtype object"),
+    ({"coords": {"omega": [1.0, 2.0, 3.0]}}, "coords names must be strings other than 'omega'"),
+    ({"dims": object()}, "dims must be a tuple or list of names .* got object"),
+    ({"dims": "omega"}, r"dims must be a tuple or list of names \(strings\), e\.g\. \('omega',\)"),
+    ({"dims": np.nan}, "dims must be a tuple or list of names .* got float nan"),
+    ({"dims": [1.0, 2.0]}, "dims must hold names"),
+    ({"dims": ("omega", "omega")}, "dims must not repeat a name"),
+    ({"amplitude": np.array([])}, "amplitude must be True, False or None, got ndarray"),
+    ({"amplitude": "yes"}, "amplitude must be True, False or None, got str 'yes'"),
+    ({"amplitude": 1}, "amplitude must be True, False or None, got int 1"),
+    ({"amplitude": True, "mean_force": [1.0, np.nan, 1.0], "source": "csv"},
+     r"needs a nonzero mean force everywhere \(finite, not NaN\)"),
+    ({"source": ["csv"]}, "source must be a string or None, got list"),
+    ({"quality_comment": None}, "quality_comment must be a string, got None"),
+    ({"quality": True}, "quality must be integer codes"),
+])
+def test_make_spectrum_rejects_bad_arguments(kwargs, match):
+    with pytest.raises(SchemaError, match=match):
+        _spec3(**kwargs)
+
+
+def test_measured_spectrum_may_mark_unknown_values_with_nan():
+    ds = _spec3(mean_force=[1e-7, np.nan, 1e-7], mean_indentation=[5e-9, np.nan, 6e-9],
+                complex_stiffness=[1 + 1j, np.nan, 3 + 1j], stderr={"phase": [0.1, np.nan, 0.1]},
+                source="csv")
+    assert "amplitude" not in ds  # a = |F1|/F̄ is unknown where F̄ is
+    assert np.isnan(ds.mean_force.values[1]) and np.isnan(ds.stiffness.values[1])
+    computed = _spec3(source="simulation")  # "simulation" is a computed spectrum: finite only
+    assert "amplitude" in computed
+    with pytest.raises(SchemaError, match="mean_force must be finite"):
+        _spec3(mean_force=np.nan, source="simulation")
+
+
+@pytest.mark.parametrize("validate", [validate_spectrum, validate_equilibrium,
+                                      validate_trajectory, validate_curves, validate_fit_result])
+@pytest.mark.parametrize(("require", "match"), [
+    (object(), "require must be a tuple or list of names .* got object"),
+    (np.nan, "require must be a tuple or list of names .* got float nan"),
+    (True, "require must be a tuple or list of names .* got bool True"),
+    ("omega", r"require must be a tuple or list of names \(strings\), e\.g\. \('omega',\)"),
+    ([1.0], "require must hold names"),
+], ids=["object", "nan", "bool", "str", "numbers"])
+def test_validators_reject_a_bad_require(validate, require, match):
+    ds = {validate_spectrum: _spectrum, validate_equilibrium: _equilibrium,
+          validate_trajectory: _trajectory, validate_curves: _curves,
+          validate_fit_result: _fit}[validate]()
+    with pytest.raises(SchemaError, match=match):
+        validate(ds, require=require)
+
+
+@pytest.mark.parametrize(("build", "match"), [
+    (lambda: _equilibrium(attrs="abc"), r"attrs must be a mapping \(dict\) or None, got str"),
+    (lambda: _equilibrium(contact_threshold="1nm"), "contact_threshold must be real numbers"),
+    (lambda: _equilibrium(contact_threshold=np.nan), "contact_threshold must be finite"),
+    (lambda: _equilibrium(contact_threshold=[1e-9, 2e-9]),
+     "contact_threshold must be a single number"),
+    (lambda: _equilibrium(force=None), "force must be real numbers, got None"),
+    (lambda: _trajectory(attrs=[1, 2]), r"attrs must be a mapping \(dict\) or None, got list"),
+    (lambda: _trajectory(contact_threshold=None), "contact_threshold must be real numbers"),
+    (lambda: _curves(attrs=np.array([])), r"attrs must be a mapping \(dict\) or None"),
+    (lambda: _curves(per_curve=["x"]), r"per_curve must be a mapping \(dict\) or None, got list"),
+    (lambda: _curves(source=3), "source must be a string or None, got int 3"),
+    (lambda: _curves(segment_names="approach"),
+     "segment_names must be a tuple or list of names"),
+    (lambda: _curves(segment_names=()), "segment_names must name at least one segment"),
+    (lambda: _curves(segment_types=object()), "segment_types must be a tuple or list of names"),
+    (lambda: _fit(attrs="abc"), r"attrs must be a mapping \(dict\) or None, got str"),
+    (lambda: _fit(success="yes"), "success must be True or False, got str 'yes'"),
+    (lambda: _fit(success=np.array([])), "success must be True or False, got ndarray"),
+    (lambda: _fit(model=None), "model must be a string, got None"),
+    (lambda: _fit(units=["s"]), r"units must be a mapping \(dict\) or None, got list"),
+    (lambda: make_fit_result([("tau", (1.0, 0.1))], success=True, redchi=1.0, aic=0.0, bic=0.0,
+                             modes=1, model="x"), r"params must be a mapping \(dict\)"),
+    (lambda: make_fit_result({1: (1.0, 0.1)}, success=True, redchi=1.0, aic=0.0, bic=0.0,
+                             modes=1, model="x"), "fit parameter names must be strings, got 1"),
+], ids=["eq-attrs", "eq-threshold-str", "eq-threshold-nan", "eq-threshold-array", "eq-force-None",
+        "traj-attrs", "traj-threshold", "curves-attrs", "curves-per-curve", "curves-source",
+        "curves-names-str", "curves-names-empty", "curves-types", "fit-attrs", "fit-success-str",
+        "fit-success-array", "fit-model", "fit-units", "fit-params-list", "fit-params-key"])
+def test_other_builders_reject_bad_arguments(build, match):
+    with pytest.raises(SchemaError, match=match):
+        build()

@@ -23,8 +23,8 @@ from viscoforce.solvers.simulate import simulate
 from viscoforce.solvers.svda_ode import solve_svda
 from viscoforce.svda import svda_peak_phase_frequency, svda_ramp_deformation
 
-TAU = 1e-3
-SLS = vf.StandardLinearSolid(E0=1e10, E_inf=1e9, tau=TAU)
+TAU = vf.PAPER.tau
+SLS = vf.PAPER.material()
 
 
 def phase_peak(problem, position):

@@ -184,7 +184,7 @@ def test_contact_radius_when_only_the_centre_is_below_threshold():
 
 # ── half-space validity ──────────────────────────────────────────────────────────────────────
 
-R_PAPER = 10e-6
+R_PAPER = vf.PAPER.R
 
 
 @pytest.mark.parametrize("E", [1e9, 1e10])

@@ -246,6 +246,15 @@ _T = np.linspace(0, 1e-3, 3)
     (dict(radius=0.0), "radius must be > 0"),
     (dict(debye_length=np.nan), "debye_length must be finite"),
     (dict(u_start=np.inf), "u_start must be finite"),
+    # outside the representable range (the probe found scipy ValueErrors here)
+    (dict(E_inf=1e-300), r"outside the representable range: the rate scale \(E0/E_inf\)/tau = "
+                         r"inf 1/s of Eq. 17 exceeds 1e\+120 1/s .*raise tau or E_inf"),
+    (dict(tau=1e-300), r"outside the representable range: the rate scale .* = 1e\+301 1/s"),
+    (dict(E0=1e300), r"outside the representable range: the rate scale"),
+    (dict(radius=1e300), r"outside the representable range: sqrt\(8\*pi\*R/debye_length\)"
+                         r"\*P/E0 = inf"),
+    (dict(u_start=1e300), r"u_start is outside the representable range: u_start/debye_length = "
+                          r"inf"),
 ])
 def test_solve_svda_raises_parameter_error(kwargs, match):
     args = dict(drive=_DRIVE, t_eval=_T, **PARAMS)
@@ -253,6 +262,20 @@ def test_solve_svda_raises_parameter_error(kwargs, match):
     drive = args.pop("drive")
     with pytest.raises(ParameterError, match=match):
         solve_svda(drive, **args)
+
+
+def test_solve_svda_is_quiet_for_short_but_representable_creep_times():
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        fast = solve_svda(_DRIVE, **{**PARAMS, "tau": 1e-100}, t_eval=_T)
+    assert np.all(np.isfinite(fast.force))
+
+
+def test_scipy_integrate_is_imported_where_it_is_used():
+    # CLI start-up: `spectrum` imports this module, which must not pull in scipy.integrate
+    assert not hasattr(svda_ode, "solve_ivp")
 
 
 def test_solve_svda_refuses_too_many_output_times():

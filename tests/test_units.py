@@ -446,3 +446,31 @@ def test_units_holds_no_argparse_helpers():
     source = Path(units.__file__).read_text(encoding="utf-8")
     assert "import argparse" not in source
     assert not {"quantity_type", "normalize_negative_args"} & set(units.__all__)
+
+
+# ── bad argument types (robustness probe) ─────────────────────────────────────────────────────
+
+@pytest.mark.parametrize(("call", "match"), [
+    (lambda: unit_factor("length", None), r"unit must be a unit string .*got None"),
+    (lambda: unit_factor("length", ["nm"]), r"unit must be a unit string .*got list \['nm'\]"),
+    (lambda: unit_factor("length", {}), r"unit must be a unit string .*got dict \{\}"),
+    (lambda: unit_factor("length", np.array([])), "unit must be a unit string .*got ndarray"),
+    (lambda: unit_factor("length", 1e-9), "unit must be a unit string .*got float 1e-09"),
+    (lambda: format_quantity(5e-9, "length", ["nm"]), "unit must be a unit string .*got list"),
+    (lambda: format_quantity(5e-9, "length", {"nm": 1}), "unit must be a unit string .*got dict"),
+    (lambda: format_quantity(5e-9, "length", ascii_only=np.array([])),
+     r"ascii_only must be True or False, got ndarray array\(\[\]"),
+    (lambda: format_quantity(5e-9, "length", ascii_only="yes"),
+     "ascii_only must be True or False, got str 'yes'"),
+    (lambda: format_quantity(5e-9, "length", ascii_only=None),
+     "ascii_only must be True or False, got None"),
+    (lambda: parse_quantity("5nm", "length", name=np.array([])),
+     "name must be a string or None, got ndarray"),
+    (lambda: parse_quantity("5nm", "length", name=["--h0"]),
+     r"name must be a string or None, got list \['--h0'\]"),
+], ids=["factor-None", "factor-list", "factor-dict", "factor-array", "factor-float",
+        "format-unit-list", "format-unit-dict", "format-ascii-array", "format-ascii-str",
+        "format-ascii-None", "parse-name-array", "parse-name-list"])
+def test_bad_argument_types_raise_parameter_error(call, match):
+    with pytest.raises(ParameterError, match=match):
+        call()

@@ -134,7 +134,8 @@ def svda_static_deformation(position: ArrayLike, E: float, radius: float, P: flo
         return np.zeros_like(h0)
     # z = prefactor e^{−κh0}, prefactor = sqrt(8πRκ)·P/E, taken in logs: it overflows a float64
     # for a tiny E or debye_length although u stays finite.
-    log_abs_prefactor = 0.5 * math.log(8.0 * math.pi * r * kappa) + math.log(abs(p)) - math.log(e)
+    log_abs_prefactor = (0.5 * (math.log(8.0 * math.pi) + math.log(r) + math.log(kappa))
+                         + math.log(abs(p)) - math.log(e))
     with np.errstate(over="ignore", invalid="ignore"):  # κh0 = ±inf: refused or e^{−inf} = 0
         log_abs_z = log_abs_prefactor - kappa * h0
     if p > 0.0:

@@ -200,12 +200,19 @@ def _dimension(dimension: str) -> _Dimension:
             f"dimension must be one of {', '.join(DIMENSIONS)}; got {dimension!r}") from None
 
 
+def _describe(value: object) -> str:
+    """Short text for a rejected value: ``None``, ``list [1, 2]``, ``ndarray array([], ...)``."""
+    if value is None:
+        return "None"
+    text = repr(value)
+    return f"{type(value).__name__} {text if len(text) <= 60 else text[:57] + '...'}"
+
+
 def _require_unit_text(name: str, unit: object) -> str:
     """Return ``unit`` unchanged, raising ParameterError unless it is a string."""
     if not isinstance(unit, str):
-        shown = "None" if unit is None else f"{type(unit).__name__} {unit!r:.60}"
         raise ParameterError(
-            f"{name} must be a unit string (see accepted_units()), got {shown}")
+            f"{name} must be a unit string (see accepted_units()), got {_describe(unit)}")
     return unit
 
 
@@ -361,8 +368,7 @@ def parse_quantity(text: str | float, dimension: str, *, name: str | None = None
     """
     spec = _dimension(dimension)
     if name is not None and not isinstance(name, str):
-        raise ParameterError(
-            f"name must be a string or None, got {type(name).__name__} {name!r:.60}")
+        raise ParameterError(f"name must be a string or None, got {_describe(name)}")
     prefix = f"{name}: " if name else ""
     if not isinstance(text, str):
         value = _real(text, f"{prefix}expected {spec.phrase} as a string or real number")
@@ -434,9 +440,7 @@ def format_quantity(value: float, dimension: str, unit: str | None = None, *, di
     if isinstance(digits, bool) or not isinstance(digits, int) or not 1 <= digits <= 17:
         raise ParameterError(f"digits must be an integer in [1, 17], got {digits!r}")
     if not isinstance(ascii_only, bool):
-        raise ParameterError(
-            f"ascii_only must be True or False, got {type(ascii_only).__name__} "
-            f"{ascii_only!r:.60}")
+        raise ParameterError(f"ascii_only must be True or False, got {_describe(ascii_only)}")
     if unit is not None:
         _require_unit_text("unit", unit)
         chosen, factor = unit, _lookup_unit(dimension, unit, repr(unit), "unit").factor

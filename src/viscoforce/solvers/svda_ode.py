@@ -105,11 +105,11 @@ class _SVDARates:
         exponent = y - self.kappa * h0
         if not (math.isfinite(h0) and math.isfinite(v) and math.isfinite(y)):
             raise ConvergenceError(
-                f"SVDA right-hand side is not finite at t={t!r} s (position={h0!r} m, "
+                f"SVDA right-hand side is not finite at t={float(t)!r} s (position={h0!r} m, "
                 f"velocity={v!r} m/s, kappa*u={y!r}); check the drive", time=t)
         if exponent > MAX_EXPONENT:
             raise ConvergenceError(
-                f"SVDA gap collapsed at t={t!r} s: kappa*(h0 − u) = {-exponent:.4g} makes "
+                f"SVDA gap collapsed at t={float(t)!r} s: kappa*(h0 − u) = {-exponent:.4g} makes "
                 f"exp(−kappa*h) overflow; the drive is far outside the SVDA's validity", time=t)
         return self.f_prefactor * math.exp(exponent), v
 
@@ -135,7 +135,7 @@ class _SVDARates:
         if not math.isfinite(value):
             raise ParameterError(
                 f"the inputs are outside the representable range: the SVDA rate (Eq. 17) "
-                f"overflows a float64 at t={t!r} s (tau={self.tau!r} s, "
+                f"overflows a float64 at t={float(t)!r} s (tau={self.tau!r} s, "
                 f"E0/E_inf={self.ratio!r}, kappa={self.kappa!r} 1/m, kappa*u={y!r})")
         return value
 
@@ -219,7 +219,9 @@ def solve_svda(drive: SeparationHistory, *, E0: float, E_inf: float, tau: float,
     Raises
     ------
     ParameterError
-        If an input is out of range or ``drive`` lacks the SeparationHistory methods.
+        If an input is out of range, ``drive`` lacks the SeparationHistory methods, or the inputs
+        are outside the representable range (the rate scale (E0/E_inf)/τ above
+        :data:`MAX_RATE`, κ·u_start or the prefactor of f overflowing a float64).
     EffortError
         If ``t_eval`` holds more than :data:`~viscoforce._limits.MAX_SAMPLES` times.
     ConvergenceError
@@ -245,8 +247,8 @@ def solve_svda(drive: SeparationHistory, *, E0: float, E_inf: float, tau: float,
         raise ParameterError(
             f"the inputs are outside the representable range: the rate scale (E0/E_inf)/tau = "
             f"{max(1.0, ratio) / tau_:.3g} 1/s of Eq. 17 exceeds {MAX_RATE:g} 1/s (E0={E0!r} "
-            f"Pa, E_inf={E_inf!r} Pa, tau={tau!r} s); a creep time that short relaxes "
-            f"instantly: model the solid as elastic with E = E_inf")
+            f"Pa, E_inf={E_inf!r} Pa, tau={tau!r} s): raise tau or E_inf (a solid that relaxes "
+            f"this fast is elastic with E = E_inf)")
     times = require_increasing("t_eval", t_eval)
     if times[0] < 0:
         raise ParameterError(f"t_eval must start at >= 0 s, got t_eval[0]={times[0]!r}")
