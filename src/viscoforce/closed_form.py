@@ -204,7 +204,7 @@ def sls_creep_compliance(t: ArrayLike, E0: float, E_inf: float, tau: float) -> F
     t : float or array_like
         Times since the load was applied [s], >= 0.
     E0 : float
-        Instantaneous (short-time, glassy) modulus [Pa], >= E_inf.
+        Instantaneous (short-time, glassy) modulus [Pa], > E_inf.
     E_inf : float
         Relaxed (long-time) modulus [Pa], > 0.
     tau : float
@@ -238,7 +238,7 @@ def sls_complex_compliance(omega: ArrayLike, E0: float, E_inf: float, tau: float
     omega : float or array_like
         Angular frequencies [rad/s], >= 0.
     E0 : float
-        Instantaneous modulus [Pa], >= E_inf.
+        Instantaneous modulus [Pa], > E_inf.
     E_inf : float
         Relaxed modulus [Pa], > 0.
     tau : float

@@ -183,7 +183,7 @@ def svda_ramp_deformation(t: ArrayLike, position: float, speed: float, E0: float
     speed : float
         Drive velocity ḣ [m/s]; negative when approaching (h0(t) = position + speed·t).
     E0 : float
-        Instantaneous modulus [Pa], >= E_inf.
+        Instantaneous modulus [Pa], > E_inf.
     E_inf : float
         Relaxed modulus [Pa], > 0.
     tau : float
@@ -349,7 +349,7 @@ def svda_harmonic_response(omega: ArrayLike, position: float, eta: float, E0: fl
     eta : float
         Drive amplitude η [m], >= 0 (the result is linear in η).
     E0 : float
-        Instantaneous modulus [Pa], >= E_inf.
+        Instantaneous modulus [Pa], > E_inf.
     E_inf : float
         Relaxed modulus [Pa], > 0.
     tau : float
@@ -414,7 +414,7 @@ def svda_complex_stiffness(omega: ArrayLike, position: float, E0: float, E_inf: 
     position : float
         Mean position h̄0 [m].
     E0 : float
-        Instantaneous modulus [Pa], >= E_inf.
+        Instantaneous modulus [Pa], > E_inf.
     E_inf : float
         Relaxed modulus [Pa], > 0.
     tau : float
@@ -459,7 +459,7 @@ def svda_peak_phase_frequency(position: float, E0: float, E_inf: float, tau: flo
     position : float
         Mean position h̄0 [m].
     E0 : float
-        Instantaneous modulus [Pa], >= E_inf.
+        Instantaneous modulus [Pa], > E_inf.
     E_inf : float
         Relaxed modulus [Pa], > 0.
     tau : float

@@ -188,7 +188,7 @@ def solve_svda(drive: SeparationHistory, *, E0: float, E_inf: float, tau: float,
     drive : SeparationHistory
         Position h0(t) [m] and velocity [m/s], with ``duration`` [s] and ``breakpoints()`` [s].
     E0 : float
-        Instantaneous modulus [Pa], >= E_inf.
+        Instantaneous modulus [Pa], > E_inf.
     E_inf : float
         Relaxed modulus [Pa], > 0.
     tau : float

@@ -1,0 +1,269 @@
+"""JPK archive → schema *curves* dataset (:func:`jpk_to_curves`).
+
+What goes where (SI throughout; the file is never modified):
+
+* per sample: ``time`` [s] from the start of the curve (segment ``start_time`` + i·duration /
+  num_points), ``force`` [N] as the file gives it (**no baseline subtracted**), ``height`` [m]
+  from the preferred height channel, ``deflection`` [m] (``vDeflection``), ``tip_position`` [m]
+  = −height − deflection (tip displacement toward the sample, the :func:`~viscoforce.schema.
+  make_curves` default), ``segment`` (row of the segment table);
+* per curve: ``x``, ``y`` [m], ``spring_constant`` [N/m], ``sensitivity`` [m/V], ``baseline`` [N]
+  (the file's free-cantilever baseline converted to force; NaN when the file has none) and a
+  ``curve`` coordinate holding the curve's index in the archive;
+* per segment (``segment_table``, one row per segment of every curve): ``segment_name`` (one of
+  :data:`~viscoforce.schema.SEGMENT_NAMES`), ``segment_type`` (the file's
+  ``settings.segment-settings.type``), ``segment_style``, ``segment_curve`` (row of ``curve``),
+  ``segment_index``, ``segment_start_time`` [s], ``segment_duration`` [s], ``segment_num_points``,
+  ``segment_frequency`` [Hz] and ``segment_amplitude`` [m] (nominal drive of modulation segments,
+  NaN otherwise), ``segment_baseline`` [N];
+* ``attrs`` (flat numbers and strings): ``source`` = ``"jpk"``, ``file``, ``archive_kind``,
+  ``n_curves``, ``height_channel``, ``force_baseline_subtracted`` = 0, the calibration of the
+  first curve (``spring_constant``, ``sensitivity``; per-curve values are the variables), the grid
+  (``grid_*``) of a map, and the settings of the first curve's segments ``segment_<k>_style``,
+  ``_type``, ``_duration``, ``_num_points``, and for modulation ``_frequency``, ``_amplitude``,
+  ``_start_phase``.
+
+Height channel: the calibrated sensor where the file has one, in the order ``strainGaugeHeight``,
+``measuredHeight``, ``capacitiveSensorHeight``, then the piezo ``height``. One channel is used for
+the whole dataset: the first of that order present in every segment of every selected curve (a
+channel that exists in some segments only, e.g. ``capacitiveSensorHeight`` in extend and retract,
+would make the height jump between segments).
+"""
+
+from __future__ import annotations
+
+import math
+import operator
+from collections.abc import Iterable
+from typing import Any
+
+import numpy as np
+import xarray as xr
+
+from viscoforce.exceptions import InstrumentFormatError, ParameterError
+from viscoforce.io.jpk import JPKArchive, JPKCurve, JPKSegment
+from viscoforce.schema import make_curves, validate_curves
+
+__all__ = ["HEIGHT_CHANNELS", "jpk_to_curves", "segment_name"]
+
+#: Height channels in order of preference (calibrated sensors first, the piezo last).
+HEIGHT_CHANNELS = ("strainGaugeHeight", "measuredHeight", "capacitiveSensorHeight", "height")
+_STYLES = {"extend": "approach", "approach": "approach", "retract": "retract", "pause": "pause",
+           "modulation": "modulation"}
+_TYPE_WORDS = (("modulation", "modulation"), ("pause", "pause"), ("extend", "approach"),
+               ("retract", "retract"))
+
+
+def segment_name(style: str, type_: str = "") -> str:
+    """Schema segment name of a JPK segment: by ``settings.style``, else by words of its type.
+
+    extend → approach, retract → retract, pause → pause, modulation → modulation, anything
+    else → other.
+    """
+    name = _STYLES.get(style.strip().lower())
+    if name is not None:
+        return name
+    low = type_.lower()
+    for word, found in _TYPE_WORDS:
+        if word in low:
+            return found
+    return "other"
+
+
+def _select(archive: JPKArchive, curves: int | Iterable[int] | None) -> list[int]:
+    n = archive.n_curves
+    if curves is None:
+        return list(range(n))
+    if isinstance(curves, int | np.integer) and not isinstance(curves, bool):
+        curves = [curves]
+    try:
+        picked = [operator.index(c) for c in curves]  # type: ignore[union-attr]
+    except TypeError:
+        raise ParameterError(f"curves must be None, an integer or integers, got {curves!r}"
+                             ) from None
+    if not picked:
+        raise ParameterError("curves selects no curve; give None for all")
+    for c in picked:
+        if not -n <= c < n:
+            raise ParameterError(f"curve index {c} out of range for {n} curves in {archive.path}")
+    return [c % n for c in picked]
+
+
+def _height_channel(decoded: list[JPKCurve], wanted: str | None) -> str:
+    segments = [s for c in decoded for s in c.segments]
+    if wanted is not None:
+        if wanted not in HEIGHT_CHANNELS:
+            raise ParameterError(f"height_channel must be one of {HEIGHT_CHANNELS}, got "
+                                 f"{wanted!r}")
+        missing = [f"curve {c.index} segment {s.index}" for c in decoded for s in c.segments
+                   if wanted not in s.channels]
+        if missing:
+            raise ParameterError(f"height_channel {wanted!r} is missing in {', '.join(missing[:5])}")
+        return wanted
+    for name in HEIGHT_CHANNELS:
+        if all(name in s.channels and s.units.get(name, "m") == "m" for s in segments):
+            return name
+    raise InstrumentFormatError(
+        "no height channel in metres is present in every segment (looked for "
+        f"{', '.join(HEIGHT_CHANNELS)})")
+
+
+def _require(seg: JPKSegment, curve: JPKCurve, name: str, unit: str) -> np.ndarray:
+    if name not in seg.channels:
+        raise InstrumentFormatError(
+            f"curve {curve.index} segment {seg.index} has no {name!r} channel "
+            f"(channels: {', '.join(sorted(seg.channels))}); is the deflection calibrated?")
+    if seg.units.get(name, unit) != unit:
+        raise InstrumentFormatError(
+            f"curve {curve.index} segment {seg.index}: {name!r} is in {seg.units[name]!r}, not "
+            f"{unit!r}: the file lacks its calibration")
+    return np.asarray(seg.channels[name], dtype=float)
+
+
+def _nan(value: float | None) -> float:
+    return math.nan if value is None else float(value)
+
+
+def _file_attrs(archive: JPKArchive, first: JPKCurve, height: str) -> dict[str, Any]:
+    attrs: dict[str, Any] = {
+        "file": str(archive.path), "archive_kind": archive.kind, "n_curves": archive.n_curves,
+        "height_channel": height, "force_baseline_subtracted": 0,
+        "force_convention": "force = spring_constant x vDeflection, positive when the tip is "
+                            "pushed away from the sample (repulsion); not baseline-corrected",
+        "tip_position_convention": "tip_position = -height - deflection: tip displacement toward "
+                                   "the sample, up to an offset",
+        "spring_constant": float(first.spring_constant), "sensitivity": float(first.sensitivity),
+        "n_segments": len(first.segments),
+    }
+    if archive.grid is not None:
+        g = archive.grid
+        attrs.update(grid_ilength=int(g.ilength), grid_jlength=int(g.jlength),
+                     grid_ulength=float(g.ulength), grid_vlength=float(g.vlength),
+                     grid_xcenter=float(g.xcenter), grid_ycenter=float(g.ycenter))
+    for s in first.segments:
+        p = f"segment_{s.index}_"
+        attrs[p + "style"] = s.style
+        attrs[p + "type"] = s.type
+        attrs[p + "name"] = segment_name(s.style, s.type)
+        attrs[p + "duration"] = float(s.duration)
+        attrs[p + "num_points"] = int(s.num_points)
+        if s.modulation is not None:
+            attrs[p + "frequency"] = float(s.modulation.frequency)
+            attrs[p + "amplitude"] = float(s.modulation.amplitude)
+            if s.modulation.start_phase is not None:
+                attrs[p + "start_phase"] = float(s.modulation.start_phase)
+    return attrs
+
+
+def jpk_to_curves(archive: JPKArchive, *, curves: int | Iterable[int] | None = None,
+                  height_channel: str | None = None) -> xr.Dataset:
+    """The schema curves dataset of all (or the selected) curves of a JPK archive.
+
+    See the module docstring for every variable and attribute.
+
+    Parameters
+    ----------
+    archive : JPKArchive
+        An archive opened by :func:`viscoforce.io.jpk.read_jpk`.
+    curves : int or iterable of int, optional
+        Indices of the curves to convert (negative count from the end); default all.
+    height_channel : str, optional
+        Force one of :data:`HEIGHT_CHANNELS`; default the first of them present in every
+        segment of every selected curve.
+
+    Returns
+    -------
+    xarray.Dataset
+        Valid under :func:`viscoforce.schema.validate_curves`; ``attrs["height_channel"]`` names
+        the height used.
+
+    Raises
+    ------
+    ParameterError
+        If ``archive`` is not a JPKArchive, ``curves`` is malformed or out of range, or
+        ``height_channel`` is unknown or missing somewhere.
+    InstrumentFormatError
+        If a segment lacks a calibrated ``vDeflection``/``force`` or any height channel.
+    """
+    if not isinstance(archive, JPKArchive):
+        raise ParameterError(f"archive must be a JPKArchive (from read_jpk), got "
+                             f"{type(archive).__name__}")
+    picked = _select(archive, curves)
+    decoded = [archive.curve(i) for i in picked]
+    height = _height_channel(decoded, height_channel)
+
+    cols: dict[str, list[np.ndarray]] = {"time": [], "force": [], "height": [], "deflection": [],
+                                         "segment": []}
+    table: dict[str, list[Any]] = {k: [] for k in (
+        "name", "type", "style", "curve", "index", "start_time", "duration", "num_points",
+        "frequency", "amplitude", "baseline")}
+    counts, baselines = [], []
+    for row, curve in enumerate(decoded):
+        n_curve = 0
+        for seg in curve.segments:
+            n = int(seg.num_points)
+            force = _require(seg, curve, "force", "N")
+            defl = _require(seg, curve, "vDeflection", "m")
+            h = _require(seg, curve, height, "m")
+            if not force.size == defl.size == h.size == n:
+                raise InstrumentFormatError(
+                    f"curve {curve.index} segment {seg.index}: channel lengths force {force.size}, "
+                    f"vDeflection {defl.size}, {height} {h.size} differ from num-points {n}")
+            cols["time"].append(seg.start_time + np.arange(n) * (seg.duration / n))
+            cols["force"].append(force)
+            cols["deflection"].append(defl)
+            cols["height"].append(h)
+            cols["segment"].append(np.full(n, len(table["name"]), dtype=np.int32))
+            mod = seg.modulation
+            table["name"].append(segment_name(seg.style, seg.type))
+            table["type"].append(seg.type)
+            table["style"].append(seg.style)
+            table["curve"].append(row)
+            table["index"].append(seg.index)
+            table["start_time"].append(float(seg.start_time))
+            table["duration"].append(float(seg.duration))
+            table["num_points"].append(n)
+            table["frequency"].append(math.nan if mod is None else float(mod.frequency))
+            table["amplitude"].append(math.nan if mod is None else float(mod.amplitude))
+            table["baseline"].append(_nan(seg.baseline))
+            n_curve += n
+        counts.append(n_curve)
+        known = [s.baseline for s in curve.segments if s.baseline is not None]
+        baselines.append(float(known[0]) if known else math.nan)
+
+    flat = {k: np.concatenate(v) for k, v in cols.items()}
+    per_curve = {"x": [c.x for c in decoded], "y": [c.y for c in decoded],
+                 "spring_constant": [c.spring_constant for c in decoded],
+                 "sensitivity": [c.sensitivity for c in decoded]}
+    ds = make_curves(flat["time"], flat["force"], flat["height"], flat["deflection"],
+                     segment=flat["segment"], segment_names=table["name"],
+                     segment_types=table["type"], sample_count=counts, per_curve=per_curve,
+                     attrs=_file_attrs(archive, decoded[0], height), source="jpk")
+    seg_dim = ("segment_table",)
+    extra = {
+        "baseline": (("curve",), np.asarray(baselines, dtype=float),
+                     {"units": "N", "long_name": "free-cantilever force baseline from the file "
+                                                 "(not subtracted from force)"}),
+        "segment_style": (seg_dim, np.asarray(table["style"], dtype=str),
+                          {"long_name": "segment style as the file names it"}),
+        "segment_curve": (seg_dim, np.asarray(table["curve"], dtype=np.int32),
+                          {"units": "1", "long_name": "row of the curve dim the segment belongs to"}),
+        "segment_index": (seg_dim, np.asarray(table["index"], dtype=np.int32),
+                          {"units": "1", "long_name": "segment number within its curve"}),
+        "segment_start_time": (seg_dim, np.asarray(table["start_time"]),
+                               {"units": "s", "long_name": "segment start from the curve start"}),
+        "segment_duration": (seg_dim, np.asarray(table["duration"]),
+                             {"units": "s", "long_name": "segment duration"}),
+        "segment_num_points": (seg_dim, np.asarray(table["num_points"], dtype=np.int32),
+                               {"units": "1", "long_name": "number of samples of the segment"}),
+        "segment_frequency": (seg_dim, np.asarray(table["frequency"]),
+                              {"units": "Hz", "long_name": "modulation frequency (nominal)"}),
+        "segment_amplitude": (seg_dim, np.asarray(table["amplitude"]),
+                              {"units": "m", "long_name": "modulation amplitude (nominal drive)"}),
+        "segment_baseline": (seg_dim, np.asarray(table["baseline"]),
+                             {"units": "N", "long_name": "free-cantilever force baseline"}),
+    }
+    ds = ds.assign(extra).assign_coords(
+        curve=("curve", np.asarray(picked, dtype=np.int32),
+               {"units": "1", "long_name": "index of the curve in the archive"}))
+    return validate_curves(ds)
