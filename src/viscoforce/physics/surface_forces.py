@@ -85,7 +85,7 @@ class SurfaceForceLaw(ABC):
 
     def values(self) -> dict[str, float]:
         """The law's own parameters in SI, by field name (``{"P": 1e7, "debye_length": 1e-9}``)."""
-        return {k: float(v) for k, v in vars(self).items()}
+        return {k: float(v) for k, v in vars(self).items() if not k.startswith("_")}
 
     def parameters(self) -> dict[str, float | str]:
         """Flat dataset attrs: ``surface_force`` (:meth:`describe`) and the named values (SI)."""
@@ -116,15 +116,18 @@ class DoubleLayer(SurfaceForceLaw):
         object.__setattr__(self, "P", require_positive("P (double-layer pressure scale)", self.P))
         object.__setattr__(self, "debye_length",
                            require_positive("debye_length", self.debye_length))
+        object.__setattr__(self, "_minus_kappa", -1.0 / self.debye_length)
 
     def pressure(self, gap):
         """Pressure [Pa] at gap [m] (+inf where e^{−h/λ} overflows, h < −709 λ)."""
         h = _as_gap(gap)
-        # clipping at ±1000 λ changes nothing (e^{−1000} is 0 in float64, e^{+1000} overflows)
-        # and keeps h/λ from overflowing for absurd gaps; NaN passes through to the check below
-        limit = _CLIP_DECAY_LENGTHS * self.debye_length
-        x = np.clip(h, -limit, limit) / -self.debye_length
+        # NaN passes through to the one check below; gaps beyond ±1e299 m make h/λ overflow
+        # quietly to ±inf and take the slow path (no clip on the solvers' hot path)
+        with np.errstate(over="ignore"):
+            x = h * self._minus_kappa
         if x.size and not x.max() <= _MAX_EXPONENT:  # one reduction: NaN, or overflowing e^x
+            limit = _CLIP_DECAY_LENGTHS * self.debye_length
+            x = np.clip(h, -limit, limit) * self._minus_kappa
             _reject_nan(h)
             with np.errstate(over="ignore"):  # absurdly overlapping bodies: an honest +inf
                 return self.P * np.exp(x)
