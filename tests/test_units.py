@@ -108,6 +108,13 @@ CONVERSIONS = [
     ("40mN/m", "stiffness", 4e-2),
     ("3nN/nm", "stiffness", 3.0),
     ("20pN/nm", "stiffness", 2e-2),
+    # deflection sensitivity and drag (viscoforce load --sensitivity, --drag)
+    ("50nm/V", "sensitivity", 5e-8),
+    ("1.1028e-7m/V", "sensitivity", 1.1028e-7),
+    ("2um/V", "sensitivity", 2e-6),
+    ("1e-6N*s/m", "drag", 1e-6),
+    ("3uN*s/m", "drag", 3e-6),
+    ("2kg/s", "drag", 2.0),
     # dimensionless
     ("0.5", "dimensionless", 0.5),
     ("0.5 1", "dimensionless", 0.5),
@@ -275,7 +282,7 @@ def test_bad_numeric_input(value, pattern):
 def test_unknown_dimension(dimension):
     with pytest.raises(ParameterError, match=r"dimension must be one of length, time, pressure, "
                                              r"speed, angular_frequency, frequency, force, "
-                                             r"stiffness, dimensionless; got"):
+                                             r"stiffness, sensitivity, drag, dimensionless; got"):
         parse_quantity("1", dimension)
     with pytest.raises(ParameterError, match=r"dimension must be one of"):
         accepted_units(dimension)

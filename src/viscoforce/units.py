@@ -161,6 +161,15 @@ _DIMENSIONS: dict[str, _Dimension] = {
         "a stiffness", "stiffness", "0.1N/m",
         _d(("N/m", 1, 0), ("mN/m", 1, -3), ("nN/nm", 1, 0), ("pN/nm", 1, -3)),
         ("mN/m", "N/m")),
+    "sensitivity": _Dimension(
+        "a deflection sensitivity", "deflection sensitivity", "50nm/V",
+        _d(("m/V", 1, 0), ("mm/V", 1, -3), ("µm/V", 1, -6), ("nm/V", 1, -9)),
+        ("nm/V", "µm/V", "m/V")),
+    "drag": _Dimension(
+        "a drag coefficient", "drag coefficient", "1e-6N*s/m",
+        _d(("N*s/m", 1, 0), ("Ns/m", 1, 0), ("N s/m", 1, 0), ("kg/s", 1, 0), ("mN*s/m", 1, -3),
+           ("µN*s/m", 1, -6), ("nN*s/m", 1, -9), ("pN*s/nm", 1, -3)),
+        ("N*s/m",)),
     "dimensionless": _Dimension(
         "a dimensionless number", "dimensionless quantities", "0.5",
         _d(("1", 1, 0)),

@@ -51,6 +51,7 @@ COMMANDS: tuple[Command, ...] = (
     Command("static", "model", "static elastic equilibrium at one position"),
     Command("simulate", "model", "viscoelastic response along a drive h0(t)"),
     Command("spectrum", "model", "force spectroscopy: stiffness and phase vs omega"),
+    Command("load", "analysis", "instrument file to curves or a modulation spectrum"),
 )
 
 _DESCRIPTION = ("Viscoelastic particles with finite-ranged surface forces (SI or unit suffixes: "

@@ -1,0 +1,135 @@
+"""Commands that analyse measured data: ``load`` (fit, bode and demo follow).
+
+Like :mod:`viscoforce.cli.model`, each command is a pair in :data:`SUBCOMMANDS`; the library is
+imported inside the run functions.
+"""
+
+from __future__ import annotations
+
+import argparse
+import re
+
+from viscoforce.cli._args import (
+    NETCDF,
+    Flag,
+    FlagGroup,
+    Output,
+    UsageError,
+    add_flags,
+    add_outputs,
+    quantity_type,
+)
+from viscoforce.cli._output import print_json, print_written
+
+__all__ = ["SUBCOMMANDS", "phase_lag_type"]
+
+_PAIR_RE = re.compile(r"^\s*(?P<f>[^=:]+?)\s*[=:]\s*(?P<deg>[-+0-9.eE]+)\s*$")
+_FREQUENCY = quantity_type("frequency")
+
+
+def phase_lag_type(text: str) -> float | tuple[float, float]:
+    """``--phase-lag`` value: degrees (``14``) or a frequency=degrees pair (``300Hz=14``).
+
+    Returns a float (one lag for every frequency) or a (frequency [Hz], degrees) pair.
+    """
+    match = _PAIR_RE.match(text)
+    try:
+        if match is None:
+            return float(text)
+        return (_FREQUENCY(match["f"]), float(match["deg"]))
+    except (ValueError, argparse.ArgumentTypeError):
+        raise argparse.ArgumentTypeError(
+            f"expected degrees (e.g. 14) or FREQUENCY=DEGREES pairs (e.g. 300Hz=14), got "
+            f"{text!r}") from None
+
+
+LOAD_FLAGS = FlagGroup(None, (
+    Flag("--format", None, None, "NAME", "file format (default: detected from the content)"),
+    Flag("--spring-constant", "stiffness", None, "STIFFNESS",
+         "cantilever spring constant, e.g. 0.1N/m (for files without calibration)"),
+    Flag("--sensitivity", "sensitivity", None, "SENSITIVITY",
+         "deflection sensitivity, e.g. 50nm/V (for files without calibration)"),
+    Flag("--drag", "drag", None, "DRAG",
+         "hydrodynamic drag B, subtracted from the spectrum as i*omega*B, e.g. 1e-6N*s/m"),
+))
+
+
+def add_load(parser: argparse.ArgumentParser) -> None:
+    """Flags of ``viscoforce load``."""
+    parser.add_argument("file", metavar="FILE", help="instrument file (JPK, CSV, ...)")
+    add_flags(parser, LOAD_FLAGS)
+    parser.add_argument("--phase-lag", type=phase_lag_type, nargs="+", default=None,
+                        metavar="LAG", help="instrument phase lag subtracted from the spectrum: "
+                        "degrees for all frequencies, or FREQUENCY=DEGREES pairs")
+    parser.add_argument("--raw", action="store_true",
+                        help="write the curves, not the spectrum of the modulation segments")
+    add_outputs(parser, [Output("--out", NETCDF, "FILE.nc", "write the dataset (netCDF)")])
+    parser.add_argument("--json", action="store_true",
+                        help="print one JSON object: format, kind, n_curves, dims, variables")
+
+
+def _phase_lag(values: list | None, data) -> float | dict[float, float] | None:
+    """One lag [deg] for all frequencies, or {Hz: deg} with 0 for the frequencies not named."""
+    if values is None:
+        return None
+    scalars = [v for v in values if not isinstance(v, tuple)]
+    if scalars and len(values) > 1:
+        raise UsageError("--phase-lag takes one number of degrees or FREQUENCY=DEGREES pairs, "
+                         "not both")
+    if scalars:
+        return float(scalars[0])
+    import numpy as np
+
+    lags = dict(values)
+    present = np.unique(data["segment_frequency"].values) if "segment_frequency" in data else []
+    present = [float(f) for f in present if np.isfinite(f)]
+    for f in lags:
+        if not any(abs(f - p) <= 1e-9 * p for p in present):
+            raise UsageError(f"--phase-lag {f:g}Hz: the file has no modulation at that frequency "
+                             f"(it has {', '.join(f'{p:g}' for p in present)} Hz)")
+    return {p: next((v for f, v in lags.items() if abs(f - p) <= 1e-9 * p), 0.0) for p in present}
+
+
+def _has_modulation(ds) -> bool:
+    names = ds.get("segment_name")
+    return names is not None and bool((names.values == "modulation").any())
+
+
+def run_load(args: argparse.Namespace) -> int:
+    """Read an instrument file; modulation segments become a spectrum unless ``--raw``."""
+    from viscoforce.experiments.modulation import modulation_spectrum
+    from viscoforce.io.instruments import load_instrument
+
+    options = {k: v for k, v in (("spring_constant", args.spring_constant),
+                                 ("sensitivity", args.sensitivity)) if v is not None}
+    data = load_instrument(args.file, format=args.format, **options)
+    fmt = str(data.attrs.get("source", args.format or ""))
+    corrections = args.drag is not None or args.phase_lag is not None
+    if "omega" in data.dims or args.raw or not _has_modulation(data):
+        if corrections and "omega" not in data.dims:
+            raise UsageError("--drag and --phase-lag correct a spectrum; this file gives curves "
+                             "(no modulation segments, or --raw)")
+        ds = data
+    else:
+        ds = modulation_spectrum(data, phase_lag=_phase_lag(args.phase_lag, data), drag=args.drag)
+    if args.out:
+        ds.to_netcdf(args.out, engine="h5netcdf")
+    kind = "spectrum" if "omega" in ds.dims else "curves"
+    result = {"format": fmt, "kind": kind,
+              "n_curves": int(ds.sizes.get("curve", 1)),
+              "dims": {str(k): int(v) for k, v in ds.sizes.items()},
+              "variables": sorted(str(v) for v in ds.data_vars)}
+    if args.json:
+        print_json(result)
+        return 0
+    print(f"{args.file}: format {fmt}, {kind} of {result['n_curves']} curve(s); dims "
+          + ", ".join(f"{k}={v}" for k, v in result["dims"].items()))
+    print("variables: " + ", ".join(result["variables"]))
+    print_written(args.out)
+    return 0
+
+
+#: The commands of this module: name → (add the flags to a parser, run the parsed arguments).
+SUBCOMMANDS = {
+    "load": (add_load, run_load),
+}

@@ -1,0 +1,540 @@
+"""Vendor force curves read through the MIT library `afmformats` into a schema *curves* dataset.
+
+Formats (detected by content, :func:`detect_afmformats`; read by :func:`read_afmformats`):
+
+* Asylum Research / Igor binary wave ``.ibw`` (force from the ``Defl`` column times the file's
+  ``SpringConstant``; ``ZSnsr`` height; segments from the wave note ``Indexes`` / ``Direction``);
+* AFM Workshop ``.csv`` (``Force-Distance Curve`` header; force in nN, or photodiode T-B in V,
+  which needs ``spring_constant`` and ``sensitivity``), and zips of them (a map);
+* Optics11 Chiaro ``.txt`` (``Device:<tab>Chiaro`` header), also inside a zip (one curve per
+  member);
+* NT-MDT Nova text export ``.txt`` (three numeric columns, decimal commas, no header): there is no
+  calibration in the file, so ``spring_constant`` and ``sensitivity`` must be given.
+
+What goes where (SI; the file is opened read-only and never modified; zip members are copied to a
+temporary directory because afmformats reads paths):
+
+* per sample: ``time`` [s] (the file's where it has one; Igor: sample / ``NumPtsPerSec``;
+  AFM Workshop and NT-MDT record none: the sample index is used, 1 s per sample, and
+  ``attrs["time_channel"]`` says so), ``force`` [N] as the file gives it (no baseline
+  subtracted), ``height`` [m] (afmformats' convention, as JPK's: it grows away from the sample;
+  the measured/sensor height where there is one, see ``attrs["height_channel"]``),
+  ``deflection`` [m] = force / spring constant (``attrs["deflection_channel"]``; NaN when the file
+  gives force but no spring constant), ``tip_position`` = −height − deflection, ``segment``;
+* per curve: ``spring_constant`` [N/m], ``sensitivity`` [m/V] (NaN where unknown), ``x``, ``y``
+  [m] where the file has a position, and a ``curve`` coordinate (index in the file);
+* ``segment_table``: afmformats segment 0 → ``approach``, 1 → ``retract`` (Igor: note direction
+  1 → approach, −1 → retract, 0 → pause), ``segment_type`` the file's own label;
+* ``attrs``: ``source`` = ``"afmformats:<maker> (<description>)"``, ``file``, ``n_curves``,
+  ``afmformats_version``, the channels used, and every afmformats metadata value that is a
+  number or a string as ``meta_<key>``, as afmformats gives it (mostly SI; its Chiaro loader
+  leaves ``setpoint`` in µN, speeds in µm/s and ``z range`` in nm; spaces → underscores;
+  per-curve numbers that differ become arrays, differing strings are joined with ``" | "``).
+
+Calibration given by the caller: NT-MDT needs both (``sensitivity`` as Nova displays it, "nm/V",
+which is really nm per nA of photodiode current; afmformats wants it in m/A, hence ×1e9);
+AFM Workshop uses them where its columns are volts and for the deflection of force columns; for
+Igor they *recalibrate* (deflection × sensitivity/file sensitivity, force = k × deflection), for
+Chiaro ``spring_constant`` recalibrates the force and ``sensitivity`` does not apply.
+
+afmformats' exceptions derive from ``BaseException``; they are caught by name
+(``afmformats.errors.AFMFileFormatError`` and its subclasses, ``MissingMetaDataError``) together
+with the ordinary errors its parsers raise on broken input, and re-raised as
+:class:`~viscoforce.exceptions.InstrumentFormatError` naming the file (and member).
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+import re
+import shutil
+import struct
+import tempfile
+import zipfile
+import zlib
+from collections.abc import Iterator, Sequence
+from contextlib import contextmanager
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import xarray as xr
+
+from viscoforce._validation import require_positive
+from viscoforce.exceptions import InstrumentFormatError, ParameterError, ViscoforceError
+from viscoforce.schema import make_curves
+
+__all__ = ["AFMFORMATS_EXTENSIONS", "detect_afmformats", "read_afmformats"]
+
+#: File extensions :func:`read_afmformats` handles (content decides, see :func:`detect_afmformats`).
+AFMFORMATS_EXTENSIONS = (".ibw", ".csv", ".txt", ".zip")
+_MEMBER_EXTENSIONS = (".ibw", ".csv", ".txt")
+_HEAD = 65536
+#: uncompressed bytes of zip members copied out at most (a zip bomb is refused up front)
+_MAX_UNZIPPED = 2 * 1024**3
+_IGOR_VERSIONS = (1, 2, 3, 5)
+_NUMBER = re.compile(r"^[+-]?(\d+([.,]\d*)?|[.,]\d+)([eE][+-]?\d+)?$")
+_MAKER_NTMDT = "NT-MDT Spectrum Instruments"
+_MAKER_WORKSHOP = "AFM workshop"
+_MAKER_IGOR = "Asylum Research"
+_MAKER_CHIARO = "Optics11 Life"
+#: errors the afmformats parsers (numpy.loadtxt, igor2, zipfile, its own asserts) raise on bad input
+_PARSE_ERRORS = (ValueError, TypeError, KeyError, IndexError, AssertionError, AttributeError,
+                 ArithmeticError,
+                 OSError, EOFError, UnicodeError, struct.error, zipfile.BadZipFile, zlib.error)
+_CLI_HINT = ("pass spring_constant [N/m] and sensitivity [m/V] (CLI: --spring-constant 0.1N/m "
+             "--sensitivity 50nm/V)")
+
+
+# ── detection ─────────────────────────────────────────────────────────────────────────────────
+
+
+def _kind_of(suffix: str, head: bytes) -> str | None:
+    """Which afmformats format ``head`` (the first bytes of a file named ``*suffix``) is, or None."""
+    suffix = suffix.lower()
+    if suffix == ".ibw":
+        if len(head) < 64:
+            return None
+        le, be = struct.unpack("<h", head[:2])[0], struct.unpack(">h", head[:2])[0]
+        return "igor" if le in _IGOR_VERSIONS or be in _IGOR_VERSIONS else None
+    text = head.decode("latin-1")
+    if suffix == ".csv":
+        first = text.lstrip("\ufeff\xef\xbb\xbf").splitlines()[:1]
+        return "workshop" if first and first[0].strip() == "Force-Distance Curve" else None
+    if suffix == ".txt":
+        if "Device:\tChiaro" in text:
+            return "chiaro"
+        lines = [ln for ln in text.splitlines() if ln.strip()]
+        if len(head) == _HEAD and lines:
+            lines = lines[:-1]  # the last line may be cut
+        lines = lines[:10]
+        if lines and all(len(tok := ln.split()) == 3 and all(_NUMBER.match(t) for t in tok)
+                         for ln in lines):
+            return "ntmdt"
+    return None
+
+
+def _zip_members(zf: zipfile.ZipFile) -> list[zipfile.ZipInfo]:
+    return [info for info in zf.infolist()
+            if not info.is_dir() and Path(info.filename).suffix.lower() in _MEMBER_EXTENSIONS
+            and not info.filename.startswith("__MACOSX/")
+            and not Path(info.filename).name.startswith(".")]
+
+
+def _read_head(zf: zipfile.ZipFile, info: zipfile.ZipInfo) -> bytes:
+    with zf.open(info) as fh:
+        return fh.read(_HEAD)
+
+
+def detect_afmformats(path: str | Path) -> bool:
+    """True if ``path`` is a file :func:`read_afmformats` reads, judged by content.
+
+    Igor binary wave version in the first two bytes (``.ibw``), the ``Force-Distance Curve`` first
+    line (AFM Workshop ``.csv``), ``Device:<tab>Chiaro`` in the header (Chiaro ``.txt``), three
+    numeric columns (NT-MDT ``.txt``); a ``.zip`` whose first member with one of those extensions
+    is one of them. Never raises for unreadable files (returns False).
+    """
+    path = Path(path)
+    suffix = path.suffix.lower()
+    if suffix not in AFMFORMATS_EXTENSIONS or not path.is_file():
+        return False
+    try:
+        if suffix != ".zip":
+            with path.open("rb") as fh:
+                return _kind_of(suffix, fh.read(_HEAD)) is not None
+        with zipfile.ZipFile(path) as zf:
+            members = _zip_members(zf)
+            return bool(members) and _kind_of(Path(members[0].filename).suffix,
+                                               _read_head(zf, members[0])) is not None
+    except (OSError, EOFError, zipfile.BadZipFile, zipfile.LargeZipFile, zlib.error,
+            NotImplementedError, RuntimeError):
+        return False
+
+
+# ── loading ───────────────────────────────────────────────────────────────────────────────────
+
+
+@dataclass
+class _Curve:
+    """One curve in SI, ready for make_curves."""
+
+    time: np.ndarray
+    force: np.ndarray
+    height: np.ndarray
+    deflection: np.ndarray
+    segments: list[tuple[str, str]]  # (segment_name, segment_type) per local segment id
+    local_segment: np.ndarray
+    spring_constant: float
+    sensitivity: float
+    metadata: dict[str, Any]
+    x: float = math.nan
+    y: float = math.nan
+    notes: dict[str, str] = field(default_factory=dict)
+
+
+def _afmformats():
+    try:
+        import afmformats
+    except ImportError as exc:  # pragma: no cover - depends on the environment
+        raise InstrumentFormatError("reading Igor/AFM Workshop/Chiaro/NT-MDT files needs the "
+                                    "afmformats package: pip install afmformats") from exc
+    for name in ("afmformats", "igor2"):
+        # afmformats logs a traceback (logger.exception) and igor2 an error with the raw bytes
+        # before raising on a broken file; with no handler configured, logging's last resort
+        # would print them on stderr although we raise a clean InstrumentFormatError. Records
+        # still propagate to the application's own handlers.
+        logger = logging.getLogger(name)
+        if not logger.handlers:
+            logger.addHandler(logging.NullHandler())
+    return afmformats
+
+
+@contextmanager
+def _translated(where: str) -> Iterator[None]:
+    """Turn afmformats' BaseException-derived errors and parser errors into InstrumentFormatError."""
+    afmformats = _afmformats()
+    errors = afmformats.errors
+    try:
+        yield
+    except ViscoforceError:
+        raise
+    except errors.MissingMetaDataError as exc:
+        keys = " and ".join(getattr(exc, "meta_keys", []) or ["calibration"])
+        raise InstrumentFormatError(f"{where}: the file lacks the {keys}; {_CLI_HINT}") from None
+    except errors.FileFormatNotSupportedError as exc:
+        raise InstrumentFormatError(f"{where}: not a file afmformats can read ({exc})") from None
+    except errors.AFMFileFormatError as exc:
+        raise InstrumentFormatError(f"{where}: corrupt or unsupported file: "
+                                    f"{type(exc).__name__}: {exc}") from None
+    except _PARSE_ERRORS as exc:
+        raise InstrumentFormatError(f"{where}: corrupt, truncated or unexpected content "
+                                    f"({type(exc).__name__}: {exc})") from None
+
+
+def _igor_segments(path: Path, n: int) -> list[tuple[int, int, float]] | None:
+    """(start, stop, direction) per segment from the Igor wave note, or None if unusable."""
+    from igor2 import binarywave  # afmformats' own dependency
+
+    note = binarywave.load(str(path))["wave"]["note"]
+    if isinstance(note, bytes):
+        note = note.decode("latin-1")
+    fields: dict[str, str] = {}
+    for line in re.split(r"\r\n|\r|\n", str(note)):
+        key, sep, value = line.partition(":")
+        if sep:
+            fields[key.strip()] = value.strip()
+    try:
+        indexes = [int(float(v)) for v in fields["Indexes"].split(",") if v.strip()]
+        directions = [float(v) for v in fields["Direction"].split(",") if v.strip()]
+    except (KeyError, ValueError):
+        return None
+    if (len(indexes) < 2 or len(directions) < len(indexes) or indexes[0] != 0
+            or indexes[-1] != n - 1 or np.any(np.diff(indexes) <= 0)):
+        return None
+    bounds = [0] + [i + 1 for i in indexes[1:]]
+    return [(bounds[k], bounds[k + 1], directions[k + 1]) for k in range(len(bounds) - 1)]
+
+
+def _segments(kind: str, path: Path, data: Any, n: int, height: np.ndarray,
+              notes: dict[str, str]) -> tuple[list[tuple[str, str]], np.ndarray]:
+    local = np.zeros(n, dtype=np.int32)
+    if kind == "igor":
+        parts = _igor_segments(path, n)
+        if parts is None:
+            split = int(np.argmin(height)) + 1
+            notes["segments_from"] = "split after the lowest height (the note has no Indexes)"
+            local[split:] = 1
+            return [("approach", "extend"), ("retract", "retract")], local
+        notes["segments_from"] = "wave note Indexes and Direction"
+        table: list[tuple[str, str]] = []
+        for start, stop, direction in parts:
+            row = (("approach", "extend") if direction > 0 else ("retract", "retract")
+                   if direction < 0 else ("pause", "dwell"))
+            if row not in table:
+                table.append(row)
+            local[start:stop] = table.index(row)
+        return table, local
+    raw = np.asarray(data["segment"]).astype(np.int64)
+    labels = {0: ("approach", "afmformats segment 0 (approach)"),
+              1: ("retract", "afmformats segment 1 (retract)")}
+    table = []
+    for value in np.unique(raw):
+        row = labels.get(int(value), ("other", f"afmformats segment {int(value)}"))
+        table.append(row)
+        local[raw == value] = len(table) - 1
+    notes["segments_from"] = "afmformats segment column"
+    return table, local
+
+
+def _finite_or_nan(value: Any) -> float:
+    try:
+        x = float(value)
+    except (TypeError, ValueError):
+        return math.nan
+    return x if math.isfinite(x) else math.nan
+
+
+def _convert(kind: str, fmt: str, path: Path, afm: Any, k_user: float | None,
+             s_user: float | None) -> _Curve:
+    meta = dict(afm.metadata)
+    columns = list(afm.columns)
+    n = len(afm)
+    notes: dict[str, str] = {}
+    if "force" not in columns:
+        raise InstrumentFormatError(f"{path}: afmformats gives no force column ({columns})")
+    force = np.asarray(afm["force"], dtype=float)
+    height_order = (("height (piezo)", "height (measured)") if kind == "chiaro"
+                    else ("height (measured)", "height (piezo)"))
+    hname = next((c for c in height_order if c in columns), None)
+    if hname is None:
+        raise InstrumentFormatError(f"{path}: afmformats gives no height column ({columns})")
+    height = np.asarray(afm[hname], dtype=float)
+    notes["height_channel"] = hname
+    if kind == "chiaro":
+        notes["height_note"] = ("Chiaro's 'height (measured)' is the file's Indentation column "
+                                "(zero before contact), so the piezo height is used")
+    elif kind == "ntmdt":
+        notes["height_note"] = "NT-MDT's first column (piezo height, nm) as afmformats reads it"
+    if "time" in columns:
+        time = np.asarray(afm["time"], dtype=float)
+        notes["time_channel"] = "time (from the file)"
+        if time.size > 1 and np.any(np.diff(time) <= 0):
+            raise InstrumentFormatError(f"{path}: the file's time column does not increase")
+    elif kind == "igor" and _finite_or_nan(meta.get("rate approach")) > 0:
+        rate = float(meta["rate approach"])
+        time = np.arange(n) / rate
+        notes["time_channel"] = f"sample index / NumPtsPerSec ({rate:g} Hz)"
+    else:
+        time = np.arange(n, dtype=float)
+        notes["time_channel"] = "sample index (the file records no time; 1 s per sample placeholder)"
+
+    k_file = _finite_or_nan(meta.get("spring constant"))
+    s_file = _finite_or_nan(meta.get("sensitivity"))
+    k, s = k_file, s_file
+    if kind == "ntmdt":
+        s = float(s_user)  # afmformats holds it in m/A (x1e9); keep the user's value
+        notes["sensitivity_note"] = ("meta_sensitivity is afmformats' value in m/A (nm per nA of "
+                                     "photodiode current) = 1e9 x the sensitivity variable [m/V]")
+    if math.isfinite(k) and k > 0:
+        deflection = force / k
+        notes["deflection_channel"] = ("photodiode signal x sensitivity (= force / spring constant)"
+                                       if kind == "ntmdt"
+                                       else "force / spring constant (the file gives force)")
+    else:
+        deflection = np.full(n, math.nan)
+        notes["deflection_channel"] = ("unavailable: the file gives force but no spring constant "
+                                       "(pass spring_constant)")
+    if kind in ("igor", "chiaro"):  # afmformats does not take overrides here: recalibrate
+        if s_user is not None:
+            if not math.isfinite(s_file):
+                raise ParameterError(f"{path}: {fmt} has no deflection sensitivity to override "
+                                     "(its deflection is measured directly); drop sensitivity")
+            deflection = deflection * (s_user / s_file)
+            s = s_user
+            notes["recalibrated_sensitivity"] = f"file {s_file:g} m/V -> {s_user:g} m/V"
+        if k_user is not None:
+            force = k_user * deflection
+            notes["recalibrated_spring_constant"] = f"file {k_file:g} N/m -> {k_user:g} N/m"
+            k = k_user
+        elif s_user is not None:
+            force = k * deflection
+    table, local = _segments(kind, path, afm, n, height, notes)
+    x = _finite_or_nan(meta.get("position x"))
+    y = _finite_or_nan(meta.get("position y"))
+    return _Curve(time=time, force=force, height=height, deflection=deflection, segments=table,
+                  local_segment=local, spring_constant=k, sensitivity=s, metadata=meta, x=x, y=y,
+                  notes=notes)
+
+
+def _load_file(path: Path, where: str, k_user: float | None, s_user: float | None,
+               display: Path) -> tuple[str, list[_Curve]]:
+    """Load one real file (``path``) through afmformats; ``where`` names it in errors."""
+    afmformats = _afmformats()
+    with _translated(where):
+        suffix = path.suffix.lower()
+        if suffix == ".zip":
+            kind = "workshop"
+        else:
+            with path.open("rb") as fh:
+                kind = _kind_of(suffix, fh.read(_HEAD)) or ""
+        if not kind:
+            raise InstrumentFormatError(f"{where}: not an Igor .ibw, AFM Workshop .csv, Chiaro or "
+                                        "NT-MDT .txt file (content not recognised)")
+        recipe = afmformats.formats.get_recipe(path, modality="force-distance")
+        fmt = f"{recipe.maker} ({recipe.descr})"
+        override: dict[str, float] = {}
+        if recipe.maker == _MAKER_NTMDT:
+            if k_user is None or s_user is None:
+                missing = " and ".join(name for name, v in (("spring_constant", k_user),
+                                                            ("sensitivity", s_user)) if v is None)
+                raise InstrumentFormatError(f"{where}: NT-MDT text exports carry no calibration; "
+                                            f"{missing} missing: {_CLI_HINT}")
+            override = {"spring constant": k_user, "sensitivity": s_user * 1e9}
+        elif recipe.maker == _MAKER_WORKSHOP:
+            override = {key: v for key, v in (("spring constant", k_user),
+                                              ("sensitivity", s_user)) if v is not None}
+        elif recipe.maker not in (_MAKER_IGOR, _MAKER_CHIARO):
+            raise InstrumentFormatError(f"{where}: afmformats reads it as {fmt}, which this reader "
+                                        "does not handle (use viscoforce.io.read_jpk for JPK)")
+        loaded = afmformats.load_data(path, meta_override=override, modality="force-distance")
+        if not loaded:
+            raise InstrumentFormatError(f"{where}: no force-distance curve in the file")
+        curves = [_convert(kind, fmt, path, afm, k_user, s_user) for afm in loaded]
+    for curve in curves:
+        curve.metadata["path"] = str(display)
+    return fmt, curves
+
+
+def _load_zip(path: Path, k_user: float | None, s_user: float | None) -> tuple[str, list[_Curve]]:
+    try:
+        with zipfile.ZipFile(path) as zf:
+            members = _zip_members(zf)
+            if not members:
+                raise InstrumentFormatError(f"{path}: zip holds no .ibw, .csv or .txt member")
+            if all(Path(m.filename).suffix.lower() == ".csv" for m in members):
+                return _load_file(path, str(path), k_user, s_user, path)  # AFM Workshop map
+            total = sum(m.file_size for m in members)
+            if total > _MAX_UNZIPPED:
+                raise InstrumentFormatError(f"{path}: members unpack to {total} bytes, more than "
+                                            f"the {_MAX_UNZIPPED} allowed")
+            fmts: list[str] = []
+            curves: list[_Curve] = []
+            with tempfile.TemporaryDirectory(prefix="viscoforce-afm-") as tmp:
+                for i, info in enumerate(members):
+                    where = f"{path}!{info.filename}"
+                    target = Path(tmp) / f"{i:05d}{Path(info.filename).suffix.lower()}"
+                    with zf.open(info) as src, target.open("wb") as dst:
+                        shutil.copyfileobj(src, dst)
+                    fmt, got = _load_file(target, where, k_user, s_user,
+                                          Path(f"{path}!{info.filename}"))
+                    fmts.append(fmt)
+                    curves += got
+    except (zipfile.BadZipFile, zipfile.LargeZipFile, zlib.error, EOFError,
+            NotImplementedError, RuntimeError) as exc:
+        raise InstrumentFormatError(f"{path}: corrupt or unreadable zip "
+                                    f"({type(exc).__name__}: {exc})") from None
+    if len(set(fmts)) != 1:
+        raise InstrumentFormatError(f"{path}: zip mixes formats {sorted(set(fmts))}; read the "
+                                    "members one by one")
+    return fmts[0], curves
+
+
+# ── assembly ──────────────────────────────────────────────────────────────────────────────────
+
+
+def _attr_key(key: str) -> str:
+    return "meta_" + re.sub(r"[^0-9A-Za-z]+", "_", str(key)).strip("_").lower()
+
+
+def _scalar(value: Any) -> float | int | str | None:
+    if isinstance(value, bool | np.bool_):
+        return int(value)
+    if isinstance(value, int | np.integer):
+        v = int(value)
+        return v if -(2**31) <= v < 2**31 else float(v)
+    if isinstance(value, float | np.floating):
+        return float(value)
+    if isinstance(value, str):
+        return value
+    return None
+
+
+def _meta_attrs(curves: Sequence[_Curve]) -> dict[str, Any]:
+    out: dict[str, Any] = {}
+    keys = dict.fromkeys(k for c in curves for k in c.metadata if k != "path")
+    for key in keys:
+        values = [_scalar(c.metadata.get(key)) for c in curves]
+        if any(v is None for v in values):
+            continue
+        if all(isinstance(v, str) for v in values):
+            distinct = list(dict.fromkeys(values))
+            out[_attr_key(key)] = " | ".join(str(v) for v in distinct)
+        elif all(not isinstance(v, str) for v in values):
+            if len(set(values)) == 1:
+                out[_attr_key(key)] = values[0]
+            else:
+                out[_attr_key(key)] = np.asarray(values, dtype=float)
+    return out
+
+
+def _optional_positive(name: str, value: Any) -> float | None:
+    return None if value is None else require_positive(name, value)
+
+
+def read_afmformats(path: str | Path, *, spring_constant: float | None = None,
+                    sensitivity: float | None = None) -> xr.Dataset:
+    """Read an Igor ``.ibw``, AFM Workshop ``.csv``, Chiaro ``.txt`` / ``.zip`` or NT-MDT ``.txt``.
+
+    Parameters
+    ----------
+    path : str or Path
+        The file (opened read-only, never modified).
+    spring_constant : float, optional
+        Cantilever spring constant [N/m]. Required for NT-MDT text (and AFM Workshop files in
+        volts); recalibrates Igor and Chiaro files (force = k × deflection).
+    sensitivity : float, optional
+        Deflection sensitivity [m/V] (NT-MDT: the value Nova displays as nm/V, in SI). Required
+        for NT-MDT text; rescales the deflection of Igor files.
+
+    Returns
+    -------
+    xarray.Dataset
+        Curves dataset (:func:`viscoforce.schema.make_curves`), one ``curve`` per curve in the
+        file, ``attrs["source"] = "afmformats:<format>"``; see the module docstring for details.
+
+    Raises
+    ------
+    InstrumentFormatError
+        If the file is missing, not one of these formats, corrupt or truncated, or lacks the
+        calibration it needs (NT-MDT without ``spring_constant`` / ``sensitivity``); the message
+        names the file (and zip member).
+    ParameterError
+        If ``spring_constant`` / ``sensitivity`` is not a positive number, or ``sensitivity`` is
+        given for a file that measures deflection directly (Chiaro).
+    """
+    k_user = _optional_positive("spring_constant", spring_constant)
+    s_user = _optional_positive("sensitivity", sensitivity)
+    path = Path(path)
+    if not path.is_file():
+        raise InstrumentFormatError(f"{path}: no such file")
+    suffix = path.suffix.lower()
+    if suffix not in AFMFORMATS_EXTENSIONS:
+        raise InstrumentFormatError(f"{path}: extension {path.suffix!r} is not one of "
+                                    f"{AFMFORMATS_EXTENSIONS}")
+    if path.stat().st_size == 0:
+        raise InstrumentFormatError(f"{path}: the file is empty")
+    fmt, curves = (_load_zip(path, k_user, s_user) if suffix == ".zip"
+                   else _load_file(path, str(path), k_user, s_user, path))
+    table: list[tuple[str, str]] = []
+    seg_parts = []
+    for c in curves:
+        rows = []
+        for row in c.segments:
+            if row not in table:
+                table.append(row)
+            rows.append(table.index(row))
+        seg_parts.append(np.asarray(rows, dtype=np.int32)[c.local_segment])
+    per_curve: dict[str, Any] = {
+        "spring_constant": [c.spring_constant for c in curves],
+        "sensitivity": [c.sensitivity for c in curves],
+    }
+    if all(math.isfinite(c.x) and math.isfinite(c.y) for c in curves):
+        per_curve["x"] = [c.x for c in curves]
+        per_curve["y"] = [c.y for c in curves]
+    attrs: dict[str, Any] = {"file": str(path), "n_curves": len(curves),
+                             "afmformats_version": str(_afmformats().__version__),
+                             "force_baseline_subtracted": 0}
+    for key, value in curves[0].notes.items():
+        attrs[key] = value
+    attrs.update(_meta_attrs(curves))
+    ds = make_curves(np.concatenate([c.time for c in curves]),
+                     np.concatenate([c.force for c in curves]),
+                     np.concatenate([c.height for c in curves]),
+                     np.concatenate([c.deflection for c in curves]),
+                     segment=np.concatenate(seg_parts),
+                     segment_names=[r[0] for r in table], segment_types=[r[1] for r in table],
+                     sample_count=[c.time.size for c in curves], per_curve=per_curve,
+                     attrs=attrs, source=f"afmformats:{fmt}")
+    return ds.assign_coords(curve=np.arange(len(curves), dtype=np.int32))
