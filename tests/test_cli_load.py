@@ -62,3 +62,23 @@ def test_load_user_errors_exit_2(capsys, argv, message):
     assert main(argv) == 2
     err = capsys.readouterr().err
     assert message in err and "Traceback" not in err
+
+
+@pytest.mark.parametrize("raw", [True, False])
+def test_load_output_round_trips_unchanged(tmp_path, capsys, raw):
+    """What `load` writes (h5netcdf) reads back identical to the dataset it computed."""
+    from viscoforce.experiments.modulation import modulation_spectrum
+    from viscoforce.io.instruments import load_instrument
+
+    src = FIXTURES / "synthetic.jpk-force" if raw else MAP
+    if not src.exists():
+        pytest.skip("real data folder absent")
+    expected = load_instrument(src)
+    if not raw:
+        expected = modulation_spectrum(expected)
+    out = tmp_path / "ds.nc"
+    argv = ["load", str(src), "--out", str(out), "--json"] + (["--raw"] if raw else [])
+    assert main(argv) == 0
+    capsys.readouterr()
+    with xr.open_dataset(out, engine="h5netcdf") as back:
+        xr.testing.assert_identical(back.load(), expected)

@@ -209,3 +209,171 @@ def test_real_modulation_map():
     assert np.all(spec["nominal_amplitude"].values == pytest.approx(15e-9))
     # stiffness rises with frequency
     assert np.all(np.diff(np.median(spec["stiffness"].values, axis=0)) > 0)
+
+
+# --- contact point on the approach, mean indentation, hard-surface phase reference -------------
+
+from viscoforce.experiments.modulation import find_contact_point  # noqa: E402
+
+Z_C = -8.7e-6   # contact tip position [m]
+
+
+def hertz_approach(rng, *, n=1200, z_start=-2e-6, z_end=300e-9, force_end=0.5e-9, noise=5e-12,
+                   tilt=0.0, exponent=1.5, z_c=Z_C):
+    """Approach: z from z_c + z_start to z_c + z_end, F = tilted baseline + A (z − z_c)^p + noise."""
+    z = z_c + np.linspace(z_start, z_end, n)
+    amp = force_end / z_end**exponent
+    force = (-1e-10 + tilt * (z - z_c) + amp * np.clip(z - z_c, 0, None) ** exponent
+             + noise * rng.standard_normal(n))
+    return z, force
+
+
+@pytest.mark.parametrize("seed", range(5))
+@pytest.mark.parametrize("exponent", [1.5, 1.0])
+def test_contact_point_recovered_on_noisy_hertz_curves(seed, exponent):
+    rng = np.random.default_rng(seed)
+    z, f = hertz_approach(rng, tilt=2e-5, exponent=exponent)   # 2e-5 N/m: 40 pN over 2 µm
+    c = find_contact_point(z, f, exponent=exponent)
+    assert c is not None
+    assert abs(c["z_contact"] - Z_C) < 15e-9, (c["z_contact"] - Z_C)   # stated tolerance 15 nm
+    assert c["z_threshold"] > c["z_contact"]
+    np.testing.assert_allclose(c["sigma"], 5e-12, rtol=0.2)
+    assert c["rise"] > 50
+
+
+def test_contact_point_absent_without_a_rise_or_with_contact_in_the_baseline():
+    rng = np.random.default_rng(1)
+    z, f = hertz_approach(rng, force_end=0.0)         # no rise: noise only
+    assert find_contact_point(z, f) is None
+    z, f = hertz_approach(rng, force_end=1e-13)       # rise far below 5 sigma
+    assert find_contact_point(z, f) is None
+    z, f = hertz_approach(rng, z_start=-100e-9, z_end=2e-6)   # contact inside the baseline window
+    assert find_contact_point(z, f) is None
+    assert find_contact_point(z[:8], f[:8]) is None   # too short
+    with pytest.raises(ParameterError, match="baseline_fraction"):
+        find_contact_point(z, f, baseline_fraction=0.95)
+    with pytest.raises(ParameterError, match="k_sigma"):
+        find_contact_point(z, f, k_sigma=0)
+    with pytest.raises(ParameterError, match="exponent"):
+        find_contact_point(z, f, exponent=-1)
+    with pytest.raises(ParameterError, match="one length"):
+        find_contact_point(z, f[:-1])
+
+
+def contact_curves(freqs, *, depths, k=0.02, chi=20.0, noise=5e-12, seed=0, lag_deg=None,
+                   per_period=64, periods=8, amplitude=10e-9):
+    """Curves: Hertz approach (contact at Z_C), then modulation about Z_C + depth per curve.
+
+    A depth of None gives an approach without a rise (no contact point).
+    """
+    rng = np.random.default_rng(seed)
+    lag_deg = lag_deg or {}
+    cols = {k_: [] for k_ in ("time", "force", "tip", "segment")}
+    names, freq_col, counts = [], [], []
+    for depth in depths:
+        t0, n_curve = 0.0, 0
+        z, f = hertz_approach(rng, noise=noise, force_end=0.0 if depth is None else 0.5e-9)
+        t = np.arange(z.size) * 5e-4
+        segs = [("approach", None, t, z, f)]
+        t0 = t[-1] + 5e-4
+        z0 = Z_C + (300e-9 if depth is None else depth)
+        for fr in freqs:
+            n = periods * per_period + 1
+            t = t0 + np.arange(n) / (fr * per_period)
+            w = 2 * np.pi * fr
+            zz = z0 + amplitude * np.sin(w * (t - t0))
+            ff = 3e-10 + k * amplitude * np.sin(w * (t - t0) + np.radians(chi + lag_deg.get(fr, 0)))
+            segs.append(("modulation", fr, t, zz, ff))
+            t0 = t[-1] + (t[-1] - t[-2])
+        for name, fr, t, zz, ff in segs:
+            cols["time"].append(t - segs[0][2][0])
+            cols["tip"].append(zz)
+            cols["force"].append(ff)
+            cols["segment"].append(np.full(t.size, len(names), dtype=np.int32))
+            names.append(name)
+            freq_col.append(fr if fr else np.nan)
+            n_curve += t.size
+        counts.append(n_curve)
+    flat = {k_: np.concatenate(v) for k_, v in cols.items()}
+    defl = flat["force"] / KC
+    ds = make_curves(flat["time"], flat["force"], -flat["tip"] - defl, defl,
+                     tip_position=flat["tip"], segment=flat["segment"], segment_names=names,
+                     sample_count=counts, per_curve={"x": np.arange(len(depths)) * 1e-6,
+                                                     "y": np.zeros(len(depths))},
+                     source="synthetic-test")
+    return ds.assign(segment_frequency=("segment_table", np.asarray(freq_col), {"units": "Hz"}))
+
+
+def test_mean_indentation_from_the_approach_contact_point():
+    depths = [250e-9, 120e-9, None]
+    spec = modulation_spectrum(contact_curves([5.0, 50.0], depths=depths))
+    validate_spectrum(spec)
+    ind = spec["mean_indentation"].values
+    assert spec["mean_indentation"].attrs["units"] == "m"
+    np.testing.assert_allclose(ind[0], 250e-9, atol=15e-9)
+    np.testing.assert_allclose(ind[1], 120e-9, atol=15e-9)
+    assert np.isnan(ind[2]).all()                       # no rise on curve 2: NaN, said in attrs
+    assert "found on 2 of 3 curves" in spec.attrs["contact_point"]
+    assert "none on curves [2]" in spec.attrs["contact_point"]
+    np.testing.assert_allclose(spec["contact_position"].values[:2], Z_C, atol=15e-9)
+    # the spectrum itself is unchanged by the contact estimate
+    np.testing.assert_allclose(spec["stiffness"].values, 0.02, rtol=1e-6)
+    np.testing.assert_allclose(spec["phase"].values, 20.0, atol=1e-4)
+    # contact_point=False or no contact anywhere: the variable is left out, attrs say why
+    off = modulation_spectrum(contact_curves([5.0], depths=[250e-9]), contact_point=False)
+    assert "mean_indentation" not in off and "not estimated" in off.attrs["contact_point"]
+    none = modulation_spectrum(contact_curves([5.0], depths=[None, None]))
+    assert "mean_indentation" not in none and "left out" in none.attrs["contact_point"]
+    # options reach find_contact_point; bad ones raise
+    linear = modulation_spectrum(contact_curves([5.0], depths=[250e-9]),
+                                 contact_point={"exponent": 1.0, "k_sigma": 4.0})
+    assert "exponent=1.0" in linear.attrs["contact_point"]
+    with pytest.raises(ParameterError, match="k_sigma"):
+        modulation_spectrum(contact_curves([5.0], depths=[250e-9]), contact_point={"k_sigma": -1})
+    with pytest.raises(ParameterError, match="contact_point"):
+        modulation_spectrum(contact_curves([5.0], depths=[250e-9]), contact_point="yes")
+
+
+def test_phase_reference_from_a_hard_surface_spectrum():
+    freqs = [3.0, 30.0, 300.0]
+    lags = {3.0: 2.0, 30.0: 9.0, 300.0: 104.0}
+    hard = modulation_spectrum(synthetic(freqs, 1.0, 0.0, lag_deg=lags, n_curves=5, noise=2e-11,
+                                         seed=3))
+    soft = synthetic(freqs, 0.03, 25.0, lag_deg=lags)
+    fixed = modulation_spectrum(soft, phase_reference=hard)
+    np.testing.assert_allclose(fixed["phase"].values, 25.0, atol=0.05)
+    np.testing.assert_allclose(fixed["phase_lag"].values, [2.0, 9.0, 104.0], atol=0.05)
+    assert fixed.attrs["phase_lag"] == "reference"
+    assert (fixed["quality"].values == 0).all()         # 300 Hz back inside (0°, 90°)
+    np.testing.assert_allclose(fixed["stiffness"].values, 0.03, rtol=1e-6)
+    # an already-corrected reference: its own phase_lag is added back
+    hard_fixed = modulation_spectrum(synthetic(freqs, 1.0, 0.0, lag_deg=lags), phase_lag=lags)
+    again = modulation_spectrum(soft, phase_reference=hard_fixed)
+    np.testing.assert_allclose(again["phase"].values, 25.0, atol=1e-5)
+    # median over curves: one outlier curve does not move the lag
+    bad = hard.copy(deep=True)
+    bad["phase"][0, :] = 170.0
+    np.testing.assert_allclose(modulation_spectrum(soft, phase_reference=bad)["phase"].values,
+                               25.0, atol=0.1)
+    with pytest.raises(ParameterError, match="not both"):
+        modulation_spectrum(soft, phase_reference=hard, phase_lag=3.0)
+    with pytest.raises(ParameterError, match="matching 300 Hz"):
+        modulation_spectrum(soft, phase_reference=hard.isel(omega=[0, 1]))
+    with pytest.raises(ParameterError, match="spectrum dataset"):
+        modulation_spectrum(soft, phase_reference={"phase": 1})
+
+
+def test_real_map_mean_indentation():
+    path = REAL / "PyFMReader" / "map-data-2021.11.05-17.37.44.432.jpk-force-map"
+    if not path.is_file():
+        pytest.skip(f"real data file not present: {path}")
+    spec = modulation_spectrum(path)
+    ind = spec["mean_indentation"].values
+    assert "found on 16 of 16 curves" in spec.attrs["contact_point"]
+    # a soft sample (probably a cell, E ~ 0.3-0.5 kPa): 0.5-1.7 µm under a ~0.4 nN setpoint
+    assert np.all((ind > 300e-9) & (ind < 2.5e-6)), ind
+    # the same operating point at every frequency of a curve (creep < 60 nm over the segments)
+    assert np.all(np.ptp(ind, axis=1) < 60e-9)
+    # self-reference: the map's own 300 Hz median phase taken as the lag gives zero median there
+    ref = modulation_spectrum(path, phase_reference=spec)
+    np.testing.assert_allclose(np.median(ref["phase"].values, axis=0), 0.0, atol=1e-6)

@@ -40,6 +40,42 @@ giving ``stiffness_stderr`` = ρ|k*_raw| and ``phase_stderr`` = ρ|k*_raw|/|k*| 
 the corrections shift k* but not its error), ``drive_amplitude_stderr`` = σ_δ√(2/N) and
 ``mean_force_stderr`` = σ_F/√N. Correlated (coloured) noise makes these optimistic.
 
+Contact point and mean indentation (:func:`find_contact_point`, on each curve's approach
+segment, force F against tip position z = ``tip_position``):
+
+1. Baseline: a straight line F = a + b·z fitted to the first ``baseline_fraction`` (default 30 %)
+   of the approach samples (a line, so a tilted free-cantilever baseline — virtual deflection,
+   drag — is removed); noise σ = 1.4826·MAD of its residuals (robust to outliers/spikes).
+2. Rise: r = F − baseline over the whole approach. The contact must give r(end) > ``k_sigma``·σ
+   (default k = 5); the first estimate z₁ is the last sample at or below k·σ (after it the force
+   stays above the threshold up to the end of the approach). z₁ must lie after the baseline
+   window, and the baseline window must not curve upward significantly (t-statistic of the x²
+   term of a quadratic fit > 8: a convex rise); else the baseline is contaminated and no
+   contact is reported.
+3. Refinement: least squares of r = A·max(z − z_c, 0)^p (p = ``exponent``, default 1.5, Hertz
+   sphere; 1 for a linear contact) over all samples after the baseline window, for z_c between
+   the baseline window end and z₁ (A > 0 in closed form for each z_c; grid over the sample
+   positions, then bounded scalar refinement).
+
+Indentation δ = z − z_c (tip displacement into the sample past contact, > 0 in contact); the
+``mean_indentation`` of a modulation point is δ at the mean tip position of its lock-in window.
+Limits: the method needs a free (non-contact) baseline in the first ``baseline_fraction`` of the
+approach and a monotonic-ish rise ending at least k·σ above it; long-range forces (double-layer,
+adhesion snap-in, hydrodynamics that are not linear in z) shift z_c; the power law is a local
+model, so for very deep or non-Hertzian indentation the refined z_c is biased by a fraction of
+the fitted range; creep of the sample between the approach and the modulation is included in δ
+(the mean tip position is measured, not assumed). Where no contact is found the curve's
+``mean_indentation`` is NaN and ``attrs["contact_point"]`` says so; when none is found on any
+curve the variable is left out.
+
+Phase reference: ``phase_reference`` = a spectrum measured on a hard (elastic) surface, where the
+true phase is 0: its median phase per frequency (over all its other dims, non-finite values
+ignored; taken circularly, about the circular mean) plus the ``phase_lag`` it already had
+subtracted (its ``phase_lag`` variable, when present) is the instrument lag λ(f), subtracted as
+``phase_lag``. Every modulation frequency must be in the reference (relative tolerance 1e-6;
+extra reference frequencies are ignored), and ``phase_lag`` and ``phase_reference`` are
+exclusive.
+
 Quality (kept, never dropped): 1 ``phase_outside_passive_range`` where the corrected phase is
 outside (0°, 90°) (:func:`viscoforce.schema.phase_quality`), else 2 ``low_signal`` where
 |F̂| < 3·σ_F̂, else 0.
@@ -54,6 +90,7 @@ from typing import Any
 
 import numpy as np
 import xarray as xr
+from scipy.optimize import minimize_scalar
 
 from viscoforce.exceptions import ParameterError
 from viscoforce.io.curves import jpk_to_curves
@@ -61,8 +98,9 @@ from viscoforce.io.jpk import JPKArchive, read_jpk
 from viscoforce.lockin import demodulate
 from viscoforce.schema import make_spectrum, phase_quality, validate_curves
 
-__all__ = ["demodulate_segment", "modulation_spectrum"]
+__all__ = ["demodulate_segment", "find_contact_point", "modulation_spectrum"]
 
+_CONVEX_T = 8.0  # t-statistic of the baseline's x² term above which the window holds a contact
 _SLACK = 1e-9  # as lockin: fraction of a period the record may fall short of a whole period
 
 
@@ -90,7 +128,8 @@ def demodulate_segment(time: np.ndarray, force: np.ndarray, indentation: np.ndar
     -------
     dict
         ``F`` F̂ [N], ``d`` δ̂ [m] (complex), ``mean_force`` [N], ``sigma_F`` [N], ``sigma_d`` [m]
-        (residual std), ``cov`` [N·m], ``n`` samples and ``periods`` in the window, and ``rho``,
+        (residual std), ``mean_position`` (mean of ``indentation`` over the lock-in window)
+        [m], ``cov`` [N·m], ``n`` samples and ``periods`` in the window, and ``rho``,
         the relative standard error of k* = F̂/δ̂; ``h`` ĥ [m] when ``height`` is given.
     """
     if not (isinstance(frequency, int | float | np.floating) and frequency > 0
@@ -127,10 +166,152 @@ def demodulate_segment(time: np.ndarray, force: np.ndarray, indentation: np.ndar
         chi = np.angle(f_hat / d_hat)
         rho2 = (2.0 / n) * (var_f / af**2 + var_d / ad**2 - 2.0 * cov * math.cos(chi) / (af * ad))
         rho = math.sqrt(max(rho2, 0.0))
-    return {"F": f_hat, "d": d_hat, "mean_force": float(mean[0]), "sigma_F": math.sqrt(var_f),
+    return {"F": f_hat, "d": d_hat, "mean_force": float(mean[0]),
+            "mean_position": float(np.mean(both[1, win])), "sigma_F": math.sqrt(var_f),
             "sigma_d": math.sqrt(var_d), "cov": cov, "n": n, "periods": periods, "rho": rho,
             "h": None if height is None else complex(demodulate(
                 np.asarray(height, dtype=float), t, omega, settle=settle, detrend=detrend))}
+
+
+def find_contact_point(position: np.ndarray, force: np.ndarray, *,
+                       baseline_fraction: float = 0.3, k_sigma: float = 5.0,
+                       exponent: float = 1.5, min_points: int = 5) -> dict[str, Any] | None:
+    """Contact point of an approach curve, force against tip position (method in the module doc).
+
+    Parameters
+    ----------
+    position : ndarray
+        Tip position z [m] (displacement toward the sample, ``tip_position``), in time order.
+    force : ndarray
+        Force F [N] (repulsion > 0), same length.
+    baseline_fraction : float
+        Fraction of the samples (from the start) fitted by the baseline line, in (0, 0.8].
+    k_sigma : float
+        Threshold in baseline-noise units for the rise, > 0.
+    exponent : float
+        Exponent p of the post-contact model A·(z − z_c)^p, > 0 (1.5 Hertz sphere, 1 linear).
+    min_points : int
+        Least number of samples in the baseline window and after contact, >= 3.
+
+    Returns
+    -------
+    dict or None
+        ``z_contact`` [m], ``z_threshold`` [m] (the k·σ crossing z₁), ``sigma`` [N] (baseline
+        noise), ``baseline`` (a [N], b [N/m]), ``amplitude`` A [N/m^p], ``rise`` (final rise /
+        σ); None when no contact is found (too few samples, no rise above k·σ, a rise inside the
+        baseline window or a convex baseline, or a non-positive fit).
+    """
+    if not (isinstance(baseline_fraction, int | float) and 0 < baseline_fraction <= 0.8):
+        raise ParameterError(f"baseline_fraction must be in (0, 0.8], got {baseline_fraction!r}")
+    if not (isinstance(k_sigma, int | float) and k_sigma > 0 and math.isfinite(k_sigma)):
+        raise ParameterError(f"k_sigma must be > 0 and finite, got {k_sigma!r}")
+    if not (isinstance(exponent, int | float) and exponent > 0 and math.isfinite(exponent)):
+        raise ParameterError(f"exponent must be > 0 and finite, got {exponent!r}")
+    if isinstance(min_points, bool) or not isinstance(min_points, int) or min_points < 3:
+        raise ParameterError(f"min_points must be an integer >= 3, got {min_points!r}")
+    z = np.asarray(position, dtype=float)
+    f = np.asarray(force, dtype=float)
+    if z.shape != f.shape or z.ndim != 1:
+        raise ParameterError(f"position and force must be 1-D of one length, got {z.shape} and "
+                             f"{f.shape}")
+    ok = np.isfinite(z) & np.isfinite(f)
+    z, f = z[ok], f[ok]
+    nb = int(baseline_fraction * z.size)
+    if nb < min_points or z.size - nb < min_points:
+        return None
+    zb, fb = z[:nb], f[:nb]
+    if np.ptp(zb) <= 0:
+        return None
+    b, a = np.polyfit(zb, fb, 1)
+    xb = (zb - zb.mean()) / np.ptp(zb)
+    design = np.column_stack([np.ones(nb), xb, xb**2])
+    coef = np.linalg.lstsq(design, fb, rcond=None)[0]
+    rq = fb - design @ coef
+    cov2 = float(rq @ rq) / max(nb - 3, 1) * np.linalg.inv(design.T @ design)[2, 2]
+    if cov2 > 0 and coef[2] / math.sqrt(cov2) > _CONVEX_T:
+        return None  # a significantly convex (rising) baseline: contact inside the window
+    r = f - (a + b * z)
+    rb = r[:nb]
+    sigma = 1.4826 * float(np.median(np.abs(rb - np.median(rb))))
+    if not sigma > 0:
+        sigma = float(np.std(rb))
+    if not sigma > 0:
+        return None
+    thr = k_sigma * sigma
+    if not r[-1] > thr:
+        return None
+    below = np.flatnonzero(r <= thr)
+    j = int(below[-1]) if below.size else 0
+    if j < nb or z.size - j - 1 < min_points:
+        return None
+    zs, rs = z[nb:], r[nb:]
+    lo, hi = float(np.max(z[:nb])), float(z[j])
+    if not hi > lo:
+        return None
+    p = float(exponent)
+
+    def sse(zc: float) -> tuple[float, float]:
+        g = np.clip(zs - zc, 0.0, None) ** p
+        gg = float(g @ g)
+        amp = float(g @ rs) / gg if gg > 0 else 0.0
+        res = rs - amp * g
+        return float(res @ res), amp
+
+    grid = np.unique(np.clip(zs[(zs >= lo) & (zs <= hi)], lo, hi))
+    grid = np.concatenate([[lo], grid, [hi]])
+    if grid.size > 400:
+        grid = np.linspace(lo, hi, 400)
+    costs = np.array([sse(g)[0] for g in grid])
+    i = int(np.argmin(costs))
+    a_lo, a_hi = grid[max(i - 1, 0)], grid[min(i + 1, grid.size - 1)]
+    zc = float(grid[i])
+    if a_hi > a_lo:
+        opt = minimize_scalar(lambda c: sse(c)[0], bounds=(a_lo, a_hi), method="bounded",
+                              options={"xatol": 1e-6 * (hi - lo) + 1e-15})
+        if opt.fun <= costs[i]:
+            zc = float(opt.x)
+    amp = sse(zc)[1]
+    if not amp > 0:
+        return None
+    return {"z_contact": zc, "z_threshold": hi, "sigma": sigma, "baseline": (float(a), float(b)),
+            "amplitude": amp, "rise": float(r[-1] / sigma)}
+
+
+def _approach_contact(tip: np.ndarray, force: np.ndarray, seg: np.ndarray, names: np.ndarray,
+                      options: Mapping[str, Any]) -> dict[str, Any] | None:
+    """Contact point on the curve's (first) approach segment, or None."""
+    rows = [row for row in dict.fromkeys(seg.tolist()) if names[row] == "approach"]
+    if not rows:
+        return None
+    m = seg == rows[0]
+    return find_contact_point(tip[m], force[m], **options)
+
+
+def _reference_lags(reference: Any, fr: np.ndarray) -> np.ndarray:
+    """Instrument lag [degree] per frequency from a hard-surface reference spectrum."""
+    if not isinstance(reference, xr.Dataset) or "phase" not in reference.variables \
+            or "omega" not in reference.dims:
+        raise ParameterError("phase_reference must be a spectrum dataset with 'phase' over "
+                             "'omega'")
+    ref_f = np.asarray(reference["omega"].values, dtype=float) / (2.0 * math.pi)
+    phase = reference["phase"].transpose("omega", ...).values.reshape(ref_f.size, -1)
+    if "phase_lag" in reference.variables and reference["phase_lag"].dims == ("omega",):
+        phase = phase + np.asarray(reference["phase_lag"].values, dtype=float)[:, None]
+    lags = np.empty(fr.size)
+    for j, f in enumerate(fr):
+        hit = np.flatnonzero(np.isclose(ref_f, f, rtol=1e-6, atol=0.0))
+        if hit.size != 1:
+            raise ParameterError(f"phase_reference has no single frequency matching {f:g} Hz "
+                                 f"(it has {sorted(np.round(ref_f, 9).tolist())} Hz)")
+        v = phase[hit[0]]
+        v = v[np.isfinite(v)]
+        if v.size == 0:
+            raise ParameterError(f"phase_reference has no finite phase at {f:g} Hz")
+        centre = math.degrees(math.atan2(np.sin(np.radians(v)).mean(),
+                                         np.cos(np.radians(v)).mean()))
+        d = (v - centre + 180.0) % 360.0 - 180.0
+        lags[j] = centre + float(np.median(d))
+    return lags
 
 
 def _lag_for(phase_lag: float | Mapping[float, float] | None, frequency: float) -> float:
@@ -176,7 +357,9 @@ def modulation_spectrum(data: Any, *, curves: int | Iterable[int] | None = None,
                         detrend: str | None = "linear",
                         phase_lag: float | Mapping[float, float] | None = None,
                         drag: float | None = None, subtract_baseline: bool = True,
-                        height_channel: str | None = None) -> xr.Dataset:
+                        height_channel: str | None = None,
+                        phase_reference: xr.Dataset | None = None,
+                        contact_point: bool | Mapping[str, Any] = True) -> xr.Dataset:
     """Spectrum over (``curve``, ``omega``) from every modulation segment of every curve.
 
     See the module docstring for the signs, the lock-in window, the corrections and the
@@ -204,6 +387,13 @@ def modulation_spectrum(data: Any, *, curves: int | Iterable[int] | None = None,
         Subtract the file's free-cantilever baseline from the mean force (default True).
     height_channel : str, optional
         Height channel for a JPK archive (default: the calibrated sensor).
+    phase_reference : xarray.Dataset, optional
+        Spectrum measured on a hard (elastic) surface at the same frequencies (e.g. this
+        function's output on a glass/sapphire map): its median phase per frequency is the
+        instrument lag, subtracted as ``phase_lag`` (module docstring). Not with ``phase_lag``.
+    contact_point : bool or mapping
+        Estimate the contact point on each curve's approach (:func:`find_contact_point`) and
+        store ``mean_indentation``; a mapping gives that function's options; False skips it.
 
     Returns
     -------
@@ -214,13 +404,16 @@ def modulation_spectrum(data: Any, *, curves: int | Iterable[int] | None = None,
         ``phase_lag`` [degree] over ``omega`` (the lag subtracted), ``height_amplitude`` [m]
         (|ĥ| of the height channel: the measured drive; it differs
         from |δ̂| by the cantilever deflection), ``lockin_periods``, ``lockin_settle`` [s] and
-        ``lockin_samples``; coords ``curve``, ``x``, ``y``.
+        ``lockin_samples``; coords ``curve``, ``x``, ``y``; ``mean_indentation`` [m] (NaN on
+        curves without a contact point; absent when no curve has one) with ``contact_position``
+        [m] over ``curve`` (the tip position at contact, NaN where none).
 
     Raises
     ------
     ParameterError
         Bad options, no modulation segment, a modulation segment without a frequency, curves
-        whose frequency sets differ, or a frequency repeated within a curve.
+        whose frequency sets differ, a frequency repeated within a curve, both ``phase_lag``
+        and ``phase_reference``, or a reference lacking a modulation frequency.
     """
     if not (isinstance(settle_periods, int | float) and settle_periods >= 0
             and math.isfinite(settle_periods)):
@@ -236,6 +429,15 @@ def modulation_spectrum(data: Any, *, curves: int | Iterable[int] | None = None,
         if not (isinstance(phase_lag, int | float) and math.isfinite(phase_lag)):
             raise ParameterError(f"phase_lag must be degrees or a mapping Hz → degrees, got "
                                  f"{phase_lag!r}")
+    if phase_reference is not None and phase_lag is not None:
+        raise ParameterError("give phase_lag or phase_reference, not both")
+    if isinstance(contact_point, Mapping):
+        contact_options: dict[str, Any] | None = dict(contact_point)
+    elif isinstance(contact_point, bool):
+        contact_options = {} if contact_point else None
+    else:
+        raise ParameterError(f"contact_point must be True, False or a mapping of "
+                             f"find_contact_point options, got {contact_point!r}")
     ds, rows = _curves_of(data, curves, height_channel)
     if "segment_frequency" not in ds.variables:
         raise ParameterError("the curves dataset has no 'segment_frequency' [Hz] over "
@@ -256,10 +458,13 @@ def modulation_spectrum(data: Any, *, curves: int | Iterable[int] | None = None,
     seg = np.asarray(ds["segment"].values)
 
     results: list[dict[float, tuple[int, dict[str, Any]]]] = []
+    contacts: list[dict[str, Any] | None] = []
     for r in rows:
         sl = slice(int(starts[r]), int(starts[r] + counts[r]))
         found: dict[float, tuple[int, dict[str, Any]]] = {}
         s_seg = seg[sl]
+        contacts.append(None if contact_options is None else _approach_contact(
+            tip[sl], force[sl], s_seg, names, contact_options))
         for row in np.unique(s_seg):
             if names[row] != "modulation":
                 continue
@@ -290,10 +495,13 @@ def modulation_spectrum(data: Any, *, curves: int | Iterable[int] | None = None,
     shape = (len(rows), fr.size)
     k_raw = np.empty(shape, complex)
     arrays = {k: np.empty(shape) for k in ("eta", "eta_se", "mean", "mean_se", "rho", "snr",
-                                           "nominal", "height", "periods", "n", "settle")}
+                                           "nominal", "height", "periods", "n", "settle",
+                                           "indent")}
+    z_contact = np.asarray([np.nan if c is None else c["z_contact"] for c in contacts])
     for i, found in enumerate(results):
         for j, f in enumerate(sorted(found)):
             row, o = found[f]
+            arrays["indent"][i, j] = o["mean_position"] - z_contact[i]
             k_raw[i, j] = o["F"] / o["d"]
             b = base[row] if subtract_baseline and math.isfinite(base[row]) else 0.0
             arrays["eta"][i, j] = abs(o["d"])
@@ -307,7 +515,10 @@ def modulation_spectrum(data: Any, *, curves: int | Iterable[int] | None = None,
             arrays["periods"][i, j] = o["periods"]
             arrays["n"][i, j] = o["n"]
             arrays["settle"][i, j] = o["settle"]
-    lags = np.asarray([_lag_for(phase_lag, float(f)) for f in fr])
+    if phase_reference is not None:
+        lags = _reference_lags(phase_reference, fr)
+    else:
+        lags = np.asarray([_lag_for(phase_lag, float(f)) for f in fr])
     k = k_raw * np.exp(-1j * np.radians(lags))
     if drag is not None:
         k = k - 1j * omega * float(drag)
@@ -328,22 +539,51 @@ def modulation_spectrum(data: Any, *, curves: int | Iterable[int] | None = None,
                        "displacement into the sample",
         "settle_periods": float(settle_periods), "detrend": str(detrend),
         "settle": "per-point lockin_settle" if settle is None else float(settle),
-        "phase_lag": ("none" if phase_lag is None else "per-frequency"
+        "phase_lag": ("reference" if phase_reference is not None else "none"
+                      if phase_lag is None else "per-frequency"
                       if isinstance(phase_lag, Mapping) else "scalar"),
         "drag": float(drag) if drag is not None else 0.0,
         "mean_force_baseline_subtracted": int(bool(subtract_baseline)),
         "stderr_method": "white-noise residuals: sigma_Xhat = sigma*sqrt(2/N); relative error of "
                          "k* rho^2 = (2/N)(sF^2/|F|^2 + sd^2/|d|^2 - 2 c cos(chi)/(|F||d|))",
     })
+    if phase_reference is not None:
+        attrs["phase_reference"] = ("instrument lag = median phase per frequency of a "
+                                    "hard-surface reference spectrum (plus its own phase_lag)")
+        if "file" in phase_reference.attrs:
+            attrs["phase_reference_file"] = str(phase_reference.attrs["file"])
     source = str(ds.attrs.get("source", "jpk"))
+    n_contact = int(np.isfinite(z_contact).sum())
+    keep_indent = n_contact > 0 and (n_contact == z_contact.size or source != "simulation")
+    if contact_options is None:
+        attrs["contact_point"] = "not estimated (contact_point=False)"
+    else:
+        missing = [int(c) for c, z in zip(np.asarray(index).tolist(), z_contact, strict=True)
+                   if not math.isfinite(z)]
+        opts = ", ".join(f"{k}={v!r}" for k, v in sorted(contact_options.items())) or "defaults"
+        attrs["contact_point"] = (
+            "approach baseline line + k*sigma rise + power-law refinement "
+            f"(viscoforce.experiments.modulation.find_contact_point, {opts}); found on "
+            f"{n_contact} of {z_contact.size} curves"
+            + (f"; none on curves {missing} (mean_indentation NaN there)" if missing
+               and keep_indent else "")
+            + ("; mean_indentation left out" if not keep_indent else ""))
+        if keep_indent:
+            attrs["indentation_definition"] = (
+                "mean_indentation = mean tip_position over the lock-in window minus the tip "
+                "position at the approach contact point (> 0 in contact)")
     spec = make_spectrum(
         omega, k, arrays["mean"], arrays["eta"], dims=("curve", "omega"), attrs=attrs,
         coords={"curve": ("curve", np.asarray(index)), "x": ("curve", np.asarray(x, float)),
                 "y": ("curve", np.asarray(y, float))},
         stderr={"stiffness": sigma_c, "phase": phase_se, "drive_amplitude": arrays["eta_se"],
                 "mean_force": arrays["mean_se"]},
-        quality=quality, amplitude=False, source=source)
+        quality=quality, amplitude=False, source=source,
+        mean_indentation=arrays["indent"] if keep_indent else None)
     w = ("curve", "omega")
+    if keep_indent:
+        spec = spec.assign(contact_position=("curve", z_contact, {
+            "units": "m", "long_name": "tip position at the approach contact point"}))
     return spec.assign_coords(
         frequency=("omega", fr, {"units": "Hz", "long_name": "modulation frequency"})).assign(
         nominal_amplitude=(w, arrays["nominal"], {"units": "m",
