@@ -53,7 +53,7 @@ def test_load_modulation_map_gives_a_spectrum(capsys, tmp_path):
 @pytest.mark.parametrize(("argv", "message"), [
     (["load", "/nonexistent.jpk-force"], "nonexistent"),
     (["load", "FIX", "--phase-lag", "abc"], "FREQUENCY=DEGREES"),
-    (["load", "FIX", "--raw", "--drag", "1e-6N*s/m"], "--drag and --phase-lag correct a spectrum"),
+    (["load", "FIX", "--raw", "--drag", "1e-6N*s/m"], "and --phase-reference correct a spectrum"),
     (["load", "FIX", "--out", "x.txt"], ".nc"),
     (["load", "FIX", "--phase-lag", "14", "300Hz=2"], "not both"),
 ])
@@ -82,3 +82,14 @@ def test_load_output_round_trips_unchanged(tmp_path, capsys, raw):
     capsys.readouterr()
     with xr.open_dataset(out, engine="h5netcdf") as back:
         xr.testing.assert_identical(back.load(), expected)
+
+
+def test_load_with_the_map_as_its_own_phase_reference_has_zero_median_phase(capsys, tmp_path):
+    if not MAP.exists():
+        pytest.skip("real data folder absent")
+    out = tmp_path / "s.nc"
+    assert main(["load", str(MAP), "--phase-reference", str(MAP), "--out", str(out)]) == 0
+    capsys.readouterr()
+    with xr.open_dataset(out, engine="h5netcdf") as ds:
+        median = ds.phase.median("curve").values
+    assert abs(median).max() < 1.0  # degrees; the median curve of the map itself is the lag

@@ -61,6 +61,9 @@ def add_load(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--phase-lag", type=phase_lag_type, nargs="+", default=None,
                         metavar="LAG", help="instrument phase lag subtracted from the spectrum: "
                         "degrees for all frequencies, or FREQUENCY=DEGREES pairs")
+    parser.add_argument("--phase-reference", default=None, metavar="FILE",
+                        help="a hard-surface measurement (any file load reads) whose phase per "
+                             "frequency is the instrument lag to subtract")
     parser.add_argument("--raw", action="store_true",
                         help="write the curves, not the spectrum of the modulation segments")
     add_outputs(parser, [Output("--out", NETCDF, "FILE.nc", "write the dataset (netCDF)")])
@@ -104,14 +107,21 @@ def run_load(args: argparse.Namespace) -> int:
                                  ("sensitivity", args.sensitivity)) if v is not None}
     data = load_instrument(args.file, format=args.format, **options)
     fmt = str(data.attrs.get("source", args.format or ""))
-    corrections = args.drag is not None or args.phase_lag is not None
+    corrections = (args.drag is not None or args.phase_lag is not None
+                   or args.phase_reference is not None)
     if "omega" in data.dims or args.raw or not _has_modulation(data):
         if corrections and "omega" not in data.dims:
-            raise UsageError("--drag and --phase-lag correct a spectrum; this file gives curves "
-                             "(no modulation segments, or --raw)")
+            raise UsageError("--drag, --phase-lag and --phase-reference correct a spectrum; this "
+                             "file gives curves (no modulation segments, or --raw)")
         ds = data
     else:
-        ds = modulation_spectrum(data, phase_lag=_phase_lag(args.phase_lag, data), drag=args.drag)
+        reference = None
+        if args.phase_reference is not None:
+            reference = load_instrument(args.phase_reference)
+            if "omega" not in reference.dims:
+                reference = modulation_spectrum(reference)
+        ds = modulation_spectrum(data, phase_lag=_phase_lag(args.phase_lag, data), drag=args.drag,
+                                 phase_reference=reference)
     if args.out:
         ds.to_netcdf(args.out, engine="h5netcdf")
     kind = "spectrum" if "omega" in ds.dims else "curves"
