@@ -15,7 +15,7 @@ TOP_KEYS = {"schema", "created", "quick", "machine", "target", "settings", "real
             "summary", "files"}
 SYNTHETIC_KEYS = {"archive", "as_is", "serial", "profile", "dask"}
 DASK_KEYS = {"curves", "blocks", "wall_s", "tasks_s", "concat_s", "cluster_startup_s",
-             "per_curve_s", "workers", "threads", "worker_blas_threads", "scheduler", "keep_open",
+             "per_curve_s", "workers", "threads", "worker_blas_threads", "scheduler", "open_mode",
              "worker_peak_rss_bytes", "workers_peak_rss_sum_bytes", "check",
              "client_peak_rss_bytes", "client_peak_rss_before_bytes", "total_peak_rss_bytes"}
 SUMMARY_KEYS = {"wall_s", "memory_bytes", "time_passed", "memory_passed", "passed", "verdict",
