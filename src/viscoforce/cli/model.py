@@ -180,6 +180,15 @@ SIMULATE_FLAGS = FlagGroup(None, (
 ))
 
 
+def _add_run_flags(parser: argparse.ArgumentParser, own: FlagGroup) -> None:
+    """--progress, --json, the command's own group, then material, system and numerics flags."""
+    parser.add_argument("--progress", action=argparse.BooleanOptionalAction, default=None,
+                        help=_PROGRESS)
+    parser.add_argument("--json", action="store_true", help=_JSON)
+    for group in (own, MATERIAL_FLAGS, SYSTEM_FLAGS, NUMERICS_FLAGS):
+        add_flags(parser, group)
+
+
 def add_simulate(parser: argparse.ArgumentParser) -> None:
     """Flags of ``viscoforce simulate``."""
     from viscoforce.solvers.steppers import DEFAULT_METHOD, METHODS
@@ -193,13 +202,7 @@ def add_simulate(parser: argparse.ArgumentParser) -> None:
         Output("--out", NETCDF, "FILE.nc", "write the dataset (netCDF)"),
         Output("--plot", FIGURE, "FILE.png", "write the force-position (hysteresis) plot"),
     ])
-    parser.add_argument("--progress", action=argparse.BooleanOptionalAction, default=None,
-                        help=_PROGRESS)
-    parser.add_argument("--json", action="store_true", help=_JSON)
-    add_flags(parser, DRIVE_FLAGS)
-    add_flags(parser, MATERIAL_FLAGS)
-    add_flags(parser, SYSTEM_FLAGS)
-    add_flags(parser, NUMERICS_FLAGS)
+    _add_run_flags(parser, DRIVE_FLAGS)
 
 
 def drive_from_args(args: argparse.Namespace) -> SeparationHistory:
@@ -313,13 +316,7 @@ def add_spectrum(parser: argparse.ArgumentParser) -> None:
         Output("--out", NETCDF, "FILE.nc", "write the spectrum (netCDF)"),
         Output("--plot", FIGURE, "FILE.png", "write a Bode plot"),
     ])
-    parser.add_argument("--progress", action=argparse.BooleanOptionalAction, default=None,
-                        help=_PROGRESS)
-    parser.add_argument("--json", action="store_true", help=_JSON)
-    add_flags(parser, TIME_DOMAIN_FLAGS)
-    add_flags(parser, MATERIAL_FLAGS)
-    add_flags(parser, SYSTEM_FLAGS)
-    add_flags(parser, NUMERICS_FLAGS)
+    _add_run_flags(parser, TIME_DOMAIN_FLAGS)
 
 
 def _omega(args: argparse.Namespace):
