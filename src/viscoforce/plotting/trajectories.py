@@ -1,70 +1,43 @@
-"""Plots of simulated trajectories (paper Figs. 1, 5–8); compute and draw are kept apart.
+"""Trajectory plots: force and contact-radius loops, surface profiles, force against time.
 
-Every function takes the ``xarray.Dataset`` returned by
-:func:`viscoforce.solvers.simulate.simulate` (a *trajectory*), draws on ``ax`` (or on a new figure
-when ``ax`` is None) and returns a :class:`PlotHandle` holding the figure, the axes and the
-artists it drew, so that callers can restyle, annotate or save the result. Nothing here computes
-physics, changes global state or calls ``plt.show()``.
-
-Inputs are checked against the dataset contracts of :mod:`viscoforce.schema`
-(:func:`~viscoforce.schema.validate_trajectory`, :func:`~viscoforce.schema.validate_spectrum`), so
-a wrong unit or dim raises :class:`~viscoforce.exceptions.SchemaError` before anything is drawn.
-
-Data stay in SI inside; conversion happens only for display: positions and gaps in nm, forces in
-µN (or ``force_unit``), times in ms (or ``time_unit``). Axis labels carry the unit.
-
-matplotlib is imported lazily inside the functions, so ``import viscoforce.plotting`` is cheap.
+Each takes the ``xarray.Dataset`` returned by :func:`viscoforce.solvers.simulate.simulate`
+(paper Figs. 1, 5–8); positions and gaps are shown in nm.
 """
 
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any, Literal
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numpy.typing import ArrayLike
 
 from viscoforce._typing import FloatArray
-from viscoforce._validation import (
-    as_float_1d,
-    describe_value,
-    require_finite,
-    require_positive,
-)
+from viscoforce._validation import as_float_1d, describe_value, require_finite
 from viscoforce.exceptions import ParameterError, SchemaError
-from viscoforce.schema import validate_spectrum, validate_trajectory
+from viscoforce.plotting._common import (
+    _FORCE_UNITS,
+    _LENGTH_UNITS,
+    _NM,
+    _TIME_UNITS,
+    ForceUnit,
+    LengthUnit,
+    PlotHandle,
+    TimeUnit,
+    _display_limit,
+    _new_or_given_axes,
+    _plot,
+    _require_flag,
+    _require_text,
+    _unit,
+)
+from viscoforce.schema import validate_trajectory
 
 if TYPE_CHECKING:
     import xarray as xr
     from matplotlib.artist import Artist
     from matplotlib.axes import Axes
-    from matplotlib.colorbar import Colorbar
     from matplotlib.figure import Figure
-
-__all__ = [
-    "PlotHandle",
-    "hysteresis_plot",
-    "contact_radius_plot",
-    "profile_plot",
-    "force_time_plot",
-    "bode_plot",
-]
-
-ForceUnit = Literal["N", "mN", "uN", "nN", "pN"]
-TimeUnit = Literal["s", "ms", "us"]
-LengthUnit = Literal["m", "um", "nm"]
-
-#: Display units: option name → (size of the unit in SI, label text).
-_FORCE_UNITS: dict[str, tuple[float, str]] = {
-    "N": (1.0, "N"), "mN": (1e-3, "mN"), "uN": (1e-6, "µN"), "nN": (1e-9, "nN"),
-    "pN": (1e-12, "pN"),
-}
-_TIME_UNITS: dict[str, tuple[float, str]] = {"s": (1.0, "s"), "ms": (1e-3, "ms"),
-                                             "us": (1e-6, "µs")}
-_LENGTH_UNITS: dict[str, tuple[float, str]] = {"m": (1.0, "m"), "um": (1e-6, "µm"),
-                                               "nm": (1e-9, "nm")}
-_NM = 1e-9
 
 #: Linestyles that tell the branches apart: approach (loading) and retraction (unloading).
 LOADING_STYLE = "-"
@@ -73,89 +46,6 @@ UNLOADING_STYLE = "--"
 #: triangles for E_inf, crosses for E0).
 STATIC_MARKERS = ("^", "x", "s", "o", "v", "+", "D")
 _POSITION_LABEL = "position $h_0$ [nm]"
-
-
-@dataclass(frozen=True)
-class PlotHandle:
-    """What a plot function drew.
-
-    Attributes
-    ----------
-    figure : matplotlib.figure.Figure
-        The figure holding the axes.
-    axes : tuple of matplotlib.axes.Axes
-        The axes drawn on (one, or two for the two-panel :func:`profile_plot`).
-    lines : tuple of matplotlib.artist.Artist or matplotlib.colorbar.Colorbar
-        What was drawn, in drawing order: trajectory branches first, then reference curves (and,
-        for :func:`profile_plot`, the colour bar last).
-    """
-
-    figure: Figure
-    axes: tuple[Axes, ...]
-    lines: tuple[Artist | Colorbar, ...]
-
-    @property
-    def ax(self) -> Axes:
-        """The first (main) axes."""
-        return self.axes[0]
-
-
-# ── helpers: validation and unit conversion ─────────────────────────────────────────────────────
-
-
-def _require_choice(name: str, value: Any, choices: Sequence[str] | Mapping[str, Any]) -> str:
-    """Return ``value``, raising unless it is one of the strings ``choices``.
-
-    The ``isinstance`` test comes first: ``value in choices`` would raise for an unhashable
-    value (list, dict) or be ambiguous for an array.
-    """
-    if not isinstance(value, str) or value not in choices:
-        listed = ", ".join(repr(c) for c in (sorted(choices) if isinstance(choices, Mapping)
-                                             else choices))
-        raise ParameterError(f"{name} must be one of {listed}, got {describe_value(value)}")
-    return value
-
-
-def _require_flag(name: str, value: Any, *, allow_none: bool = False) -> bool | None:
-    """Return ``value`` as a bool, raising unless it is True or False (or None if allowed)."""
-    if value is None and allow_none:
-        return None
-    if not isinstance(value, bool | np.bool_):
-        allowed = "True, False or None" if allow_none else "True or False"
-        raise ParameterError(f"{name} must be {allowed}, got {describe_value(value)}")
-    return bool(value)
-
-
-def _require_text(name: str, value: Any) -> str | None:
-    """Return ``value``, raising unless it is a string or None (a label or title)."""
-    if value is not None and not isinstance(value, str):
-        raise ParameterError(f"{name} must be a string or None, got {describe_value(value)}")
-    return value
-
-
-def _display_limit(name: str, value: Any, scale: float, unit: str) -> float | None:
-    """Validate an axis limit [SI] (> 0, or None) that is shown in ``unit`` (= ``scale`` SI)."""
-    if value is None:
-        return None
-    limit = require_positive(name, value)
-    if not np.isfinite(limit / scale):
-        raise ParameterError(
-            f"{name} must be at most {np.finfo(float).max * scale:.3g} m to be shown in {unit}, "
-            f"got {value!r}")
-    return limit
-
-
-def _unit(name: str, value: str, table: Mapping[str, tuple[float, str]]) -> tuple[float, str]:
-    return table[_require_choice(name, value, table)]
-
-
-def _plot(ax: Axes, x: FloatArray, y: FloatArray, **kw: Any) -> Artist:
-    """``ax.plot`` of one line; a bad matplotlib property in ``line_kw`` raises ParameterError."""
-    try:
-        (line,) = ax.plot(x, y, **kw)
-    except (AttributeError, TypeError, ValueError) as exc:
-        raise ParameterError(f"line_kw holds an invalid matplotlib line property: {exc}") from None
-    return line
 
 
 def _require_trajectory(trajectory: Any, names: Sequence[str], function: str) -> xr.Dataset:
@@ -184,19 +74,6 @@ def _require_trajectory(trajectory: Any, names: Sequence[str], function: str) ->
 
 def _values(trajectory: xr.Dataset, name: str) -> FloatArray:
     return np.asarray(trajectory[name].values, dtype=float)
-
-
-def _new_or_given_axes(ax: Any, figsize: tuple[float, float]) -> tuple[Figure, Axes]:
-    from matplotlib.axes import Axes
-
-    if ax is None:
-        import matplotlib.pyplot as plt
-
-        figure, new_ax = plt.subplots(figsize=figsize, layout="constrained")
-        return figure, new_ax
-    if not isinstance(ax, Axes):
-        raise ParameterError(f"ax must be a matplotlib Axes or None, got {type(ax).__name__}")
-    return ax.figure, ax
 
 
 def _line_kw(line_kw: Mapping[str, Any] | None) -> dict[str, Any]:
@@ -300,8 +177,6 @@ def _max_finite(*arrays: FloatArray) -> float:
     finite = [a[np.isfinite(a)] for a in arrays]
     return max((float(a.max()) for a in finite if a.size), default=0.0)
 
-
-# ── trajectory plots ─────────────────────────────────────────────────────────────────────────────
 
 
 def hysteresis_plot(trajectory: xr.Dataset, *, ax: Axes | None = None,
@@ -598,133 +473,3 @@ def force_time_plot(trajectory: xr.Dataset, *, ax: Axes | None = None, log: bool
     axes.set_xlabel(f"time $t$ [{t_unit}]")
     axes.set_ylabel(f"{quantity} [{f_unit}]")
     return PlotHandle(figure, (axes,), (line,))
-
-
-# ── frequency-domain plots ──────────────────────────────────────────────────────────────────────
-
-FrequencyUnit = Literal["rad/s", "Hz"]
-Magnitude = Literal["stiffness", "amplitude"]
-_MAGNITUDE_LABELS = {"stiffness": "stiffness $|F_1|/\\eta$ [N/m]",
-                     "amplitude": "relative amplitude $a = |F_1|/\\bar F$"}
-
-
-def _spectrum_items(spectra: Any, magnitude: str) -> list[tuple[str, xr.Dataset]]:
-    """(label, spectrum) pairs, each validated (:func:`viscoforce.schema.validate_spectrum`)."""
-    import xarray as xr
-
-    if isinstance(spectra, xr.Dataset):  # itself a Mapping, so test it first
-        pairs: list[tuple[str | None, Any]] = [(None, spectra)]
-    elif isinstance(spectra, Mapping):
-        pairs = [(str(label), ds) for label, ds in spectra.items()]
-    elif isinstance(spectra, Sequence) and not isinstance(spectra, str | bytes):
-        pairs = [(None, ds) for ds in spectra]
-    else:
-        raise ParameterError(
-            "spectra must be a spectrum Dataset, a mapping label -> Dataset or a sequence of "
-            f"Datasets, got {type(spectra).__name__}")
-    if not pairs:
-        raise ParameterError("spectra must contain at least one spectrum")
-    items = []
-    for i, (given, ds) in enumerate(pairs):
-        label = given if given is not None else (
-            "spectrum" if isinstance(spectra, xr.Dataset) else f"spectrum {i + 1}")
-        if isinstance(ds, xr.Dataset):
-            label = given if given is not None else str(ds.attrs.get("method", label))
-            for name in ("omega", magnitude, "phase"):
-                if name not in ds.variables:
-                    raise SchemaError(f"bode_plot: spectrum {label!r} has no '{name}'")
-        try:
-            validate_spectrum(ds, require=("omega", magnitude, "phase"))
-        except SchemaError as exc:
-            raise SchemaError(f"bode_plot: spectrum {label!r}: {exc}") from None
-        extra = [d for d in ds[magnitude].dims if d != "omega"]
-        if extra:
-            raise ParameterError(
-                f"bode_plot draws one spectrum per entry; spectrum {label!r} also spans {extra}: "
-                f"select one, e.g. ds.isel({extra[0]}=0)")
-        items.append((label, ds))
-    return items
-
-
-def bode_plot(spectra: xr.Dataset | Mapping[str, xr.Dataset] | Sequence[xr.Dataset], *,
-              ax: Sequence[Axes] | None = None, magnitude: Magnitude = "stiffness",
-              frequency_unit: FrequencyUnit = "rad/s", markers: bool | None = None,
-              title: str | None = None) -> PlotHandle:
-    """Bode plot: magnitude and phase χ against a log frequency axis (data, methods, fits).
-
-    Parameters
-    ----------
-    spectra : Dataset, mapping label → Dataset, or sequence of Datasets
-        Spectra over ``omega`` [rad/s] with ``stiffness`` or ``amplitude`` and ``phase`` [degree]
-        (:mod:`viscoforce.schema`). Several are overlaid; a sequence is labelled by each
-        dataset's ``method`` attribute. ``<name>_stderr`` variables become error bars.
-    ax : pair of Axes, optional
-        (magnitude, phase) axes to draw on; default a new two-row figure.
-    magnitude : {"stiffness", "amplitude"}
-        Upper panel: |F1|/η [N/m] or a = |F1|/F̄.
-    frequency_unit : {"rad/s", "Hz"}
-        Display unit of the frequency axis (ω stays in rad/s inside).
-    markers : bool, optional
-        Draw markers (default: for spectra with ≤ 30 points, as measured data usually are).
-    title : str, optional
-        Figure title.
-
-    Returns
-    -------
-    PlotHandle
-        ``axes = (magnitude_axes, phase_axes)``.
-
-    Raises
-    ------
-    ParameterError
-        Bad option or axes; ``spectra`` neither a Dataset, a mapping nor a sequence; a spectrum
-        with extra dims besides ``omega`` (select one first).
-    SchemaError
-        An entry is not a spectrum (:func:`viscoforce.schema.validate_spectrum`): not a Dataset,
-        no magnitude or phase, wrong units or dims.
-    """
-    import matplotlib.pyplot as plt
-    from matplotlib.axes import Axes
-
-    _require_choice("magnitude", magnitude, tuple(_MAGNITUDE_LABELS))
-    _require_choice("frequency_unit", frequency_unit, ("rad/s", "Hz"))
-    markers = _require_flag("markers", markers, allow_none=True)
-    title = _require_text("title", title)
-    if ax is not None and not (isinstance(ax, Sequence) and not isinstance(ax, str | bytes)
-                               and len(ax) == 2 and all(isinstance(a, Axes) for a in ax)):
-        raise ParameterError(
-            f"ax must be None or a pair of matplotlib Axes (magnitude axes, phase axes), got "
-            f"{describe_value(ax)}")
-    items = _spectrum_items(spectra, magnitude)
-    if ax is None:
-        figure, axes = plt.subplots(2, 1, sharex=True, figsize=(6.4, 5.6), layout="constrained")
-    else:
-        axes = tuple(ax)
-        figure = axes[0].figure
-    scale = 1.0 if frequency_unit == "rad/s" else 1.0 / (2.0 * np.pi)
-    drawn = []
-    for label, ds in items:
-        x = np.asarray(ds["omega"].values, dtype=float) * scale
-        show_markers = markers if markers is not None else x.size <= 30
-        style = {"marker": "o", "markersize": 4} if show_markers else {}
-        for panel, name in ((axes[0], magnitude), (axes[1], "phase")):
-            y = np.asarray(ds[name].values, dtype=float)
-            err = ds.get(f"{name}_stderr")
-            if err is not None:
-                art = panel.errorbar(x, y, yerr=np.asarray(err.values, dtype=float), label=label,
-                                     capsize=2, linestyle="none" if show_markers else "-",
-                                     **style)
-            else:
-                (art,) = panel.plot(x, y, label=label, **style)
-            drawn.append(art)
-    axes[0].set_xscale("log")
-    axes[0].set_ylabel(_MAGNITUDE_LABELS[magnitude])
-    axes[1].set_ylabel("phase $\\chi$ [deg] (force leads compression)")
-    sym = "$\\omega$ [rad/s]" if frequency_unit == "rad/s" else "$f = \\omega/2\\pi$ [Hz]"
-    axes[1].set_xlabel(f"frequency {sym}")
-    axes[0].legend(fontsize="small")
-    for a in axes:
-        a.grid(True, which="both", alpha=0.3)
-    if title:
-        figure.suptitle(title)
-    return PlotHandle(figure, tuple(axes), tuple(drawn))

@@ -1,0 +1,364 @@
+"""Bode plot: magnitude and phase χ of spectra against a log frequency axis, data against fit.
+
+Measured points get error bars from their ``<name>_stderr`` variables, points whose ``quality``
+flag is non-zero are ringed in red (the legend gives the flag's meaning), and a fit result
+(:func:`viscoforce.schema.make_fit_result`, what ``fit --out`` writes) adds its best-fit curve,
+drawn over its own (usually denser) ``omega`` grid, and a box of its parameters ± stderr.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from typing import TYPE_CHECKING, Any, Literal
+
+import numpy as np
+
+from viscoforce._typing import FloatArray
+from viscoforce._validation import describe_value
+from viscoforce.exceptions import ParameterError, SchemaError
+from viscoforce.plotting._common import (
+    PlotHandle,
+    _require_choice,
+    _require_flag,
+    _require_text,
+)
+from viscoforce.schema import validate_fit_result, validate_spectrum
+from viscoforce.units import format_quantity, unit_factor
+
+if TYPE_CHECKING:
+    import xarray as xr
+    from matplotlib.artist import Artist
+    from matplotlib.axes import Axes
+
+FrequencyUnit = Literal["rad/s", "Hz"]
+Magnitude = Literal["stiffness", "amplitude"]
+_MAGNITUDE_LABELS = {"stiffness": "stiffness $|F_1|/\\eta$ [N/m]",
+                     "amplitude": "relative amplitude $a = |F_1|/\\bar F$"}
+#: Style of the ring drawn around flagged points (``quality`` != 0).
+FLAGGED_STYLE: dict[str, Any] = {"linestyle": "none", "marker": "o", "markersize": 9,
+                                 "markerfacecolor": "none", "markeredgecolor": "tab:red",
+                                 "markeredgewidth": 1.5}
+#: Style of the best-fit curve.
+FIT_STYLE: dict[str, Any] = {"color": "k", "linewidth": 1.5}
+#: CF units of a fit parameter → the :func:`viscoforce.units.format_quantity` dimension.
+_PARAMETER_DIMENSIONS = {"s": "time", "Pa": "pressure", "N/m": "stiffness", "N": "force",
+                         "m": "length", "1": "dimensionless"}
+
+
+def _spectrum_items(spectra: Any, magnitude: str) -> list[tuple[str, xr.Dataset]]:
+    """(label, spectrum) pairs, each validated (:func:`viscoforce.schema.validate_spectrum`)."""
+    import xarray as xr
+
+    if isinstance(spectra, xr.Dataset):  # itself a Mapping, so test it first
+        pairs: list[tuple[str | None, Any]] = [(None, spectra)]
+    elif isinstance(spectra, Mapping):
+        pairs = [(str(label), ds) for label, ds in spectra.items()]
+    elif isinstance(spectra, Sequence) and not isinstance(spectra, str | bytes):
+        pairs = [(None, ds) for ds in spectra]
+    else:
+        raise ParameterError(
+            "spectra must be a spectrum Dataset, a mapping label -> Dataset or a sequence of "
+            f"Datasets, got {type(spectra).__name__}")
+    if not pairs:
+        raise ParameterError("spectra must contain at least one spectrum")
+    items = []
+    for i, (given, ds) in enumerate(pairs):
+        label = given if given is not None else (
+            "spectrum" if isinstance(spectra, xr.Dataset) else f"spectrum {i + 1}")
+        if isinstance(ds, xr.Dataset):
+            label = given if given is not None else str(ds.attrs.get("method", label))
+            for name in ("omega", magnitude, "phase"):
+                if name not in ds.variables:
+                    raise SchemaError(f"bode_plot: spectrum {label!r} has no '{name}'")
+        try:
+            validate_spectrum(ds, require=("omega", magnitude, "phase"))
+        except SchemaError as exc:
+            raise SchemaError(f"bode_plot: spectrum {label!r}: {exc}") from None
+        items.append((label, ds))
+    return items
+
+
+def _selection(select: Any) -> dict[str, int]:
+    if select is None:
+        return {}
+    if not isinstance(select, Mapping):
+        raise ParameterError(
+            f"select must be a mapping dim -> index (e.g. {{'curve': 0}}) or None, got "
+            f"{describe_value(select)}")
+    out = {}
+    for dim, index in select.items():
+        if not isinstance(dim, str):
+            raise ParameterError(f"select keys must be dim names (strings), got {dim!r}")
+        if dim == "omega":
+            raise ParameterError("select must not pick along 'omega' (the frequency axis)")
+        if isinstance(index, bool) or not isinstance(index, int | np.integer):
+            raise ParameterError(
+                f"select[{dim!r}] must be an integer index, got {describe_value(index)}")
+        out[dim] = int(index)
+    return out
+
+
+def _pick(ds: xr.Dataset, picks: Mapping[str, int], what: str, extra: Sequence[str]) -> xr.Dataset:
+    """``ds.isel(picks)`` over the dims it has; raise if extra dims other than ``omega`` remain."""
+    here = {d: i for d, i in picks.items() if d in ds.dims}
+    for dim, index in here.items():
+        size = ds.sizes[dim]
+        if not -size <= index < size:
+            raise ParameterError(
+                f"select[{dim!r}] = {index} is out of range: {what} has {size} entries along "
+                f"{dim!r}")
+    ds = ds.isel(here) if here else ds
+    left = [d for d in extra if d not in here]
+    if left:
+        raise ParameterError(
+            f"bode_plot draws one spectrum per entry; {what} also spans {left}: select one, "
+            f"e.g. ds.isel({left[0]}=0) or select={{{left[0]!r}: 0}}")
+    return ds
+
+
+def _fit_result(fit: Any, magnitude: str) -> xr.Dataset | None:
+    """The fit result, validated, with its best-fit spectrum (``fit_stiffness``, ``fit_phase``)."""
+    import xarray as xr
+
+    if fit is None:
+        return None
+    if not isinstance(fit, xr.Dataset):
+        raise ParameterError(
+            "fit must be a fit-result Dataset (viscoforce.schema.make_fit_result, what "
+            f"'fit --out' writes) or None, got {describe_value(fit)}")
+    try:
+        validate_fit_result(fit)
+    except SchemaError as exc:
+        raise SchemaError(f"bode_plot: fit: {exc}") from None
+    missing = [n for n in ("fit_stiffness", "fit_phase") if n not in fit.variables]
+    if missing:
+        raise ParameterError(
+            f"fit has no best-fit spectrum: it lacks {missing} over 'omega' (a relaxation or "
+            "step fit holds fit_force over time; refit the spectrum, or pass fit=None)")
+    if magnitude != "stiffness":
+        raise ParameterError(
+            f"fit draws the best-fit stiffness: use magnitude='stiffness' with fit=, got "
+            f"magnitude={magnitude!r}")
+    return fit
+
+
+def _flag_meanings(quality: xr.DataArray, codes: FloatArray) -> str:
+    """The CF ``flag_meanings`` of the ``codes`` present, spaces for underscores."""
+    values = [int(v) for v in np.atleast_1d(quality.attrs.get("flag_values", []))]
+    meanings = str(quality.attrs.get("flag_meanings", "")).split()
+    table = dict(zip(values, meanings, strict=False))
+    return ", ".join(table.get(int(c), f"code {int(c)}").replace("_", " ")
+                     for c in np.unique(codes))
+
+
+def _draw_spectrum(axes: tuple[Axes, Axes], ds: xr.Dataset, label: str, magnitude: str,
+                   scale: float, markers: bool | None, flag_label: str) -> list[Artist]:
+    """Magnitude and phase of one spectrum (error bars where stderr is stored), then its flags."""
+    drawn: list[Artist] = []
+    x = np.asarray(ds["omega"].values, dtype=float) * scale
+    show_markers = markers if markers is not None else x.size <= 30
+    style = {"marker": "o", "markersize": 4} if show_markers else {}
+    for panel, name in ((axes[0], magnitude), (axes[1], "phase")):
+        y = np.asarray(ds[name].values, dtype=float)
+        err = ds.get(f"{name}_stderr")
+        if err is not None:
+            art = panel.errorbar(x, y, yerr=np.asarray(err.values, dtype=float), label=label,
+                                 capsize=2, linestyle="none" if show_markers else "-", **style)
+        else:
+            (art,) = panel.plot(x, y, label=label, **style)
+        drawn.append(art)
+    if "quality" in ds.variables:
+        codes = np.asarray(ds["quality"].values)
+        flagged = codes != 0
+        if flagged.any():
+            text = f"{flag_label}flagged: {_flag_meanings(ds['quality'], codes[flagged])}"
+            for panel, name in ((axes[0], magnitude), (axes[1], "phase")):
+                y = np.asarray(ds[name].values, dtype=float)
+                (ring,) = panel.plot(x[flagged], y[flagged], label=text, **FLAGGED_STYLE)
+                drawn.append(ring)
+    return drawn
+
+
+def _quantity(value: float, err: float, unit: str) -> str:
+    """``"1.020 ± 0.041 ms"``: value ± stderr in one display unit chosen for the value.
+
+    The stderr keeps 2 significant digits and the value is rounded to the same decimal place;
+    without a stderr the value keeps 3 significant digits. Units viscoforce cannot rescale
+    (e.g. those of ``C1``) are shown in SI as stored, with a shared power of ten where the
+    value is far from 1 (``"(1.50 ± 0.20)e-8 Pa-1 s-m"``).
+    """
+    dimension = _PARAMETER_DIMENSIONS.get(unit)
+    if dimension is not None and np.isfinite(value):
+        chosen = format_quantity(value, dimension).partition(" ")[2]
+        factor = unit_factor(dimension, chosen) if chosen else 1.0
+    else:
+        chosen, factor = ("" if unit == "1" else unit), 1.0
+    v, e = value / factor, err / factor
+    if np.isfinite(v) and np.isfinite(e) and e > 0:
+        exponent = int(np.floor(np.log10(abs(v)))) if v != 0 else 0
+        exponent = 0 if -3 <= exponent < 4 else exponent  # else a shared power of ten
+        v, e = v / 10.0**exponent, e / 10.0**exponent
+        decimals = int(min(max(0, 1 - np.floor(np.log10(e))), 12))
+        shown = f"{v:.{decimals}f} ± {e:.{decimals}f}"
+        shown = f"({shown})e{exponent}" if exponent else shown
+    elif np.isfinite(e):
+        shown = f"{v:.3g} ± {e:.2g}"
+    else:
+        shown = f"{v:.3g}"
+    text = f"{shown} {chosen}" if chosen else shown
+    return text if np.isfinite(e) else f"{text} (no stderr)"
+
+
+def _parameter_text(fit: xr.Dataset) -> str:
+    """The fit's model, each parameter as value ± stderr, redchi (and non-convergence)."""
+    lines = [f"fit: {fit.attrs['model']}"]
+    for name in (str(n) for n in fit["param_i"].values):
+        value = float(fit[name].values)
+        err = float(fit[f"{name}_stderr"].values)
+        lines.append(f"{name} = {_quantity(value, err, str(fit[name].attrs['units']))}")
+    lines.append(f"redchi = {float(fit['redchi'].values):.3g}")
+    if "success" in fit.variables and int(fit["success"].values) == 0:
+        lines.append("(did not converge)")
+    return "\n".join(lines)
+
+
+def _draw_fit(axes: tuple[Axes, Axes], fit: xr.Dataset, scale: float) -> list[Artist]:
+    """The best-fit stiffness and phase over the fit's omega grid, then the parameter box."""
+    x = np.asarray(fit["omega"].values, dtype=float) * scale
+    label = f"fit ({fit.attrs['model']})"
+    drawn: list[Artist] = []
+    for panel, name in ((axes[0], "fit_stiffness"), (axes[1], "fit_phase")):
+        (line,) = panel.plot(x, np.asarray(fit[name].values, dtype=float), label=label,
+                             **FIT_STYLE)
+        drawn.append(line)
+    box = axes[1].text(0.02, 0.95, _parameter_text(fit), transform=axes[1].transAxes,
+                       va="top", ha="left", fontsize="small", family="monospace",
+                       bbox={"boxstyle": "round", "facecolor": "white", "alpha": 0.85,
+                             "edgecolor": "0.7"})
+    drawn.append(box)
+    return drawn
+
+
+def _on(artist: Artist, ax: Axes) -> bool:
+    """Whether ``artist`` (a line, text or error-bar container) was drawn on ``ax``."""
+    from matplotlib.container import Container
+
+    first = artist[0] if isinstance(artist, Container) else artist
+    return first.axes is ax and not str(artist.get_label()).startswith("_")
+
+
+def bode_plot(spectra: xr.Dataset | Mapping[str, xr.Dataset] | Sequence[xr.Dataset], *,
+              fit: xr.Dataset | None = None, ax: Sequence[Axes] | None = None,
+              magnitude: Magnitude = "stiffness", frequency_unit: FrequencyUnit = "rad/s",
+              markers: bool | None = None, select: Mapping[str, int] | None = None,
+              title: str | None = None) -> PlotHandle:
+    """Bode plot: magnitude and phase χ against a log frequency axis (data, methods, fits).
+
+    Parameters
+    ----------
+    spectra : Dataset, mapping label → Dataset, or sequence of Datasets
+        Spectra over ``omega`` [rad/s] with ``stiffness`` or ``amplitude`` and ``phase`` [degree]
+        (:mod:`viscoforce.schema`). Several are overlaid; a sequence is labelled by each
+        dataset's ``method`` attribute. ``<name>_stderr`` variables become error bars; points
+        whose ``quality`` flag is non-zero are ringed in red, labelled with the flag meanings.
+    fit : Dataset, optional
+        A fit result (:func:`viscoforce.schema.make_fit_result`, ``fit --out``) holding the
+        best-fit ``fit_stiffness`` [N/m] and ``fit_phase`` [degree] over its own ``omega``
+        grid: drawn as a black line, with a box of the parameters (value ± stderr in a unit
+        suited to the value) and the reduced chi-square. Needs ``magnitude="stiffness"``.
+    ax : pair of Axes, optional
+        (magnitude, phase) axes to draw on; default a new two-row figure.
+    magnitude : {"stiffness", "amplitude"}
+        Upper panel: |F1|/η [N/m] or a = |F1|/F̄. Its axis is logarithmic when every value
+        drawn there is positive, else linear.
+    frequency_unit : {"rad/s", "Hz"}
+        Display unit of the frequency axis (ω stays in rad/s inside).
+    markers : bool, optional
+        Draw markers (default: with a fit, or for spectra with ≤ 30 points, as measured data
+        usually are).
+    select : mapping of str to int, optional
+        Index along each extra dim (e.g. ``{"curve": 3}``) picked from every spectrum, and from
+        the fit result, that has the dim. Spectra (and a fit over a map) with extra dims
+        besides ``omega`` need it.
+    title : str, optional
+        Figure title.
+
+    Returns
+    -------
+    PlotHandle
+        ``axes = (magnitude_axes, phase_axes)``; ``lines``: per spectrum its magnitude and
+        phase artists (an ``ErrorbarContainer`` where stderr is stored, else a line), then its
+        flagged-point rings (magnitude, phase) if any; then, with ``fit``, the best-fit
+        magnitude and phase lines and the parameter text box.
+
+    Raises
+    ------
+    ParameterError
+        Bad option or axes; ``spectra`` neither a Dataset, a mapping nor a sequence; a spectrum
+        or fit with extra dims besides ``omega`` that ``select`` does not pick, a ``select``
+        index out of range or naming a dim nothing has; ``fit`` not a Dataset, without a
+        best-fit spectrum, or with ``magnitude="amplitude"``.
+    SchemaError
+        An entry is not a spectrum (:func:`viscoforce.schema.validate_spectrum`): not a Dataset,
+        no magnitude or phase, wrong units or dims; ``fit`` is not a valid fit result
+        (:func:`viscoforce.schema.validate_fit_result`).
+    """
+    import matplotlib.pyplot as plt
+    from matplotlib.axes import Axes
+
+    _require_choice("magnitude", magnitude, tuple(_MAGNITUDE_LABELS))
+    _require_choice("frequency_unit", frequency_unit, ("rad/s", "Hz"))
+    markers = _require_flag("markers", markers, allow_none=True)
+    title = _require_text("title", title)
+    picks = _selection(select)
+    if ax is not None and not (isinstance(ax, Sequence) and not isinstance(ax, str | bytes)
+                               and len(ax) == 2 and all(isinstance(a, Axes) for a in ax)):
+        raise ParameterError(
+            f"ax must be None or a pair of matplotlib Axes (magnitude axes, phase axes), got "
+            f"{describe_value(ax)}")
+    items = _spectrum_items(spectra, magnitude)
+    fit_ds = _fit_result(fit, magnitude)
+    known = {str(d) for _, ds in items for d in ds.dims}
+    known |= set() if fit_ds is None else {str(d) for d in fit_ds["success"].dims}
+    unknown = sorted(set(picks) - known)
+    if unknown:
+        raise ParameterError(f"select names dims {unknown} that neither the spectra nor the "
+                             f"fit have (they have {sorted(known - {'omega'})})")
+    items = [(label, _pick(ds, picks, f"spectrum {label!r}",
+                           [str(d) for d in ds[magnitude].dims if d != "omega"]))
+             for label, ds in items]
+    if fit_ds is not None:
+        fit_ds = _pick(fit_ds, picks, "the fit result", [str(d) for d in fit_ds["success"].dims])
+        if markers is None:
+            markers = True
+        if len(items) == 1 and items[0][0] == "spectrum":
+            items = [("data", items[0][1])]
+    if ax is None:
+        figure, axes = plt.subplots(2, 1, sharex=True, figsize=(6.4, 5.6), layout="constrained")
+    else:
+        axes = tuple(ax)
+        figure = axes[0].figure
+    scale = 1.0 if frequency_unit == "rad/s" else 1.0 / (2.0 * np.pi)
+    drawn: list[Artist] = []
+    for label, ds in items:
+        drawn += _draw_spectrum((axes[0], axes[1]), ds, label, magnitude, scale, markers,
+                                f"{label} " if len(items) > 1 else "")
+    if fit_ds is not None:
+        drawn += _draw_fit((axes[0], axes[1]), fit_ds, scale)
+    shown = [np.asarray(ds[magnitude].values, dtype=float) for _, ds in items]
+    if fit_ds is not None:
+        shown.append(np.asarray(fit_ds["fit_stiffness"].values, dtype=float))
+    values = np.concatenate([v[np.isfinite(v)] for v in shown])
+    axes[0].set_xscale("log")
+    if values.size and np.all(values > 0):
+        axes[0].set_yscale("log")
+    axes[0].set_ylabel(_MAGNITUDE_LABELS[magnitude])
+    axes[1].set_ylabel("phase $\\chi$ [deg] (force leads compression)")
+    sym = "$\\omega$ [rad/s]" if frequency_unit == "rad/s" else "$f = \\omega/2\\pi$ [Hz]"
+    axes[1].set_xlabel(f"frequency {sym}")
+    axes[0].legend(handles=[a for a in drawn if _on(a, axes[0])], fontsize="small")
+    for a in axes:
+        a.grid(True, which="both", alpha=0.3)
+    if title:
+        figure.suptitle(title)
+    return PlotHandle(figure, tuple(axes), tuple(drawn))
