@@ -152,6 +152,19 @@ class ContactProblem:
                             outer_radius=outer_radius, order=order)
         return cls(sphere, surface_force, material, grid)
 
+    def with_material(self, material: ViscoelasticMaterial) -> ContactProblem:
+        """The same system and grid with another material, sharing the built kernel arrays.
+
+        Fits change the material hundreds of times; the influence matrix (the costly part,
+        material-free) is reused instead of rebuilt.
+        """
+        require_instance("material", material, ViscoelasticMaterial, what=_MATERIAL_KIND)
+        new = ContactProblem(self.sphere, self.surface_force, material, self.grid)
+        for name in ("influence", "center_row", "_sag"):
+            if name in self.__dict__:
+                new.__dict__[name] = self.__dict__[name]
+        return new
+
     @cached_property
     def influence(self) -> FloatArray:
         """Influence matrix A [m] on the nodes: u = −2 C · A p for compliance C."""

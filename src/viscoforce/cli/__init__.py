@@ -52,6 +52,8 @@ COMMANDS: tuple[Command, ...] = (
     Command("simulate", "model", "viscoelastic response along a drive h0(t)"),
     Command("spectrum", "model", "force spectroscopy: stiffness and phase vs omega"),
     Command("load", "analysis", "instrument file to curves or a modulation spectrum"),
+    Command("fit", "fitting", "fit a model to a spectrum, a curve or a map of them"),
+    Command("bode", "fitting", "Bode plot of a spectrum, with a fitted model"),
 )
 
 _DESCRIPTION = ("Viscoelastic particles with finite-ranged surface forces (SI or unit suffixes: "

@@ -1,4 +1,4 @@
-"""Commands that analyse measured data: ``load`` (fit, bode and demo follow).
+"""Commands that analyse measured data: ``load`` (``fit`` and ``bode``: :mod:`viscoforce.cli.fitting`).
 
 Like :mod:`viscoforce.cli.model`, each command is a pair in :data:`SUBCOMMANDS`; the library is
 imported inside the run functions.
@@ -93,7 +93,8 @@ def _phase_lag(values: list | None, data) -> float | dict[float, float] | None:
     return {p: next((v for f, v in lags.items() if abs(f - p) <= 1e-9 * p), 0.0) for p in present}
 
 
-def _has_modulation(ds) -> bool:
+def has_modulation(ds) -> bool:
+    """Whether a curves dataset has sine-modulation segments."""
     names = ds.get("segment_name")
     return names is not None and bool((names.values == "modulation").any())
 
@@ -109,7 +110,7 @@ def run_load(args: argparse.Namespace) -> int:
     fmt = str(data.attrs.get("source", args.format or ""))
     corrections = (args.drag is not None or args.phase_lag is not None
                    or args.phase_reference is not None)
-    if "omega" in data.dims or args.raw or not _has_modulation(data):
+    if "omega" in data.dims or args.raw or not has_modulation(data):
         if corrections and "omega" not in data.dims:
             raise UsageError("--drag, --phase-lag and --phase-reference correct a spectrum; this "
                              "file gives curves (no modulation segments, or --raw)")

@@ -29,7 +29,7 @@ from viscoforce.plotting._common import PlotHandle
 from viscoforce.plotting._common import TimeUnit as TimeUnit
 from viscoforce.plotting.bode import FrequencyUnit as FrequencyUnit
 from viscoforce.plotting.bode import Magnitude as Magnitude
-from viscoforce.plotting.bode import bode_plot
+from viscoforce.plotting.bode import bode_plot, fit_curve_plot
 from viscoforce.plotting.trajectories import LOADING_STYLE as LOADING_STYLE
 from viscoforce.plotting.trajectories import STATIC_MARKERS as STATIC_MARKERS
 from viscoforce.plotting.trajectories import UNLOADING_STYLE as UNLOADING_STYLE
@@ -48,4 +48,5 @@ __all__ = [
     "profile_plot",
     "force_time_plot",
     "bode_plot",
+    "fit_curve_plot",
 ]

@@ -18,6 +18,7 @@ from viscoforce._validation import describe_value
 from viscoforce.exceptions import ParameterError, SchemaError
 from viscoforce.plotting._common import (
     PlotHandle,
+    _new_or_given_axes,
     _require_choice,
     _require_flag,
     _require_text,
@@ -362,3 +363,55 @@ def bode_plot(spectra: xr.Dataset | Mapping[str, xr.Dataset] | Sequence[xr.Datas
     if title:
         figure.suptitle(title)
     return PlotHandle(figure, tuple(axes), tuple(drawn))
+
+
+def fit_curve_plot(fit: xr.Dataset, *, data: tuple[Any, Any] | None = None,
+                   ax: Axes | None = None, title: str | None = None) -> PlotHandle:
+    """A force-curve fit (``relaxation``, ``step``): data and best-fit force against time.
+
+    Parameters
+    ----------
+    fit : xarray.Dataset
+        Fit result with ``fit_force`` over ``time`` (:mod:`viscoforce.schema.fit`).
+    data : (t, F), optional
+        The fitted samples: time [s] (on the fit's time axis) and force [N].
+    ax : matplotlib.axes.Axes, optional
+        Axes to draw on; default a new figure.
+    title : str, optional
+        Axes title.
+
+    Returns
+    -------
+    PlotHandle
+        Figure, axes and the data line, the fit line, the parameter box.
+    """
+    import xarray as xr
+
+    if not isinstance(fit, xr.Dataset):
+        raise ParameterError(f"fit must be a fit-result Dataset, got {type(fit).__name__}")
+    validate_fit_result(fit)
+    if "fit_force" not in fit.variables:
+        raise ParameterError("fit has no best-fit force curve ('fit_force' over 'time'): it is "
+                             "not a relaxation or step fit")
+    figure, axes = _new_or_given_axes(ax, (6.4, 4.2))
+    t = np.asarray(fit["time"].values, dtype=float)
+    scale, unit = (1e3, "ms") if np.ptp(t) < 1.0 else (1.0, "s")
+    drawn: list[Artist] = []
+    if data is not None:
+        dt, df = (np.asarray(a, dtype=float) for a in data)
+        (points,) = axes.plot(dt * scale, df * 1e9, ".", ms=2, color="0.45", label="data")
+        drawn.append(points)
+    (line,) = axes.plot(t * scale, np.asarray(fit["fit_force"].values) * 1e9,
+                        label=f"fit ({fit.attrs['model']})", **FIT_STYLE)
+    drawn.append(line)
+    box = axes.text(0.98, 0.95, _parameter_text(fit), transform=axes.transAxes, va="top",
+                    ha="right", fontsize="small", family="monospace",
+                    bbox={"boxstyle": "round", "facecolor": "white", "alpha": 0.85,
+                          "edgecolor": "0.7"})
+    drawn.append(box)
+    axes.set_xlabel(f"time from the start of the segment [{unit}]")
+    axes.set_ylabel("force [nN]")
+    axes.legend(loc="lower left")
+    if title:
+        axes.set_title(title)
+    return PlotHandle(figure, (axes,), tuple(drawn))

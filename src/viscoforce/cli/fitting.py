@@ -1,0 +1,374 @@
+"""Commands that fit: ``fit`` (parameters out) and ``bode`` (data against fit, as a figure).
+
+DATA is any file ``load`` reads (an instrument file: modulation segments become a spectrum), a
+netCDF file the project wrote (spectrum, curves or trajectory), or a spectrum CSV.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from typing import Any
+
+from viscoforce.cli._args import (
+    FIGURE,
+    NETCDF,
+    NUMERICS_FLAGS,
+    SYSTEM_FLAGS,
+    Flag,
+    FlagGroup,
+    Output,
+    UsageError,
+    add_flags,
+    add_outputs,
+    integer_type,
+)
+from viscoforce.cli._output import print_json, print_written
+
+__all__ = ["SUBCOMMANDS", "modes_type", "read_data"]
+
+_MODELS = ("svda", "exact", "contact", "prony", "relaxation", "step")
+_MATERIALS = ("sls", "prony", "power-law")
+
+
+def modes_type(text: str) -> int | str:
+    """``--modes``: a positive integer or ``auto``."""
+    if text.strip().lower() == "auto":
+        return "auto"
+    return integer_type(1, 10, what="modes (or 'auto')")(text)
+
+
+FIT_FLAGS = FlagGroup("model", (
+    Flag("--modes", modes_type, 1, "N|auto",
+         "relaxation modes (exact, contact --material prony, prony, relaxation); auto: "
+         "1, 2, ... by the criterion"),
+    Flag("--criterion", None, "bic", "bic|aic", "information criterion of --modes auto"),
+    Flag("--h0", "length", None, "LENGTH", "mean position (svda, exact)"),
+    Flag("--mean-force", "force", None, "FORCE",
+         "mean force, the static E_inf load of the setpoint (svda, exact; instead of --h0)"),
+    Flag("--indentation", "length", None, "LENGTH",
+         "operating indentation D0 (contact; default: the data's mean_indentation)"),
+    Flag("--material", None, "sls", "sls|prony|power-law", "material of the contact model"),
+    Flag("--drag", "drag", None, "DRAG", "hydrodynamic drag B of the contact model (i*omega*B)"),
+    Flag("--segment", integer_type(0), None, "N",
+         "relaxation: the curve's N-th segment (from 0; default the pause after the approach)"),
+    Flag("--curve", integer_type(0), None, "I", "fit only curve (pixel) I of a map"),
+))
+
+MAP_FLAGS = FlagGroup("maps (several spectra or curves)", (
+    Flag("--scheduler", None, None, "ADDRESS",
+         "a running dask scheduler (tcp://host:8786); default: a local cluster"),
+    Flag("--workers", integer_type(1), None, "N", "workers of the local cluster (default 2)"),
+))
+
+
+def _add_fit_flags(parser: argparse.ArgumentParser, *, required: bool) -> None:
+    parser.add_argument("data", metavar="DATA",
+                        help="spectrum or curves: an instrument file, a netCDF file or a CSV")
+    parser.add_argument("--format", default=None, metavar="NAME",
+                        help="instrument file format (default: detected)")
+    parser.add_argument("--model", choices=_MODELS, required=required, default=None,
+                        help="model of the SPEC table" if required else
+                             "fit this model and draw it over the data")
+    add_flags(parser, FIT_FLAGS)
+    add_flags(parser, SYSTEM_FLAGS)
+    add_flags(parser, NUMERICS_FLAGS)
+
+
+def add_fit(parser: argparse.ArgumentParser) -> None:
+    """Flags of ``viscoforce fit``."""
+    _add_fit_flags(parser, required=True)
+    add_flags(parser, MAP_FLAGS)
+    add_outputs(parser, [Output("--out", NETCDF, "FILE.nc", "write the fit result (netCDF)"),
+                         Output("--plot", FIGURE, "FILE.png", "data and fit (one spectrum/curve)")])
+    parser.add_argument("--json", action="store_true", help="print one JSON object (SI units)")
+    parser.add_argument("--progress", action=argparse.BooleanOptionalAction, default=None,
+                        help="progress bar of map fits (default: when stderr is a terminal)")
+
+
+def add_bode(parser: argparse.ArgumentParser) -> None:
+    """Flags of ``viscoforce bode``."""
+    _add_fit_flags(parser, required=False)
+    parser.set_defaults(model=None)
+    add_outputs(parser, [Output("--out", FIGURE, "FILE.png", "the Bode plot")])
+
+
+# ── data ────────────────────────────────────────────────────────────────────────────────────────
+
+def read_data(path: str, fmt: str | None = None):
+    """The dataset of DATA: netCDF as written, instrument files through ``load``'s route."""
+    from pathlib import Path
+
+    import xarray as xr
+
+    from viscoforce.cli.analysis import has_modulation
+    from viscoforce.io.instruments import load_instrument
+
+    if Path(path).suffix.lower() == ".nc" and fmt is None:
+        if not Path(path).is_file():
+            raise UsageError(f"DATA {path}: no such file")
+        try:
+            with xr.open_dataset(path) as ds:
+                return ds.load()
+        except (OSError, ValueError) as exc:
+            raise UsageError(f"DATA {path}: not a readable netCDF file ({exc})") from None
+    data = load_instrument(path, format=fmt)
+    if "omega" not in data.dims and has_modulation(data):
+        from viscoforce.experiments.modulation import modulation_spectrum
+
+        return modulation_spectrum(data)
+    return data
+
+
+def _kind(ds) -> str:
+    if "omega" in ds.dims and "stiffness" in ds.variables:
+        return "spectrum"
+    if "sample" in ds.dims:
+        return "curves"
+    if "time" in ds.dims and "position" in ds.variables:
+        return "trajectory"
+    raise UsageError("DATA is neither a spectrum, curves nor a trajectory dataset")
+
+
+def _fixed(args: argparse.Namespace, ds, kind: str) -> dict[str, Any]:
+    """The model's fixed inputs from the flags (and the data)."""
+    model = args.model
+    if args.h0 is not None and args.mean_force is not None:
+        raise UsageError("give --h0 or --mean-force, not both")
+    fixed: dict[str, Any] = {}
+    if model in ("svda", "exact"):
+        if args.h0 is None and args.mean_force is None:
+            median = ""
+            if "mean_force" in ds.variables:
+                import numpy as np
+
+                median = (f" (this spectrum's median mean force is "
+                          f"{float(np.nanmedian(ds['mean_force'].values)):.4g} N)")
+            raise UsageError(f"--model {model} needs the mean position: --h0 H or --mean-force "
+                             f"F{median}")
+        fixed["position" if args.h0 is not None else "mean_force"] = (
+            args.h0 if args.h0 is not None else args.mean_force)
+    if model == "svda":
+        fixed.update(radius=args.R, P=args.P, debye_length=args.debye_length)
+    if model in ("exact", "step"):
+        fixed["problem"] = _problem(args, ds, kind)
+    if model == "contact":
+        if args.material not in _MATERIALS:
+            raise UsageError(f"--material must be one of {', '.join(_MATERIALS)}, got "
+                             f"{args.material!r}")
+        fixed.update(radius=args.R, indentation=args.indentation, drag=args.drag,
+                     material=args.material)
+    return fixed
+
+
+def _problem(args: argparse.Namespace, ds, kind: str):
+    import numpy as np
+
+    from viscoforce.cli.model import problem_from_args
+    from viscoforce.physics.materials import StandardLinearSolid
+    from viscoforce.physics.paper import PAPER
+
+    if kind == "trajectory":
+        deepest = float(np.min(ds["position"].values))
+    else:
+        deepest = args.h0 if args.h0 is not None else -20e-9
+    material = StandardLinearSolid(PAPER.E0, PAPER.E_inf, PAPER.tau)
+    return problem_from_args(args, material, min(deepest, 0.0) - 2 * args.debye_length)
+
+
+def _check_model(args: argparse.Namespace, kind: str) -> None:
+    spectrum_models = ("svda", "exact", "contact", "prony")
+    wanted = {"spectrum": spectrum_models, "curves": ("relaxation",), "trajectory": ("step",)}
+    if args.model not in wanted[kind]:
+        raise UsageError(f"--model {args.model} does not fit {kind} data; for {kind}: "
+                         f"{', '.join(wanted[kind])}")
+    if args.modes == "auto" and args.model not in ("exact", "contact", "prony", "relaxation"):
+        raise UsageError(f"--modes auto needs a model with several modes, not {args.model}")
+    if args.criterion not in ("bic", "aic"):
+        raise UsageError(f"--criterion must be bic or aic, got {args.criterion!r}")
+
+
+def _extra_dims(ds, kind: str) -> list[str]:
+    if kind == "spectrum":
+        return [str(d) for d in ds["stiffness"].dims if d != "omega"]
+    if kind == "curves":
+        return ["curve"] if int(ds.sizes["curve"]) > 1 else []
+    return []
+
+
+def _select_curve(ds, kind: str, index: int | None):
+    if index is None:
+        return ds
+    dims = _extra_dims(ds, kind)
+    if not dims:
+        if index != 0:
+            raise UsageError(f"--curve {index}: DATA holds one spectrum or curve (use 0)")
+        return ds
+    if kind == "curves":
+        from viscoforce.schema import select_curve
+
+        n = int(ds.sizes["curve"])
+        if index >= n:
+            raise UsageError(f"--curve {index}: DATA has {n} curves (0 to {n - 1})")
+        return select_curve(ds, index)
+    stacked = ds.stack(pixel=dims)
+    n = stacked.sizes["pixel"]
+    if index >= n:
+        raise UsageError(f"--curve {index}: DATA has {n} spectra (0 to {n - 1})")
+    return stacked.isel(pixel=index).drop_vars(["pixel", *dims], errors="ignore")
+
+
+def fit_one(args: argparse.Namespace, ds, kind: str):
+    """The fit result of one spectrum, curve or trajectory."""
+    from viscoforce.fitting.curves import fit_hold, fit_step
+    from viscoforce.fitting.fit import fit_spectrum
+
+    fixed = _fixed(args, ds, kind)
+    if kind == "spectrum":
+        return fit_spectrum(ds, args.model, modes=args.modes, criterion=args.criterion, **fixed)
+    if kind == "curves":
+        return fit_hold(ds, segment=args.segment, modes=args.modes, criterion=args.criterion)
+    return fit_step(ds, problem=fixed["problem"])
+
+
+# ── fit ─────────────────────────────────────────────────────────────────────────────────────────
+
+def _single_json(result) -> dict[str, Any]:
+    names = [str(n) for n in result["param_i"].values]
+    params = {n: {"value": float(result[n]), "stderr": float(result[f"{n}_stderr"])}
+              for n in names}
+    corr = result["correlation"].values
+    out: dict[str, Any] = {
+        "model": result.attrs["model"], "modes": int(result["modes"]), "params": params,
+        "correlations": {a: {b: float(corr[i, j]) for j, b in enumerate(names) if j != i}
+                         for i, a in enumerate(names)},
+        "redchi": float(result["redchi"]), "aic": float(result["aic"]),
+        "bic": float(result["bic"]), "success": bool(int(result["success"])),
+        "at_bound": [s for s in str(result.attrs.get("at_bound", "")).split(", ")
+                     if s and s != "none"]}
+    if "selection_modes" in result:
+        out["selection"] = [{"modes": int(m), "aic": float(a), "bic": float(b)} for m, a, b in zip(
+            result["selection_modes"].values, result["selection_aic"].values,
+            result["selection_bic"].values, strict=True)]
+        out["criterion"] = result.attrs.get("criterion", "bic")
+    return out
+
+
+def _map_json(result) -> dict[str, Any]:
+    import numpy as np
+
+    names = [str(n) for n in result["param_i"].values]
+    ok = result["success"].values.astype(bool)
+    params = {}
+    for n in names:
+        v = np.asarray(result[n].values)[ok]
+        v = v[np.isfinite(v)]
+        params[n] = ({"median": float(np.median(v)), "q25": float(np.percentile(v, 25)),
+                      "q75": float(np.percentile(v, 75))} if v.size else
+                     {"median": None, "q25": None, "q75": None})
+    return {"model": result.attrs["model"], "n_fits": int(result.attrs["n_fits"]),
+            "n_failed": int(result.attrs["n_failed"]), "params": params}
+
+
+def _print_single(info: dict[str, Any]) -> None:
+    from viscoforce.schema.fit import parameter_units
+
+    print(f"model {info['model']}, {info['modes']} mode(s), "
+          f"{'converged' if info['success'] else 'DID NOT CONVERGE'}; redchi "
+          f"{info['redchi']:.4g}, AIC {info['aic']:.4g}, BIC {info['bic']:.4g}")
+    for name, p in info["params"].items():
+        err = "(no stderr)" if p["stderr"] != p["stderr"] else f"± {p['stderr']:.3g}"
+        print(f"  {name:<8} = {p['value']:.5g} {err} {parameter_units(name)}")
+    if info["at_bound"]:
+        print(f"  at a bound (not identified by these data): {', '.join(info['at_bound'])}")
+    for row in info.get("selection", []):
+        print(f"  candidate {row['modes']} mode(s): AIC {row['aic']:.4g}, BIC {row['bic']:.4g}")
+
+
+def run_fit(args: argparse.Namespace) -> int:
+    """Fit DATA; one spectrum/curve → parameters, a map → per-pixel parameters."""
+    ds = read_data(args.data, args.format)
+    kind = _kind(ds)
+    _check_model(args, kind)
+    ds = _select_curve(ds, kind, args.curve)
+    is_map = bool(_extra_dims(ds, kind))
+    if is_map and args.plot:
+        raise UsageError("--plot draws one spectrum or curve: add --curve I")
+    if is_map:
+        from viscoforce.fitting.maps import fit_map
+
+        fixed = _fixed(args, ds, kind)
+        progress = sys.stderr.isatty() if args.progress is None else args.progress
+        result = fit_map(ds, args.model, modes=args.modes, criterion=args.criterion,
+                         scheduler=args.scheduler, workers=args.workers, progress=progress,
+                         segment=args.segment, **fixed)
+        info = _map_json(result)
+    else:
+        result = fit_one(args, ds, kind)
+        info = _single_json(result)
+    if args.out:
+        result.to_netcdf(args.out, engine="h5netcdf")
+    if args.plot:
+        _plot(ds, kind, result, args)
+    if args.json:
+        print_json(info)
+        return 0
+    if is_map:
+        print(f"model {info['model']}: {info['n_fits']} fits, {info['n_failed']} failed")
+        for name, p in info["params"].items():
+            print(f"  {name:<8} median {p['median']}, IQR {p['q25']} .. {p['q75']}")
+    else:
+        _print_single(info)
+    print_written(args.out, args.plot)
+    return 0
+
+
+def _plot(ds, kind: str, result, args: argparse.Namespace) -> None:
+    from viscoforce.cli.model import _save_figure
+    from viscoforce.plotting import bode_plot, fit_curve_plot
+
+    if kind == "spectrum":
+        handle = bode_plot(ds, fit=result)
+    else:
+        if kind == "curves":
+            from viscoforce.fitting.curves import hold_data
+
+            hold = hold_data(ds, segment=args.segment)
+            data = (hold.x, hold.y)
+        else:
+            data = (ds["time"].values, ds["force"].values)
+        handle = fit_curve_plot(result, data=data, title=str(args.data))
+    _save_figure(handle, args.plot)
+
+
+# ── bode ────────────────────────────────────────────────────────────────────────────────────────
+
+def run_bode(args: argparse.Namespace) -> int:
+    """Bode plot of a spectrum (one curve of a map with ``--curve``), with a fit if asked."""
+    if not args.out:
+        raise UsageError("bode needs --out FILE.png")
+    ds = read_data(args.data, args.format)
+    kind = _kind(ds)
+    if kind != "spectrum":
+        raise UsageError(f"bode draws spectra; DATA holds {kind}")
+    if _extra_dims(ds, kind) and args.curve is None:
+        raise UsageError(f"DATA holds several spectra (dims {_extra_dims(ds, kind)}): pick one "
+                         "with --curve I")
+    ds = _select_curve(ds, kind, args.curve)
+    fit = None
+    if args.model is not None:
+        _check_model(args, kind)
+        fit = fit_one(args, ds, kind)
+    from viscoforce.cli.model import _save_figure
+    from viscoforce.plotting import bode_plot
+
+    _save_figure(bode_plot(ds, fit=fit), args.out)
+    print_written(args.out)
+    return 0
+
+
+#: The commands of this module: name → (add the flags to a parser, run the parsed arguments).
+SUBCOMMANDS = {
+    "fit": (add_fit, run_fit),
+    "bode": (add_bode, run_bode),
+}

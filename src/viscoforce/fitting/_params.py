@@ -1,0 +1,115 @@
+"""Parameter layouts: the SPEC's names as lmfit expressions of internal log10 parameters.
+
+A fit of relaxation times and moduli spans decades, and the physics orders them (E0 > E_1 > … >
+E_inf, τ_1 < τ_2 < …). lmfit has bounds but no inequalities, so every model here varies internal
+parameters and exposes the SPEC names as expressions of them:
+
+- a positive quantity ``q``: ``log_q`` = log10 q, bounded to a physical window;
+- an ordered chain ``a < b < c``: ``log_a`` = log10 a, ``log_b`` = log10(b/a) ≥ 0, …, so that
+  ``b = a*10**log_b``;
+- a signed quantity (a force): varied as itself.
+
+The SPEC names carry the values, stderr (propagated by lmfit through the expressions with the full
+covariance) and correlations that the result reports; the ``log_`` parameters are bookkeeping.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+
+import lmfit
+
+#: Widest decade window of a positive parameter around its guess (bounds: guess·10^±WINDOW).
+WINDOW_DECADES = 6.0
+
+
+@dataclass(frozen=True)
+class Chain:
+    """Positive quantities that increase along ``names`` (first: the smallest).
+
+    ``bounds`` is the (low, high) window of the smallest one [SI]; None: ±WINDOW_DECADES around the
+    guess. The ratios of neighbours are ≥ 1 and at most 10^``max_ratio_decades``.
+    """
+
+    names: tuple[str, ...]
+    bounds: tuple[float, float] | None = None
+    max_ratio_decades: float = 2 * WINDOW_DECADES
+
+
+@dataclass(frozen=True)
+class Signed:
+    """A real quantity varied as itself (forces)."""
+
+    name: str
+
+
+@dataclass(frozen=True)
+class Bounded:
+    """A real quantity within (low, high), varied as itself (the power-law exponent m)."""
+
+    name: str
+    low: float
+    high: float
+
+
+Item = Chain | Signed | Bounded
+
+
+def reported_names(layout: Sequence[Item]) -> list[str]:
+    """The SPEC names of ``layout`` in order of appearance."""
+    names: list[str] = []
+    for item in layout:
+        names.extend(item.names if isinstance(item, Chain) else (item.name,))
+    return names
+
+
+def build_parameters(layout: Sequence[Item], guess: Mapping[str, float]) -> lmfit.Parameters:
+    """Lmfit Parameters for ``layout`` starting at ``guess`` (SPEC name → value in SI).
+
+    Chain values out of order in ``guess`` are pushed apart to keep every ratio ≥ 1.
+    """
+    params = lmfit.Parameters()
+    for item in layout:
+        if isinstance(item, Signed):
+            params.add(item.name, value=float(guess[item.name]))
+        elif isinstance(item, Bounded):
+            value = min(max(float(guess[item.name]), item.low), item.high)
+            params.add(item.name, value=value, min=item.low, max=item.high)
+        else:
+            _add_chain(params, item, guess)
+    return params
+
+
+def _add_chain(params: lmfit.Parameters, chain: Chain, guess: Mapping[str, float]) -> None:
+    first, *rest = chain.names
+    start = float(guess[first])
+    if not (start > 0 and math.isfinite(start)):
+        raise ValueError(f"guess for {first!r} must be > 0 and finite, got {start!r}")
+    lo, hi = chain.bounds or (start * 10 ** -WINDOW_DECADES, start * 10 ** WINDOW_DECADES)
+    start = min(max(start, lo), hi)
+    params.add(f"log_{first}", value=math.log10(start), min=math.log10(lo), max=math.log10(hi))
+    params.add(first, expr=f"10**log_{first}")
+    previous, value = first, start
+    for name in rest:
+        wanted = float(guess[name])
+        ratio = wanted / value if wanted > value and math.isfinite(wanted) else 1.5
+        log_ratio = min(math.log10(ratio), chain.max_ratio_decades - 1e-9)
+        params.add(f"log_{name}", value=log_ratio, min=0.0, max=chain.max_ratio_decades)
+        params.add(name, expr=f"{previous}*10**log_{name}")
+        previous, value = name, value * 10 ** log_ratio
+
+
+def at_bound(params: lmfit.Parameters, *, rtol: float = 1e-6) -> list[str]:
+    """Varied parameters that ended on a bound (their SPEC names, without ``log_``)."""
+    hits = []
+    for p in params.values():
+        if not p.vary:
+            continue
+        span = (p.max - p.min) if math.isfinite(p.max) and math.isfinite(p.min) else 1.0
+        tol = rtol * max(abs(span), 1.0)
+        if (math.isfinite(p.min) and p.value - p.min <= tol) or (
+                math.isfinite(p.max) and p.max - p.value <= tol):
+            hits.append(p.name.removeprefix("log_"))
+    return hits

@@ -1,0 +1,95 @@
+"""Force-curve data for the ``relaxation`` and ``step`` models.
+
+``relaxation`` fits the force on a hold: by default the pause segment that follows the first
+approach of a curve (``segment=N`` picks the curve's N-th segment, counted from 0 in the file's
+order), with t from the start of that segment. ``step`` fits a trajectory (time, position, force:
+what ``simulate`` writes): the position history is the drive of the exact model.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+import xarray as xr
+
+from viscoforce.exceptions import ParameterError
+from viscoforce.fitting.fit import FitData, fit_data
+from viscoforce.schema import select_curve, validate_curves, validate_trajectory
+
+
+def segment_runs(curve: xr.Dataset) -> list[tuple[int, int, str]]:
+    """(start, stop, name) of the consecutive segments of a one-curve dataset, in file order."""
+    seg = np.asarray(curve["segment"].values)
+    names = np.asarray(curve["segment_name"].values).astype(str)
+    if seg.size == 0:
+        return []
+    edges = np.flatnonzero(np.diff(seg)) + 1
+    starts = np.concatenate(([0], edges))
+    stops = np.concatenate((edges, [seg.size]))
+    return [(int(a), int(b), str(names[seg[a]])) for a, b in zip(starts, stops, strict=True)]
+
+
+def hold_data(curves: xr.Dataset, *, curve: int = 0, segment: int | None = None) -> FitData:
+    """T [s] from the start of the hold and F [N] on it, of curve ``curve``.
+
+    Raises
+    ------
+    ParameterError
+        No pause after an approach (or ``segment`` out of range), or too few finite samples.
+    """
+    one = select_curve(validate_curves(curves), curve)
+    runs = segment_runs(one)
+    if segment is not None:
+        if isinstance(segment, bool) or not isinstance(segment, int | np.integer) or not (
+                0 <= segment < len(runs)):
+            raise ParameterError(f"segment must be an integer in [0, {len(runs) - 1}] (the "
+                                 f"curve has {len(runs)} segments: "
+                                 f"{', '.join(r[2] for r in runs)}), got {segment!r}")
+        chosen = runs[int(segment)]
+    else:
+        after = [i for i, r in enumerate(runs) if r[2] == "approach"]
+        pauses = [r for r in runs[after[0] + 1:] if r[2] == "pause"] if after else []
+        if not pauses:
+            raise ParameterError(
+                "the relaxation model fits a hold (pause) segment after the approach; this "
+                f"curve's segments are {', '.join(r[2] for r in runs) or 'none'}: give "
+                "--segment N")
+        chosen = pauses[0]
+    start, stop, _ = chosen
+    t = np.asarray(one["time"].values[start:stop], dtype=float)
+    f = np.asarray(one["force"].values[start:stop], dtype=float)
+    ok = np.isfinite(t) & np.isfinite(f)
+    if ok.sum() < 4:
+        raise ParameterError(f"the hold segment has {int(ok.sum())} finite samples; need >= 4")
+    t, f = t[ok], f[ok]
+    source = {"data_kind": "curves", "data_points": int(t.size), "segment_start": float(t[0]),
+              "curve": int(curve)}
+    if "source" in curves.attrs:
+        source["data_source"] = str(curves.attrs["source"])
+    return FitData(t - t[0], f, None, source)
+
+
+def fit_hold(curves: xr.Dataset, *, curve: int = 0, segment: int | None = None,
+             modes: int | str = 1, criterion: str = "bic") -> xr.Dataset:
+    """Fit F(t) = F_inf + Σ dF_i e^{−t/τ_i} to the hold of one curve (``relaxation`` model)."""
+    return fit_data(hold_data(curves, curve=curve, segment=segment), "relaxation", modes=modes,
+                    criterion=criterion)
+
+
+def trajectory_data(trajectory: xr.Dataset) -> tuple[FitData, tuple[np.ndarray, np.ndarray]]:
+    """(t, F) and the position history (t, h0) of a trajectory (the ``step`` model's data)."""
+    validate_trajectory(trajectory)
+    t = np.asarray(trajectory["time"].values, dtype=float)
+    f = np.asarray(trajectory["force"].values, dtype=float)
+    h = np.asarray(trajectory["position"].values, dtype=float)
+    if not (np.all(np.isfinite(f)) and np.all(np.isfinite(h))):
+        raise ParameterError("the trajectory's force and position must be finite")
+    return (FitData(t, f, None, {"data_kind": "trajectory", "data_points": int(t.size)}),
+            (t, h))
+
+
+def fit_step(trajectory: xr.Dataset, *, problem: Any) -> xr.Dataset:
+    """Fit the exact model's response to the trajectory's drive (``step`` model: tau, E0, E_inf)."""
+    data, trace = trajectory_data(trajectory)
+    return fit_data(data, "step", problem=problem, position_trace=trace)

@@ -1,0 +1,358 @@
+"""Fit one spectrum or one force curve; choose the number of modes by an information criterion.
+
+The spectrum residual is complex: real and imaginary parts of k*_model − k*_data, each weighted by
+its standard error propagated from the data's ``stiffness_stderr`` and ``phase_stderr`` (radial and
+tangential errors of k* = S e^{iχ}); without them every point is weighted by 1/|k*| (a relative
+fit, so that a spectrum over decades of stiffness is not fitted at its stiffest end only).
+Points whose ``quality`` flag is set are left out. lmfit scales the covariance by the reduced
+chi-square (its default), so the stderr are honest when the data's errors are not.
+"""
+
+from __future__ import annotations
+
+import math
+import warnings
+from collections.abc import Mapping
+from dataclasses import dataclass
+from typing import Any
+
+import lmfit
+import numpy as np
+import uncertainties
+import xarray as xr
+
+from viscoforce.exceptions import ConvergenceError, ModelValidityError, ParameterError
+from viscoforce.fitting import _params
+from viscoforce.fitting.models import (
+    MAX_AUTO_MODES,
+    MODAL_MODELS,
+    SPECTRUM_MODELS,
+    FitModel,
+    make_model,
+)
+from viscoforce.schema import make_fit_result, validate_spectrum
+
+#: Information criteria of ``modes="auto"`` (``--criterion``).
+CRITERIA = ("bic", "aic")
+#: Points of the best-fit curve written with a spectrum fit.
+FIT_CURVE_POINTS = 200
+
+
+@dataclass(frozen=True)
+class FitData:
+    """What a fit sees: x (ω [rad/s] or t [s]), y (k* [N/m] or F [N]) and weights."""
+
+    x: np.ndarray
+    y: np.ndarray
+    weights: np.ndarray | None
+    source: Mapping[str, Any]
+
+    @property
+    def n_values(self) -> int:
+        """Real numbers fitted (2 per complex point)."""
+        return self.y.size * (2 if np.iscomplexobj(self.y) else 1)
+
+
+# ── data ────────────────────────────────────────────────────────────────────────────────────────
+
+def spectrum_data(ds: xr.Dataset) -> FitData:
+    """ω, k* and weights of one spectrum (1-D over ``omega``), flagged points left out.
+
+    Raises
+    ------
+    ParameterError
+        Extra dims, NaN or negative stiffness on a point not flagged, every point flagged.
+    """
+    validate_spectrum(ds, require=("stiffness", "phase"))
+    extra = [d for d in ds["stiffness"].dims if d != "omega"]
+    if extra:
+        raise ParameterError(f"one spectrum is over 'omega' only; this one also has {extra} "
+                             "(fit it as a map, or select one)")
+    omega = np.asarray(ds["omega"].values, dtype=float)
+    stiffness = np.asarray(ds["stiffness"].values, dtype=float)
+    phase = np.radians(np.asarray(ds["phase"].values, dtype=float))
+    keep = np.ones(omega.size, dtype=bool)
+    if "quality" in ds.variables:
+        keep &= np.asarray(ds["quality"].values) == 0
+    if not keep.any():
+        raise ParameterError(f"every one of the {omega.size} spectrum points is flagged in "
+                             "'quality' (see its comment): nothing to fit; correct the phase "
+                             "lag (load --phase-lag) or inspect the data")
+    bad = keep & ~(np.isfinite(stiffness) & np.isfinite(phase))
+    if bad.any():
+        i = int(np.flatnonzero(bad)[0])
+        raise ParameterError(f"stiffness or phase is NaN/inf at omega = {omega[i]:.4g} rad/s "
+                             f"(point {i}) and the point is not flagged")
+    negative = keep & (stiffness <= 0)
+    if negative.any():
+        i = int(np.flatnonzero(negative)[0])
+        raise ParameterError(f"stiffness must be > 0 N/m, got {stiffness[i]!r} at omega = "
+                             f"{omega[i]:.4g} rad/s (point {i})")
+    k = stiffness * np.exp(1j * phase)
+    weights = None
+    if "stiffness_stderr" in ds.variables or "phase_stderr" in ds.variables:
+        s_err = (np.asarray(ds["stiffness_stderr"].values, dtype=float)
+                 if "stiffness_stderr" in ds.variables else np.full(omega.size, np.nan))
+        p_err = (np.radians(np.asarray(ds["phase_stderr"].values, dtype=float))
+                 if "phase_stderr" in ds.variables else s_err / stiffness)
+        s_err = np.where(np.isfinite(s_err), s_err, p_err * stiffness)
+        c, s = np.cos(phase), np.sin(phase)
+        sig_re = np.sqrt((c * s_err) ** 2 + (stiffness * s * p_err) ** 2)
+        sig_im = np.sqrt((s * s_err) ** 2 + (stiffness * c * p_err) ** 2)
+        usable = np.isfinite(sig_re) & np.isfinite(sig_im) & (sig_re > 0) & (sig_im > 0)
+        if usable[keep].all():
+            weights = 1.0 / sig_re + 1j / sig_im
+    if weights is None:
+        weights = (1.0 + 1j) / np.abs(k)
+    source = {"data_kind": "spectrum", "data_points": int(keep.sum()),
+              "data_flagged": int((~keep).sum())}
+    if "source" in ds.attrs:
+        source["data_source"] = str(ds.attrs["source"])
+    return FitData(omega[keep], k[keep], weights[keep], source)
+
+
+# ── one fit ─────────────────────────────────────────────────────────────────────────────────────
+
+@dataclass
+class Outcome:
+    """One lmfit fit and the model that made it."""
+
+    model: FitModel
+    result: lmfit.model.ModelResult
+
+    @property
+    def criterion(self) -> dict[str, float]:
+        """AIC and BIC of the fit."""
+        return {"aic": float(self.result.aic), "bic": float(self.result.bic)}
+
+
+def fit_once(model: FitModel, data: FitData, *, starts: int = 2) -> Outcome:
+    """Least-squares fit of ``model`` from its data-driven guess (and ``starts`` − 1 more).
+
+    Raises
+    ------
+    ParameterError
+        Fewer data values than free parameters.
+    ConvergenceError
+        No start gave a finite fit.
+    """
+    first = model.guess(data.y, data.x)
+    n_free = sum(1 for p in first.values() if p.vary)
+    if data.n_values <= n_free:
+        raise ParameterError(
+            f"model {model.spec.name!r} with {model.spec.modes} mode(s) has {n_free} free "
+            f"parameters but the data give only {data.n_values} values "
+            f"({data.y.size} points): fit fewer modes or measure more points")
+    best: Outcome | None = None
+    errors: list[str] = []
+    for params in [first, *_alternative_starts(model, first, starts - 1)]:
+        try:
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore", RuntimeWarning)
+                res = model.fit(data.y, params, weights=data.weights, method="leastsq",
+                                nan_policy="raise", **{model.independent: data.x})
+        except (ValueError, ArithmeticError, ParameterError, ConvergenceError) as exc:
+            errors.append(str(exc).splitlines()[0])
+            continue
+        if not np.isfinite(res.chisqr):
+            errors.append("non-finite chi-square")
+            continue
+        if best is None or res.chisqr < best.result.chisqr:
+            best = Outcome(model, res)
+    if best is None:
+        raise ConvergenceError(f"model {model.spec.name!r} could not be fitted from any start: "
+                               + "; ".join(errors[:3]))
+    return best
+
+
+def _alternative_starts(model: FitModel, first: lmfit.Parameters,
+                        count: int) -> list[lmfit.Parameters]:
+    """More starts for several modes: the relaxation times spread wider, or closer."""
+    if count <= 0 or model.spec.modes == 1:
+        return []
+    out = []
+    for factor in (2.5, 0.4)[:count]:
+        params = first.copy()
+        for name, p in params.items():
+            if name.startswith("log_tau_") and name != "log_tau_1" and p.vary:
+                p.set(value=min(max(p.value * factor, p.min), p.max))
+        out.append(params)
+    return out
+
+
+# ── results ─────────────────────────────────────────────────────────────────────────────────────
+
+def summary(outcome: Outcome) -> dict[str, Any]:
+    """Values, stderr, correlations and statistics of a fit (SPEC names, SI)."""
+    res, names = outcome.result, outcome.model.names
+    uvars = getattr(res, "uvars", None) or {}
+    values = {n: float(res.params[n].value) for n in names}
+    stderr: dict[str, float | None] = {}
+    corr = np.where(np.eye(len(names), dtype=bool), 1.0, np.nan)
+    if res.errorbars and all(n in uvars for n in names):
+        u = [uvars[n] for n in names]
+        stderr = {n: float(x.std_dev) for n, x in zip(names, u, strict=True)}
+        with np.errstate(invalid="ignore", divide="ignore"):
+            corr = np.asarray(uncertainties.correlation_matrix(u), dtype=float)
+    else:
+        stderr = {n: None for n in names}
+    bounded = _params.at_bound(res.params)
+    message = str(res.message)
+    success = bool(res.success) and all(math.isfinite(v) for v in values.values())
+    return {"values": values, "stderr": stderr, "correlation": corr, "success": success,
+            "redchi": float(res.redchi), "aic": float(res.aic), "bic": float(res.bic),
+            "nfev": int(res.nfev), "at_bound": bounded, "message": message}
+
+
+def result_dataset(outcome: Outcome, data: FitData, *,
+                   selection: list[dict[str, Any]] | None = None) -> xr.Dataset:
+    """The fit-result dataset (schema.fit) of one fit, with its best-fit curve."""
+    info = summary(outcome)
+    model = outcome.model
+    attrs: dict[str, Any] = {**data.source, "nfev": info["nfev"], "message": info["message"],
+                             "at_bound": ", ".join(info["at_bound"]) or "none"}
+    attrs.update(_fixed_attrs(model.spec.fixed))
+    curves: dict[str, Any]
+    if model.independent == "omega":
+        lo, hi = float(np.min(data.x)), float(np.max(data.x))
+        omega = np.geomspace(lo / 2, hi * 2, FIT_CURVE_POINTS)
+        k = model.eval(outcome.result.params, omega=omega)
+        curves = {"omega": omega, "fit_stiffness": np.abs(k), "fit_phase": np.degrees(np.angle(k))}
+    else:
+        t = np.sort(data.x)
+        curves = {"time": t, "fit_force": model.eval(outcome.result.params, t=t)}
+    ds = make_fit_result({n: (info["values"][n], info["stderr"][n]) for n in model.names},
+                         correlation=info["correlation"], success=info["success"],
+                         redchi=info["redchi"], aic=info["aic"], bic=info["bic"],
+                         modes=model.spec.modes, model=model.spec.name, attrs=attrs, **curves)
+    if selection:
+        ds = ds.assign(
+            selection_modes=("candidate", [s["modes"] for s in selection],
+                             {"units": "1", "long_name": "modes of the candidate"}),
+            selection_aic=("candidate", [s["aic"] for s in selection],
+                           {"units": "1", "long_name": "AIC of the candidate"}),
+            selection_bic=("candidate", [s["bic"] for s in selection],
+                           {"units": "1", "long_name": "BIC of the candidate"}))
+    return ds
+
+
+def _fixed_attrs(fixed: Mapping[str, Any]) -> dict[str, Any]:
+    out: dict[str, Any] = {}
+    for key, value in fixed.items():
+        if key == "problem":
+            out.update({f"system_{k}": v for k, v in value.parameters().items()
+                        if not k.startswith(("E", "tau", "delta", "material"))})
+        elif isinstance(value, int | float | str) and not isinstance(value, bool):
+            out[key] = value
+    return out
+
+
+# ── public entry points ─────────────────────────────────────────────────────────────────────────
+
+def _check_modes(name: str, modes: Any) -> int | str:
+    if modes == "auto":
+        if name not in MODAL_MODELS:
+            raise ParameterError(f"modes='auto' needs a model with several modes "
+                                 f"({', '.join(MODAL_MODELS)}), got {name!r}")
+        return "auto"
+    if isinstance(modes, bool) or not isinstance(modes, int | np.integer) or modes < 1:
+        raise ParameterError(f"modes must be an integer >= 1 or 'auto', got {modes!r}")
+    return int(modes)
+
+
+def select(data: FitData, name: str, *, modes: int | str = 1, criterion: str = "bic",
+           max_modes: int = MAX_AUTO_MODES, **fixed: Any
+           ) -> tuple[Outcome, list[dict[str, Any]]]:
+    """The best fit of model ``name`` and the candidates tried (one unless ``modes="auto"``).
+
+    ``"auto"`` fits 1, 2, … modes until the criterion has not improved twice in a row, the
+    parameters would outnumber the data, or ``max_modes``; it keeps the lowest criterion.
+    """
+    modes = _check_modes(name, modes)
+    if criterion not in CRITERIA:
+        raise ParameterError(f"criterion must be one of {', '.join(CRITERIA)}, got {criterion!r}")
+    if modes != "auto":
+        outcome = fit_once(make_model(name, modes, **fixed), data)
+        return outcome, [{"modes": modes, **outcome.criterion}]
+    outcomes: list[Outcome] = []
+    worse = 0
+    for n in range(1, max_modes + 1):
+        model = make_model(name, n, **fixed)
+        n_free = sum(1 for p in model.guess(data.y, data.x).values() if p.vary)
+        if n_free >= data.n_values:
+            break
+        try:
+            outcomes.append(fit_once(model, data))
+        except ConvergenceError:
+            if not outcomes:
+                raise
+            break
+        scores = [o.criterion[criterion] for o in outcomes]
+        worse = worse + 1 if len(scores) > 1 and scores[-1] >= min(scores[:-1]) else 0
+        if worse >= 2:
+            break
+    best = min(outcomes, key=lambda o: o.criterion[criterion])
+    return best, [{"modes": o.model.spec.modes, **o.criterion} for o in outcomes]
+
+
+def fit_data(data: FitData, name: str, *, modes: int | str = 1, criterion: str = "bic",
+             max_modes: int = MAX_AUTO_MODES, **fixed: Any) -> xr.Dataset:
+    """Fit prepared data (:class:`FitData`) with model ``name``; ``modes="auto"`` selects."""
+    best, selection = select(data, name, modes=modes, criterion=criterion, max_modes=max_modes,
+                             **fixed)
+    ds = result_dataset(best, data, selection=selection if modes == "auto" else None)
+    if modes == "auto":
+        ds.attrs["criterion"] = criterion
+    return ds
+
+
+def fit_spectrum(spectrum: xr.Dataset, model: str, *, modes: int | str = 1,
+                 criterion: str = "bic", **fixed: Any) -> xr.Dataset:
+    """Fit one spectrum (over ``omega``) with a spectrum model.
+
+    Parameters
+    ----------
+    spectrum : xarray.Dataset
+        A spectrum (:mod:`viscoforce.schema.spectrum`) over ``omega`` only.
+    model : str
+        ``svda``, ``exact``, ``contact`` or ``prony``.
+    modes : int or "auto"
+        Relaxation modes; ``"auto"`` tries 1, 2, … and keeps the lowest ``criterion``.
+    criterion : {"bic", "aic"}
+        Information criterion of ``modes="auto"``.
+    **fixed
+        The model's fixed inputs (see :func:`viscoforce.fitting.models.make_model`); for
+        ``contact`` the ``indentation`` defaults to the data's median ``mean_indentation``.
+
+    Returns
+    -------
+    xarray.Dataset
+        Fit result (:mod:`viscoforce.schema.fit`); with ``"auto"`` also ``selection_modes``,
+        ``selection_aic``, ``selection_bic`` over ``candidate``.
+    """
+    if model not in SPECTRUM_MODELS:
+        raise ParameterError(f"model {model!r} fits force curves, not spectra; spectrum models: "
+                             f"{', '.join(SPECTRUM_MODELS)}")
+    data = spectrum_data(spectrum)
+    if model == "contact" and fixed.get("indentation") is None:
+        fixed["indentation"] = _data_indentation(spectrum)
+    if model in ("svda", "exact") and fixed.get("position") is None and fixed.get(
+            "mean_force") is None:
+        mean = float(np.nanmedian(spectrum["mean_force"].values))
+        raise ParameterError(
+            f"model {model!r} needs the mean position: give h0 (--h0) or the mean force "
+            f"(--mean-force; this spectrum's median mean_force is {mean:.4g} N)")
+    return fit_data(data, model, modes=modes, criterion=criterion, **fixed)
+
+
+def _data_indentation(spectrum: xr.Dataset) -> float:
+    if "mean_indentation" not in spectrum.variables:
+        raise ModelValidityError(
+            "the contact model needs the operating indentation: this spectrum has no "
+            "mean_indentation (no contact point found, or pre-contact); give --indentation D0")
+    value = float(np.nanmedian(spectrum["mean_indentation"].values))
+    if not value > 0:
+        raise ModelValidityError(
+            f"the contact model refuses a pre-contact spectrum: median mean_indentation "
+            f"{value!r} m is not > 0 (use --model svda or exact, or give --indentation D0)")
+    return value

@@ -1,0 +1,561 @@
+"""lmfit models of the SPEC's Models table: svda, exact, contact, prony, relaxation, step.
+
+Each model is an :class:`lmfit.Model` over plain functions of the project's physics whose
+parameters carry the SPEC's exact names (``tau``, ``E0``, ``E_inf``; ``E_1``…, ``tau_1``…;
+``k_inf``, ``dk_i``; ``F_inf``, ``dF_i``; ``C1``, ``m``). The spectrum models return the complex
+stiffness k*(ω) = F̂/δ̂ [N/m] (phase = lead of the force over the indentation); the curve models
+a force [N] over time. :meth:`FitModel.guess` derives a start from the data alone, with the
+ordering constraints of :mod:`viscoforce.fitting._params`.
+
+Build a model with :func:`make_model`; the ``spec`` (name, modes, fixed inputs) is what travels to
+dask workers, which rebuild the model there (closures over a problem do not pickle cheaply).
+"""
+
+from __future__ import annotations
+
+import inspect
+import math
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+import lmfit
+import numpy as np
+from scipy.special import gamma
+
+from viscoforce.exceptions import ModelValidityError, ParameterError
+from viscoforce.fitting import _params as P
+from viscoforce.physics.materials import PronySeries, StandardLinearSolid, ViscoelasticMaterial
+from viscoforce.problem import ContactProblem
+
+#: Model names of the SPEC table (``--model``).
+MODEL_NAMES = ("svda", "exact", "contact", "prony", "relaxation", "step")
+#: Materials of the ``contact`` model (``--material``).
+CONTACT_MATERIALS = ("sls", "prony", "power-law")
+#: Models whose data are spectra (the others fit force curves over time).
+SPECTRUM_MODELS = ("svda", "exact", "contact", "prony")
+#: Models with a number of relaxation modes (``--modes``).
+MODAL_MODELS = ("exact", "contact", "prony", "relaxation")
+#: Largest number of modes tried by ``modes="auto"``.
+MAX_AUTO_MODES = 4
+
+#: Decades beyond the measured window that a relaxation time may reach (its bounds).
+TAU_MARGIN_DECADES = 3.0
+#: Modulus window [Pa] of every fit (a soft gel to diamond).
+MODULUS_BOUNDS = (1.0, 1e13)
+
+
+@dataclass(frozen=True)
+class ModelSpec:
+    """What defines a model: its name, number of modes and fixed inputs (SI).
+
+    ``fixed`` holds e.g. ``position`` or ``mean_force``, ``radius``, ``indentation``, ``drag``,
+    ``material``, ``segment``; ``problem`` (a ContactProblem) for the exact and step models.
+    """
+
+    name: str
+    modes: int = 1
+    fixed: Mapping[str, Any] = field(default_factory=dict)
+
+
+class FitModel(lmfit.Model):
+    """An lmfit Model with a SPEC parameter layout and a data-driven :meth:`guess`.
+
+    Attributes
+    ----------
+    spec : ModelSpec
+        Name, modes and fixed inputs.
+    layout : list
+        The parameter layout (:mod:`viscoforce.fitting._params`).
+    independent : str
+        ``"omega"`` (spectrum models) or ``"t"`` (curve models).
+    """
+
+    def __init__(self, spec: ModelSpec, function: Callable[..., np.ndarray],
+                 layout: Sequence[P.Item], independent: str,
+                 guesser: Callable[[np.ndarray, np.ndarray], dict[str, float]],
+                 tau_window: Callable[[np.ndarray], tuple[float, float]] | None = None):
+        self.spec = spec
+        self.layout = list(layout)
+        self.independent = independent
+        self._guesser = guesser
+        self._tau_window = tau_window
+        names = P.reported_names(layout)
+        super().__init__(_signed(function, independent, names), independent_vars=[independent],
+                         name=spec.name)
+
+    @property
+    def names(self) -> list[str]:
+        """The SPEC parameter names, in layout order."""
+        return P.reported_names(self.layout)
+
+    def parameters_from(self, values: Mapping[str, float], x: np.ndarray) -> lmfit.Parameters:
+        """Parameters starting at ``values`` (SPEC names), with the bounds for data over ``x``."""
+        layout = self.layout
+        if self._tau_window is not None:
+            window = self._tau_window(x)
+            layout = [P.Chain(i.names, window) if isinstance(i, P.Chain) and i.names[0].startswith(
+                "tau") else i for i in layout]
+        layout = [P.Chain(i.names, MODULUS_BOUNDS) if isinstance(i, P.Chain) and i.names[0] in (
+            "E_inf", "E0") else i for i in layout]
+        return P.build_parameters(layout, values)
+
+    def guess(self, data: np.ndarray, x: np.ndarray | None = None, **kws: Any) -> lmfit.Parameters:
+        """Starting parameters from the data alone (complex k* over ω, or F over t)."""
+        if x is None:
+            x = kws.get(self.independent)
+        if x is None:
+            raise ParameterError(f"guess needs the independent variable {self.independent!r}")
+        x = np.asarray(x, dtype=float)
+        return self.parameters_from(self._guesser(np.asarray(data), x), x)
+
+
+def _signed(function: Callable[..., np.ndarray], independent: str,
+            names: Sequence[str]) -> Callable[..., np.ndarray]:
+    """``function(x, **params)`` with an explicit signature, which lmfit reads for the names."""
+
+    def model(*args: Any, **kwargs: Any) -> np.ndarray:
+        bound = signature.bind(*args, **kwargs)
+        values = dict(bound.arguments)
+        return function(values.pop(independent), values)
+
+    par = inspect.Parameter
+    signature = inspect.Signature(
+        [par(independent, par.POSITIONAL_OR_KEYWORD)]
+        + [par(n, par.POSITIONAL_OR_KEYWORD, default=1.0) for n in names])
+    model.__signature__ = signature  # type: ignore[attr-defined]
+    model.__name__ = "viscoforce_model"
+    return model
+
+
+# ── parameter names ─────────────────────────────────────────────────────────────────────────────
+
+def moduli_names(modes: int) -> list[str]:
+    """E0, E_1 … E_{n−1}, E_inf (descending moduli) of an n-mode material."""
+    return ["E0", *(f"E_{i}" for i in range(1, modes)), "E_inf"]
+
+
+def tau_names(modes: int, *, single: str = "tau") -> list[str]:
+    """``tau`` for one mode (``single``), else tau_1 … tau_n (ascending)."""
+    return [single] if modes == 1 and single else [f"tau_{i}" for i in range(1, modes + 1)]
+
+
+def _material_layout(modes: int) -> list[P.Item]:
+    return [P.Chain(tuple(reversed(moduli_names(modes)))), P.Chain(tuple(tau_names(modes)))]
+
+
+def material_from(values: Mapping[str, float], modes: int) -> ViscoelasticMaterial:
+    """The Prony material of an n-mode parameter set (SPEC names)."""
+    if modes == 1:
+        return StandardLinearSolid(values["E0"], values["E_inf"], values["tau"])
+    moduli = [values[n] for n in moduli_names(modes)]
+    return PronySeries.from_moduli(moduli, [values[n] for n in tau_names(modes)])
+
+
+# ── guesses from the data ───────────────────────────────────────────────────────────────────────
+
+@dataclass(frozen=True)
+class SpectrumFeatures:
+    """What a guess reads off a spectrum: low/high-frequency |k*|, the phase peak, the window."""
+
+    k_low: float
+    k_high: float
+    omega_low: float
+    omega_high: float
+    omega_peak: float
+
+    @classmethod
+    def of(cls, k: np.ndarray, omega: np.ndarray) -> SpectrumFeatures:
+        """Features of k*(ω) (the phase peak by a parabola in log ω through the top three)."""
+        order = np.argsort(omega)
+        w, k = omega[order], k[order]
+        mag, phase = np.abs(k), np.angle(k)
+        n_end = max(1, w.size // 10)
+        i = int(np.argmax(phase))
+        if 0 < i < w.size - 1:  # parabola through the peak in log ω
+            x = np.log(w[i - 1:i + 2])
+            y = phase[i - 1:i + 2]
+            a = np.polyfit(x, y, 2)
+            peak = math.exp(-a[1] / (2 * a[0])) if a[0] < 0 else w[i]
+            peak = min(max(peak, w[i - 1]), w[i + 1])
+        else:
+            peak = float(w[i])
+        return cls(float(np.median(mag[:n_end])), float(np.median(mag[-n_end:])), float(w[0]),
+                   float(w[-1]), float(peak))
+
+    def sls_tau(self) -> float:
+        """τ of a one-mode transfer (1 + iωτ)/(a + iωτ b): its phase peaks at ωτ = √(a/b)."""
+        ratio = max(self.k_high / self.k_low, 1.0 + 1e-6) if self.k_low > 0 else 2.0
+        return math.sqrt(ratio) / self.omega_peak
+
+
+def _spread(center: float, modes: int, window: tuple[float, float]) -> list[float]:
+    """``modes`` values log-spaced around ``center`` within ``window`` (a decade apart at most)."""
+    if modes == 1:
+        return [center]
+    lo, hi = math.log10(window[0]), math.log10(window[1])
+    step = min(1.0, (hi - lo) / (modes + 1))
+    c = min(max(math.log10(center), lo + step * (modes - 1) / 2), hi - step * (modes - 1) / 2)
+    return [10 ** (c + step * (i - (modes - 1) / 2)) for i in range(modes)]
+
+
+def _geometric(high: float, low: float, modes: int) -> list[float]:
+    """E0 … E_inf: ``modes`` + 1 values from ``high`` down to ``low``, geometric."""
+    high = max(high, low * (1 + 1e-3))
+    return [high * (low / high) ** (i / modes) for i in range(modes + 1)]
+
+
+def _material_guess(e_high: float, e_low: float, tau: float, modes: int,
+                    window: tuple[float, float]) -> dict[str, float]:
+    out = dict(zip(moduli_names(modes), _geometric(e_high, e_low, modes), strict=True))
+    out.update(zip(tau_names(modes), _spread(tau, modes, window), strict=True))
+    return out
+
+
+def _omega_window(omega: np.ndarray) -> tuple[float, float]:
+    """Bounds of a creep or relaxation time measured over ``omega`` [s]."""
+    margin = 10 ** TAU_MARGIN_DECADES
+    return 1.0 / (np.max(omega) * margin), margin / np.min(omega)
+
+
+def _time_window(t: np.ndarray) -> tuple[float, float]:
+    steps = np.diff(np.sort(t))
+    dt = float(np.min(steps[steps > 0])) if np.any(steps > 0) else 1e-6
+    span = float(np.ptp(t)) or dt
+    margin = 10 ** TAU_MARGIN_DECADES
+    return dt / margin, span * margin
+
+
+def _solve_modulus(stiffness: Callable[[float], float], target: float, start: float) -> float:
+    """E with stiffness(E) = target by a secant in log–log (stiffness grows like a power of E)."""
+    lo_bound, hi_bound = MODULUS_BOUNDS
+    e1, k1 = start, stiffness(start)
+    e2 = start * 2.0
+    k2 = stiffness(e2)
+    for _ in range(12):
+        slope = math.log(k2 / k1) / math.log(e2 / e1) if k2 != k1 else 1.0
+        slope = min(max(slope, 0.05), 2.0)
+        e_new = e2 * (target / k2) ** (1.0 / slope)
+        e_new = min(max(e_new, lo_bound * 10), hi_bound / 10)
+        e1, k1, e2 = e2, k2, e_new
+        k2 = stiffness(e2)
+        if abs(math.log(k2 / target)) < 1e-3:
+            break
+    return e2
+
+
+def _moduli_from_levels(function: Callable[[np.ndarray, dict[str, float]], np.ndarray],
+                        feats: SpectrumFeatures, start: float) -> tuple[float, float]:
+    """E_inf and E0 whose relaxed and glassy |k*| match the spectrum's low and high levels."""
+    slow, fast = 1e-4 / feats.omega_high, 1e4 / feats.omega_low
+
+    def relaxed(e: float) -> float:
+        return float(abs(function(np.array([feats.omega_low]), {
+            "E_inf": e, "E0": 1.001 * e, "tau": slow})[0]))
+
+    e_inf = _solve_modulus(relaxed, feats.k_low, start)
+
+    def glassy(e: float) -> float:
+        return float(abs(function(np.array([feats.omega_high]), {
+            "E_inf": e_inf, "E0": max(e, 1.0001 * e_inf), "tau": fast})[0]))
+
+    e0 = _solve_modulus(glassy, max(feats.k_high, feats.k_low * 1.01), 2 * e_inf)
+    return e_inf, max(e0, 1.05 * e_inf)
+
+
+# ── spectrum models ─────────────────────────────────────────────────────────────────────────────
+
+def _need(spec: ModelSpec, *names: str) -> list[Any]:
+    missing = [n for n in names if spec.fixed.get(n) is None]
+    if missing:
+        raise ParameterError(f"model {spec.name!r} needs {', '.join(missing)}")
+    return [spec.fixed[n] for n in names]
+
+
+def _position_choice(spec: ModelSpec) -> tuple[float | None, float | None]:
+    position, mean_force = spec.fixed.get("position"), spec.fixed.get("mean_force")
+    if (position is None) == (mean_force is None):
+        raise ParameterError(
+            f"model {spec.name!r} needs the mean position: give h0 (--h0) or the mean force "
+            "(--mean-force, the static E_inf load of the setpoint), not "
+            + ("both" if position is not None else "neither"))
+    return position, mean_force
+
+
+def svda_position(mean_force: float, E_inf: float, radius: float, P: float,  # noqa: N803
+                  debye_length: float) -> float:
+    """h̄0 [m] whose static SVDA (E_inf) load is ``mean_force`` [N] (explicit for p = P e^{−κh}).
+
+    The Derjaguin load F = (2πRP/κ) e^{−κg} gives the centre gap g, and the static Eq. 18
+    u0 = −√(8πR/κ)(P/E_inf) e^{−κg} the deformation: h̄0 = g + u0.
+    """
+    kappa = 1.0 / debye_length
+    scale = 2.0 * math.pi * radius * P / kappa
+    if not mean_force > 0:
+        raise ParameterError(f"mean_force must be > 0 N for the svda model, got {mean_force!r}")
+    gap = -math.log(mean_force / scale) / kappa
+    u0 = -math.sqrt(8.0 * math.pi * radius / kappa) * (P / E_inf) * math.exp(-kappa * gap)
+    return gap + u0
+
+
+def _svda_model(spec: ModelSpec) -> FitModel:
+    radius, p_amp, debye = _need(spec, "radius", "P", "debye_length")
+    position, mean_force = _position_choice(spec)
+
+    def mean_position(v: Mapping[str, float]) -> float:
+        if position is not None:
+            return float(position)
+        return svda_position(mean_force, v["E_inf"], radius, p_amp, debye)
+
+    def function(omega: np.ndarray, v: Mapping[str, float]) -> np.ndarray:
+        return closed_form_svda(omega, mean_position(v), v, radius, p_amp, debye)
+
+    def guesser(k: np.ndarray, omega: np.ndarray) -> dict[str, float]:
+        feats = SpectrumFeatures.of(k, omega)
+        e_inf, e0 = _moduli_from_levels(function, feats, 1e9)
+        check_svda_precontact(mean_position({"E_inf": e_inf}), e_inf, radius, p_amp, debye)
+        return {"E_inf": e_inf, "E0": e0, "tau": feats.sls_tau()}
+
+    model = FitModel(spec, function, _material_layout(1), "omega", guesser, _omega_window)
+    model.mean_position = mean_position  # type: ignore[attr-defined]
+    return model
+
+
+def closed_form_svda(omega: np.ndarray, position: float, v: Mapping[str, float], radius: float,
+                     P: float, debye_length: float) -> np.ndarray:  # noqa: N803
+    """SVDA k*(ω) (Eqs. 23–26) for SPEC parameters ``v``."""
+    from viscoforce.svda import svda_complex_stiffness
+
+    return svda_complex_stiffness(omega, position, v["E0"], v["E_inf"], v["tau"], radius, P,
+                                  debye_length)
+
+
+def check_svda_precontact(position: float, E_inf: float, radius: float, P: float,  # noqa: N803
+                          debye_length: float) -> None:
+    """Raise ModelValidityError if the SVDA mean state is in contact (centre gap < 1/κ)."""
+    from viscoforce.svda import svda_static_deformation
+
+    u0 = float(svda_static_deformation(position, E_inf, radius, P, debye_length))
+    gap = position - u0
+    if gap < debye_length:
+        raise ModelValidityError(
+            f"the svda model describes only pre-contact spectra: at h0 = {position:.3g} m with "
+            f"E_inf = {E_inf:.3g} Pa the centre gap would be {gap:.3g} m < the contact threshold "
+            f"1/kappa = {debye_length:.3g} m; use --model exact (any position) or contact")
+
+
+def _exact_model(spec: ModelSpec) -> FitModel:
+    (problem,) = _need(spec, "problem")
+    position, mean_force = _position_choice(spec)
+    modes = spec.modes
+
+    def function(omega: np.ndarray, v: Mapping[str, float]) -> np.ndarray:
+        full = dict(v)
+        if modes > 1 and "tau" in full:  # the level search passes one-mode names
+            full = _expand_one_mode(full, modes)
+        return exact_stiffness(problem, position, mean_force, material_from(full, modes), omega)
+
+    def guesser(k: np.ndarray, omega: np.ndarray) -> dict[str, float]:
+        feats = SpectrumFeatures.of(k, omega)
+        e_inf, e0 = _moduli_from_levels(function, feats, problem.material.relaxed_modulus)
+        return _material_guess(e0, e_inf, feats.sls_tau(), modes, _omega_window(omega))
+
+    return FitModel(spec, function, _material_layout(modes), "omega", guesser, _omega_window)
+
+
+def _expand_one_mode(v: Mapping[str, float], modes: int) -> dict[str, float]:
+    """An n-mode parameter set equivalent to the one-mode ``v`` (all modes at ``tau``)."""
+    moduli = _geometric(v["E0"], v["E_inf"], modes)
+    out = dict(zip(moduli_names(modes), moduli, strict=True))
+    out.update({n: v["tau"] * (1 + 1e-9 * i) for i, n in enumerate(tau_names(modes))})
+    return out
+
+
+def exact_stiffness(problem: ContactProblem, position: float | None, mean_force: float | None,
+                    material: ViscoelasticMaterial, omega: np.ndarray) -> np.ndarray:
+    """Exact small-amplitude k*(ω) [N/m] of ``material`` at h̄0 = ``position`` or at the load."""
+    from viscoforce.experiments.linear_response import linearized_state
+
+    e_inf = material.relaxed_modulus
+    state = (linearized_state(problem, position, e_inf) if position is not None
+             else linearized_state(problem, None, e_inf, load=mean_force))
+    return state.stiffness(2.0 * np.asarray(material.complex_compliance(omega), dtype=complex))
+
+
+def _contact_model(spec: ModelSpec) -> FitModel:
+    radius, depth = _need(spec, "radius", "indentation")
+    drag = float(spec.fixed.get("drag") or 0.0)
+    kind = spec.fixed.get("material", "sls")
+    if kind not in CONTACT_MATERIALS:
+        raise ParameterError(f"material must be one of {', '.join(CONTACT_MATERIALS)}, "
+                             f"got {kind!r}")
+    if not depth > 0:
+        raise ModelValidityError(
+            f"the contact model needs a positive operating indentation, got {depth!r} m: this "
+            "spectrum is pre-contact (use --model svda or exact), or give --indentation D0")
+    root = math.sqrt(radius * depth)
+    modes = spec.modes if kind == "prony" else 1
+
+    def function(omega: np.ndarray, v: Mapping[str, float]) -> np.ndarray:
+        if kind == "power-law":
+            compliance = power_law_compliance(omega, v["E0"], v["C1"], v["m"])
+        else:
+            full = _expand_one_mode(v, modes) if modes > 1 and "tau" in v else v
+            compliance = material_from(full, modes).complex_compliance(omega)
+        return root / compliance + 1j * omega * drag
+
+    def guesser(k: np.ndarray, omega: np.ndarray) -> dict[str, float]:
+        modulus = (k - 1j * omega * drag) / root
+        feats = SpectrumFeatures.of(modulus, omega)
+        if kind == "power-law":  # |E| falls like ω^−m … rises like ω^m: slope of log|E|
+            slope = np.polyfit(np.log(omega), np.log(np.abs(modulus)), 1)[0]
+            m = min(max(float(slope), 0.05), 0.95)
+            c1 = 1.0 / (feats.k_low * gamma(m + 1)) * feats.omega_low ** m
+            return {"E0": 2.0 * feats.k_high, "C1": c1, "m": m}
+        e_inf, e0 = feats.k_low, max(feats.k_high, 1.05 * feats.k_low)
+        return _material_guess(e0, e_inf, feats.sls_tau(), modes, _omega_window(omega))
+
+    if kind == "power-law":
+        layout: list[P.Item] = [P.Chain(("E0",)), P.Chain(("C1",)), P.Bounded("m", 0.0, 1.0)]
+        window = None
+    else:
+        layout, window = _material_layout(modes), _omega_window
+    return FitModel(ModelSpec(spec.name, modes, spec.fixed), function, layout, "omega", guesser,
+                    window)
+
+
+def power_law_compliance(omega: np.ndarray, E0: float, C1: float, m: float) -> np.ndarray:  # noqa: N803
+    """C*(ω) = 1/E0 + C1 Γ(1 + m)(iω)^−m of C(t) = 1/E0 + C1 t^m (e^{+iωt} convention)."""
+    w = np.asarray(omega, dtype=float)
+    return 1.0 / E0 + C1 * gamma(1.0 + m) * (1j * w) ** (-m)
+
+
+def _prony_model(spec: ModelSpec) -> FitModel:
+    modes = spec.modes
+    dks = [f"dk_{i}" for i in range(1, modes + 1)]
+    taus = [f"tau_{i}" for i in range(1, modes + 1)]
+
+    def function(omega: np.ndarray, v: Mapping[str, float]) -> np.ndarray:
+        k = np.full(np.shape(omega), v["k_inf"], dtype=complex)
+        for dk, tau in zip(dks, taus, strict=True):
+            x = 1j * omega * v[tau]
+            k += v[dk] * x / (1.0 + x)
+        return k
+
+    def guesser(k: np.ndarray, omega: np.ndarray) -> dict[str, float]:
+        feats = SpectrumFeatures.of(k, omega)
+        k_inf = feats.k_low
+        total = max(feats.k_high - feats.k_low, 0.05 * feats.k_low)
+        tau = 1.0 / (feats.omega_peak * math.sqrt(max(feats.k_high / feats.k_low, 1.0001)))
+        out = {"k_inf": k_inf, **{dk: total / modes for dk in dks}}
+        out.update(zip(taus, _spread(tau, modes, _omega_window(omega)), strict=True))
+        return out
+
+    layout: list[P.Item] = [P.Chain(("k_inf",)), *(P.Chain((dk,)) for dk in dks),
+                            P.Chain(tuple(taus))]
+    return FitModel(spec, function, layout, "omega", guesser, _omega_window)
+
+
+# ── curve models ────────────────────────────────────────────────────────────────────────────────
+
+def _relaxation_model(spec: ModelSpec) -> FitModel:
+    modes = spec.modes
+    dfs = [f"dF_{i}" for i in range(1, modes + 1)]
+    taus = [f"tau_{i}" for i in range(1, modes + 1)]
+
+    def function(t: np.ndarray, v: Mapping[str, float]) -> np.ndarray:
+        f = np.full(np.shape(t), v["F_inf"], dtype=float)
+        for df, tau in zip(dfs, taus, strict=True):
+            f += v[df] * np.exp(-t / v[tau])
+        return f
+
+    def guesser(f: np.ndarray, t: np.ndarray) -> dict[str, float]:
+        order = np.argsort(t)
+        t, f = t[order], np.asarray(f, dtype=float)[order]
+        n_end = max(2, t.size // 20)
+        f_inf, f_start = float(np.median(f[-n_end:])), float(np.median(f[:max(2, t.size // 200)]))
+        excess = f - f_inf
+        target = (f_start - f_inf) / math.e
+        crossed = np.flatnonzero(np.sign(excess - target) != np.sign(f_start - f_inf - target))
+        t0 = float(t[crossed[0]] - t[0]) if crossed.size else float(np.ptp(t)) / 3
+        tau = max(t0, float(np.ptp(t)) / t.size)
+        out = {"F_inf": f_inf, **{df: (f_start - f_inf) / modes for df in dfs}}
+        out.update(zip(taus, _spread(tau, modes, _time_window(t)), strict=True))
+        return out
+
+    layout: list[P.Item] = [P.Signed("F_inf"), *(P.Signed(df) for df in dfs),
+                            P.Chain(tuple(taus))]
+    return FitModel(spec, function, layout, "t", guesser, _time_window)
+
+
+def _step_model(spec: ModelSpec) -> FitModel:
+    (problem, position_trace) = _need(spec, "problem", "position_trace")
+    from viscoforce.experiments.drives import MeasuredTrace
+    from viscoforce.solvers.simulate import simulate
+
+    trace_t, trace_h = (np.asarray(a, dtype=float) for a in position_trace)
+    drive = MeasuredTrace(trace_t, trace_h)
+
+    def function(t: np.ndarray, v: Mapping[str, float]) -> np.ndarray:
+        run = simulate(problem.with_material(material_from(v, 1)), drive, t_end=float(t[-1]),
+                       t_eval=np.asarray(t, dtype=float), output_kinks=False, progress=False)
+        return run["force"].values
+
+    def guesser(f: np.ndarray, t: np.ndarray) -> dict[str, float]:
+        from viscoforce.solvers.static import equilibrium_gap
+
+        f = np.asarray(f, dtype=float)
+        i_peak = int(np.argmax(np.abs(f - f[0])))
+        end = float(np.interp(t[-1], trace_t, trace_h))
+        peak_position = float(np.interp(t[i_peak], trace_t, trace_h))
+
+        def load(position: float) -> Callable[[float], float]:
+            return lambda e: abs(float(problem.load(problem.pressure(
+                equilibrium_gap(problem, position, e).gap))))
+
+        e_inf = _solve_modulus(load(end), max(abs(float(f[-1])), 1e-15), 1e9)
+        e0 = _solve_modulus(load(peak_position), max(abs(float(f[i_peak])), 1e-15), 2 * e_inf)
+        tail = np.abs(f[i_peak:] - f[-1])
+        below = np.flatnonzero(tail < tail[0] / math.e)
+        tau = float(t[i_peak + below[0]] - t[i_peak]) if below.size else float(np.ptp(t)) / 5
+        return {"E_inf": e_inf, "E0": max(e0, 1.05 * e_inf), "tau": max(tau, 1e-9)}
+
+    return FitModel(spec, function, _material_layout(1), "t", guesser, _time_window)
+
+
+_BUILDERS: dict[str, Callable[[ModelSpec], FitModel]] = {
+    "svda": _svda_model, "exact": _exact_model, "contact": _contact_model,
+    "prony": _prony_model, "relaxation": _relaxation_model, "step": _step_model}
+
+
+def make_model(name: str, modes: int = 1, **fixed: Any) -> FitModel:
+    """The lmfit model ``name`` (one of :data:`MODEL_NAMES`) with ``modes`` modes.
+
+    Parameters
+    ----------
+    name : str
+        ``svda``, ``exact``, ``contact``, ``prony``, ``relaxation`` or ``step``.
+    modes : int
+        Relaxation modes (≥ 1; only the models in :data:`MODAL_MODELS` take more than one).
+    **fixed
+        Fixed inputs in SI: ``position`` or ``mean_force`` (svda, exact); ``radius``, ``P``,
+        ``debye_length`` (svda); ``problem`` (exact, step); ``radius``, ``indentation``,
+        ``drag``, ``material`` (contact); ``position_trace`` = (t, h0) (step).
+
+    Raises
+    ------
+    ParameterError
+        Unknown model, bad modes, or a missing fixed input (the message names it).
+    ModelValidityError
+        The model cannot describe the scene (contact at no indentation).
+    """
+    if name not in _BUILDERS:
+        raise ParameterError(f"model must be one of {', '.join(MODEL_NAMES)}, got {name!r}")
+    if isinstance(modes, bool) or not isinstance(modes, int | np.integer) or modes < 1:
+        raise ParameterError(f"modes must be an integer >= 1, got {modes!r}")
+    if modes > 1 and name not in MODAL_MODELS:
+        raise ParameterError(f"model {name!r} has one mode (modes=1), got modes={modes}; "
+                             f"models with several: {', '.join(MODAL_MODELS)}")
+    if name == "contact" and modes > 1 and fixed.get("material", "sls") != "prony":
+        raise ParameterError("contact with modes > 1 needs material='prony' (--material prony)")
+    return _BUILDERS[name](ModelSpec(name, int(modes), fixed))
