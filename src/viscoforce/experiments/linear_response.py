@@ -6,31 +6,385 @@ e^{+iωt} convention, u(t) = −2∫C(t − t') A ṗ(t') dt' becomes δu = −2
 
     (I − 2C*(ω) A p') δu = −2C*(ω) A p' δh0,         δF = 2π Σ_j W_j p'_j (δh0 − δu_j),
 
-one complex linear solve per frequency for any Prony material. The complex stiffness per unit
+one complex linear system per frequency for any Prony material. The complex stiffness per unit
 compression (compression = −δh0) is k*(ω) = −δF/δh0; its argument is the phase χ by which the
 force leads the compression (SPEC convention), and |k*| the stiffness |F1|/η.
+
+Modal form (:class:`LinearizedState`). Write c = 2C*(ω) (a complex scalar), s = −p'(h̄) and
+M = A·diag(s), w = 2π W s. The system is (I + cM) δu = cM·1 per unit compression, so
+1 − δu = (I + cM)⁻¹ 1 and
+
+    k*(c) = wᵀ (I + cM)⁻¹ 1 = Σ_j β_j / (1 + c λ_j) = Σ_j w_j − c Σ_j α_j / (1 + c λ_j),
+
+with M = V Λ V⁻¹, β_j = (wᵀV)_j (V⁻¹1)_j, Σ β_j = Σ w_j and α_j = β_j λ_j. The static state and
+(λ, β) depend on the material only through E_inf, so one eigen-decomposition serves every
+τ, E0 (and every frequency): O(N³) once, then O(N) per frequency.
+
+Which eigensolver. A W⁻¹ (A divided by the area weights of its columns) would be symmetric for a
+nodal quadrature of the symmetric kernel, and M would then be similar to a symmetric matrix.
+The product-integration kernel is not: A W⁻¹ is asymmetric by 1.2e-3 of its largest entry
+(measured on the default grid), and eigh of the symmetrised matrix errs by 4e-11 (h̄0 = 2 nm) to
+1e-9 (−5 nm) in k*. So the general ``eig`` is used, on the diagonally balanced matrix
+M' = |D|^{1/2} (A W⁻¹) |D|^{1/2} sign(D), D = W s, which is similar to M and nearly symmetric: its
+eigenvectors are nearly orthogonal (condition number 1.2), and k* agrees with the direct solve to
+1e-15. Nodes with s = 0 (no force derivative) contribute nothing and are left out.
 """
 
 from __future__ import annotations
 
+import threading
+from collections import OrderedDict
+from dataclasses import dataclass
+from typing import Any
+
 import numpy as np
 import xarray as xr
-from numpy.typing import ArrayLike
+from numpy.typing import ArrayLike, NDArray
 
 from viscoforce._limits import MAX_SAMPLES, check_effort
-from viscoforce._validation import require_finite, require_positive
+from viscoforce._typing import FloatArray
+from viscoforce._validation import require_finite, require_instance, require_positive
+from viscoforce.exceptions import ParameterError
 from viscoforce.experiments._checks import require_frequencies, require_number, require_problem
+from viscoforce.physics.materials import ViscoelasticMaterial
 from viscoforce.problem import ContactProblem
 from viscoforce.schema import make_spectrum
-from viscoforce.solvers.static import equilibrium_gap
+from viscoforce.solvers.newton import NewtonResult
+from viscoforce.solvers.static import equilibrium_at_load, equilibrium_gap
 
-#: Complex matrix elements solved in one batch (≈ 64 MB).
+__all__ = ["LinearizedState", "linearized_state", "linear_stiffness", "linear_response"]
+
+#: Complex elements of one batch of the modal sum (≈ 64 MB).
 _BATCH_ELEMENTS = 4_000_000
+#: Most static states :func:`linearized_state` keeps.
+STATE_CACHE_SIZE = 32
+#: Relative mismatch of E_inf between a material and a state tolerated by ``stiffness_for``.
+_MODULUS_RTOL = 1e-12
+
+
+@dataclass(frozen=True, eq=False)
+class LinearizedState:
+    """The static E_inf state at h̄0 and the modes of its linearisation (module docstring).
+
+    Build it with :meth:`at` (a position) or :meth:`at_load` (a mean force), or get a cached one
+    from :func:`linearized_state`. It holds no reference to the problem; its arrays are
+    read-only.
+
+    Attributes
+    ----------
+    position : float
+        Mean position h̄0 [m].
+    relaxed_modulus : float
+        E_inf [Pa] of the static state.
+    mean_force : float
+        Static load at ``position`` [N].
+    gap : ndarray
+        Static nodal gaps [m].
+    eigenvalues : ndarray
+        λ_j [Pa] of M = A·diag(−p') (complex dtype; real for the laws measured so far).
+    weights : ndarray
+        β_j [N/m], with k*(c) = Σ β_j / (1 + c λ_j).
+    total_weight : float
+        Σ_j w_j = 2π Σ W_j (−p'_j) [N/m]: k* of a rigid body (c = 0).
+    """
+
+    position: float
+    relaxed_modulus: float
+    mean_force: float
+    gap: FloatArray
+    eigenvalues: NDArray[np.complex128]
+    weights: NDArray[np.complex128]
+    total_weight: float
+
+    @classmethod
+    def at(cls, problem: ContactProblem, position: float,
+           relaxed_modulus: float | None = None) -> LinearizedState:
+        """Solve the static state at ``position`` and decompose its linearisation (no cache).
+
+        Parameters
+        ----------
+        problem : ContactProblem
+            System and grid (must reach ``position``); its material is not used.
+        position : float
+            Mean position h̄0 [m], finite.
+        relaxed_modulus : float, optional
+            E_inf [Pa], > 0; default the problem material's relaxed modulus.
+
+        Returns
+        -------
+        LinearizedState
+
+        Raises
+        ------
+        ParameterError
+            If an argument is missing or out of range (the message names it and the range).
+        ConvergenceError
+            The static solve failed.
+        """
+        problem = require_problem(problem)
+        position = require_number("position", position, require_finite,
+                                  "finite [m] (h0, the undeformed apex separation)")
+        modulus = _relaxed_modulus(problem, relaxed_modulus)
+        problem.check_covers(position)
+        return cls._from_equilibrium(problem, position, modulus,
+                                     equilibrium_gap(problem, position, modulus))
+
+    @classmethod
+    def at_load(cls, problem: ContactProblem, load: float,
+                relaxed_modulus: float | None = None) -> LinearizedState:
+        """As :meth:`at`, at the position whose static E_inf load is ``load`` [N] (> 0).
+
+        The position is found by :func:`~viscoforce.solvers.static.position_at_load`
+        (to 1e-6 decay lengths); ``mean_force`` is the load there (≈ ``load``).
+
+        Raises
+        ------
+        ParameterError
+            ``load`` ≤ 0 or not finite, or another argument out of range.
+        ConvergenceError
+            The load cannot be bracketed within the grid, or a static solve failed.
+        """
+        problem = require_problem(problem)
+        modulus = _relaxed_modulus(problem, relaxed_modulus)
+        position, sol = equilibrium_at_load(problem, load, modulus)
+        return cls._from_equilibrium(problem, position, modulus, sol)
+
+    @classmethod
+    def _from_equilibrium(cls, problem: ContactProblem, position: float, modulus: float,
+                          sol: NewtonResult) -> LinearizedState:
+        """Decompose the linearisation about the static solution ``sol`` (module docstring)."""
+        stiff = -problem.surface_force.pressure_derivative(sol.gap)  # −p′ (> 0 where repulsive)
+        area = problem.grid.area_weights
+        active = np.flatnonzero(stiff != 0.0)
+        d = area[active] * stiff[active]  # D = W s on the nodes that carry a force derivative
+        q = np.sqrt(np.abs(d))
+        left = np.copysign(q, d)
+        kernel = problem.influence[np.ix_(active, active)] / area[active][None, :]  # A W⁻¹
+        balanced = q[:, None] * kernel * left[None, :]  # M' = |D|^½ A W⁻¹ |D|^½ sign(D)
+        lam, vec = np.linalg.eig(balanced)
+        weights = 2.0 * np.pi * (left @ vec) * np.linalg.solve(vec, q.astype(vec.dtype))
+        gap = np.array(sol.gap, dtype=float)
+        gap.flags.writeable = False
+        lam = np.asarray(lam, dtype=complex)
+        weights = np.asarray(weights, dtype=complex)
+        lam.flags.writeable = False
+        weights.flags.writeable = False
+        return cls(position=float(position), relaxed_modulus=float(modulus),
+                   mean_force=float(problem.load(sol.pressure)), gap=gap, eigenvalues=lam,
+                   weights=weights, total_weight=float(2.0 * np.pi * np.sum(d)))
+
+    @property
+    def residues(self) -> NDArray[np.complex128]:
+        """α_j = β_j λ_j [N/m · Pa]: k*(c) = Σ w − c Σ α_j / (1 + c λ_j)."""
+        return self.weights * self.eigenvalues
+
+    @property
+    def modes(self) -> int:
+        """Number of modes (the nodes with a nonzero force derivative)."""
+        return int(self.eigenvalues.size)
+
+    def stiffness(self, compliance: ArrayLike) -> np.ndarray:
+        """k*(c) [N/m] for values c = 2C*(ω) [1/Pa] (twice the complex compliance).
+
+        Parameters
+        ----------
+        compliance : array_like
+            c = 2 C*(ω) [1/Pa], complex, finite, Re c > 0 (a passive material), any shape, at
+            most :data:`viscoforce._limits.MAX_SAMPLES` values.
+
+        Returns
+        -------
+        numpy.ndarray
+            Complex stiffness per unit compression [N/m], shaped like ``compliance``.
+
+        Raises
+        ------
+        ParameterError
+            If ``compliance`` is not finite with a positive real part.
+        EffortError
+            If more than ``MAX_SAMPLES`` values are given (refused before computing).
+        """
+        c = _require_compliance(compliance)
+        check_effort(f"compliance values of LinearizedState.stiffness ({c.size} given)", c.size,
+                     MAX_SAMPLES, hint="give fewer values")
+        flat = c.ravel()
+        out = np.empty(flat.size, dtype=complex)
+        chunk = max(1, _BATCH_ELEMENTS // max(1, self.modes))
+        for start in range(0, flat.size, chunk):
+            part = flat[start:start + chunk, None]
+            out[start:start + chunk] = (self.weights / (1.0 + part * self.eigenvalues)).sum(axis=1)
+        return out.reshape(c.shape)
+
+    def stiffness_for(self, material: ViscoelasticMaterial, omega: ArrayLike) -> np.ndarray:
+        """k*(ω) [N/m] of ``material`` at angular frequencies ``omega`` [rad/s].
+
+        Parameters
+        ----------
+        material : ViscoelasticMaterial
+            Any Prony material whose relaxed modulus is this state's (to 1e-12 relative): the
+            state is the static equilibrium for E_inf only.
+        omega : array_like
+            Angular frequencies [rad/s], ≥ 0, 1-D, at most ``MAX_SAMPLES``.
+
+        Returns
+        -------
+        numpy.ndarray
+            Complex stiffness per unit compression [N/m], shaped like ``omega``.
+
+        Raises
+        ------
+        ParameterError
+            Bad ``omega``, a non-material, or a material with a different E_inf.
+        EffortError
+            If more than ``MAX_SAMPLES`` frequencies are requested (refused before computing).
+        """
+        require_instance("material", material, ViscoelasticMaterial)
+        omega = require_frequencies(omega, allow_zero=True)
+        check_effort(f"frequencies of LinearizedState.stiffness_for ({omega.size} requested)",
+                     omega.size, MAX_SAMPLES, hint="request fewer frequencies")
+        e_inf = material.relaxed_modulus
+        if abs(e_inf - self.relaxed_modulus) > _MODULUS_RTOL * self.relaxed_modulus:
+            raise ParameterError(
+                f"material relaxed modulus E_inf = {e_inf:.6g} Pa differs from the state's "
+                f"{self.relaxed_modulus:.6g} Pa: the state is the static equilibrium for its "
+                "E_inf only; build one for this material (linearized_state(problem, position, "
+                "material.relaxed_modulus))")
+        return self.stiffness(2.0 * np.asarray(material.complex_compliance(omega), dtype=complex))
+
+
+def _relaxed_modulus(problem: ContactProblem, relaxed_modulus: Any) -> float:
+    """``relaxed_modulus`` checked (> 0 [Pa]), or the problem material's E_inf if None."""
+    if relaxed_modulus is None:
+        return float(problem.material.relaxed_modulus)
+    return require_number("relaxed_modulus", relaxed_modulus, require_positive,
+                          "> 0 [Pa] (finite; E_inf of the static state)")
+
+
+def _require_compliance(compliance: Any) -> NDArray[np.complex128]:
+    """``compliance`` as a finite complex array with Re > 0, else ParameterError."""
+    allowed = "finite complex values 2C*(ω) [1/Pa] with real part > 0"
+    try:
+        c = np.asarray(compliance, dtype=complex)
+    except (TypeError, ValueError):
+        raise ParameterError(f"compliance must be {allowed}, got {compliance!r:.80}") from None
+    if c.size == 0:
+        raise ParameterError(f"compliance must be {allowed} (at least one), got an empty array")
+    bad = ~(np.isfinite(c) & (c.real > 0))
+    if np.any(bad):
+        i = int(np.flatnonzero(bad.ravel())[0])
+        raise ParameterError(f"compliance must be {allowed}; entry {i} is {c.ravel()[i]!r}")
+    return c
+
+
+# ── the bounded cache of static states ───────────────────────────────────────────────────────────
+
+class _StateCache:
+    """Least-recently-used map of :class:`LinearizedState` by static-state key (thread-safe).
+
+    The key is everything the static state depends on: the sphere, the surface-force law, the
+    grid (all frozen, hashable dataclasses), E_inf and the position or load. The material
+    itself is not part of it, so varying τ or E0 reuses the state. A state holds O(N) numbers,
+    not the problem or its influence matrix. Unhashable keys (a user's mutable law) bypass it.
+    """
+
+    def __init__(self, maxsize: int):
+        self.maxsize = maxsize
+        self._data: OrderedDict[tuple, LinearizedState] = OrderedDict()
+        self._lock = threading.Lock()
+        self.hits = 0
+        self.misses = 0
+
+    def get(self, key: tuple, build) -> LinearizedState:
+        try:
+            hash(key)
+        except TypeError:  # a user's law or grid that is not hashable: no caching
+            return build()
+        with self._lock:
+            if key in self._data:
+                self._data.move_to_end(key)
+                self.hits += 1
+                return self._data[key]
+            self.misses += 1
+        state = build()  # outside the lock: two threads may build the same state once each
+        with self._lock:
+            self._data[key] = state
+            self._data.move_to_end(key)
+            while len(self._data) > self.maxsize:
+                self._data.popitem(last=False)
+        return state
+
+    def clear(self) -> None:
+        with self._lock:
+            self._data.clear()
+            self.hits = self.misses = 0
+
+    def info(self) -> dict[str, int]:
+        with self._lock:
+            return {"hits": self.hits, "misses": self.misses, "maxsize": self.maxsize,
+                    "currsize": len(self._data)}
+
+
+_STATES = _StateCache(STATE_CACHE_SIZE)
+
+
+def linearized_state(problem: ContactProblem, position: float | None = None,
+                     relaxed_modulus: float | None = None, *,
+                     load: float | None = None) -> LinearizedState:
+    """The :class:`LinearizedState` at a position or a load, from a bounded cache.
+
+    The last ``STATE_CACHE_SIZE`` (32) states are kept, keyed on (sphere, surface force, grid,
+    E_inf, position or load), not on the material: a fit that varies τ or E0 at a fixed E_inf
+    decomposes once. ``linearized_state.cache_info()`` reports hits, misses and size;
+    ``linearized_state.cache_clear()`` empties it.
+
+    Parameters
+    ----------
+    problem : ContactProblem
+        System and grid.
+    position : float, optional
+        Mean position h̄0 [m]; give exactly one of ``position`` and ``load``.
+    relaxed_modulus : float, optional
+        E_inf [Pa], > 0; default the problem material's.
+    load : float, optional
+        Mean (static E_inf) force [N], > 0 (:meth:`LinearizedState.at_load`).
+
+    Returns
+    -------
+    LinearizedState
+
+    Raises
+    ------
+    ParameterError
+        Neither or both of ``position`` and ``load``, or an argument out of range.
+    ConvergenceError
+        The static solve (or the load bracketing) failed.
+    """
+    problem = require_problem(problem)
+    if (position is None) == (load is None):
+        raise ParameterError("give exactly one of position [m] and load [N] (mean force), got "
+                             f"position={position!r}, load={load!r}")
+    modulus = _relaxed_modulus(problem, relaxed_modulus)
+    base = (problem.sphere, problem.surface_force, problem.grid, modulus)
+    if load is None:
+        position = require_number("position", position, require_finite,
+                                  "finite [m] (h0, the undeformed apex separation)")
+        return _STATES.get((*base, "position", position),
+                           lambda: LinearizedState.at(problem, position, modulus))
+    load = require_number("load", load, require_positive, "> 0 [N] (finite; the mean force)")
+    return _STATES.get((*base, "load", load),
+                       lambda: LinearizedState.at_load(problem, load, modulus))
+
+
+linearized_state.cache_info = _STATES.info  # type: ignore[attr-defined]
+linearized_state.cache_clear = _STATES.clear  # type: ignore[attr-defined]
 
 
 def linear_stiffness(problem: ContactProblem, position: float, omega: ArrayLike) -> tuple[
         np.ndarray, float]:
     """k*(ω) [N/m] about the static E_inf state at ``position`` [m], and its mean force [N].
+
+    Evaluated through the cached :func:`linearized_state` (one eigen-decomposition per static
+    state, then O(N) per frequency); equal to the direct complex solve per frequency to ≈ 1e-15.
 
     Parameters
     ----------
@@ -61,25 +415,9 @@ def linear_stiffness(problem: ContactProblem, position: float, omega: ArrayLike)
     omega = require_frequencies(omega, allow_zero=True)
     check_effort(f"frequencies of linear_stiffness ({omega.size} requested)", omega.size,
                  MAX_SAMPLES, hint="request fewer frequencies")
-    problem.check_covers(position)
     material = problem.material
-    sol = equilibrium_gap(problem, position, material.relaxed_modulus)
-    stiff = -problem.surface_force.pressure_derivative(sol.gap)  # −p′ (> 0 where repulsive)
-    weights = 2.0 * np.pi * problem.grid.area_weights * stiff  # δF = −Σ weights (δh0 − δu)
-    coupled = problem.influence * stiff[None, :]
-    n = problem.grid.size
-    compliance = 2.0 * np.asarray(material.complex_compliance(omega), dtype=complex)
-    drive = coupled.sum(axis=1)
-    k = np.empty(omega.size, dtype=complex)
-    chunk = max(1, _BATCH_ELEMENTS // (n * n))  # bound the memory of the batched solve
-    diag = np.arange(n)
-    for start in range(0, omega.size, chunk):
-        c = compliance[start:start + chunk]
-        mats = c[:, None, None] * coupled[None, :, :]
-        mats[:, diag, diag] += 1.0
-        du = np.linalg.solve(mats, (c[:, None] * drive[None, :])[..., None])[..., 0]
-        k[start:start + chunk] = (weights[None, :] * (1.0 - du)).sum(axis=1)  # −δF/δh0
-    return k, float(problem.load(sol.pressure))
+    state = linearized_state(problem, position, material.relaxed_modulus)
+    return state.stiffness_for(material, omega), state.mean_force
 
 
 def linear_response(problem: ContactProblem, position: float, eta: float,
