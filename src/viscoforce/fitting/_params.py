@@ -113,3 +113,36 @@ def at_bound(params: lmfit.Parameters, *, rtol: float = 1e-6) -> list[str]:
                 math.isfinite(p.max) and p.max - p.value <= tol):
             hits.append(p.name.removeprefix("log_"))
     return hits
+
+
+def internal_parameters(params: lmfit.Parameters) -> lmfit.Parameters:
+    """The varied internal parameters of ``params`` alone (no expressions: fast to evaluate)."""
+    out = lmfit.Parameters()
+    for p in params.values():
+        if p.expr is None:
+            out.add(p.name, value=p.value, min=p.min, max=p.max, vary=p.vary)
+    return out
+
+
+def to_reported(layout: Sequence[Item], internal: Mapping[str, float]
+                ) -> tuple[dict[str, float], dict[str, dict[str, float]]]:
+    """SPEC values from internal values, and their derivatives d(SPEC)/d(internal).
+
+    A chain member is 10**(Σ of the logs up to it), so d q_k / d log_j = ln 10 · q_k for every
+    j up to k; a signed or bounded quantity is itself.
+    """
+    values: dict[str, float] = {}
+    grads: dict[str, dict[str, float]] = {}
+    ln10 = math.log(10.0)
+    for item in layout:
+        if isinstance(item, Chain):
+            total, logs = 0.0, []
+            for name in item.names:
+                total += float(internal[f"log_{name}"])
+                logs.append(f"log_{name}")
+                values[name] = 10.0 ** total
+                grads[name] = {lg: ln10 * values[name] for lg in logs}
+        else:
+            values[item.name] = float(internal[item.name])
+            grads[item.name] = {item.name: 1.0}
+    return values, grads

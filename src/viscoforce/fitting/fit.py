@@ -18,7 +18,6 @@ from typing import Any
 
 import lmfit
 import numpy as np
-import uncertainties
 import xarray as xr
 
 from viscoforce.exceptions import ConvergenceError, ModelValidityError, ParameterError
@@ -115,15 +114,55 @@ def spectrum_data(ds: xr.Dataset) -> FitData:
 
 @dataclass
 class Outcome:
-    """One lmfit fit and the model that made it."""
+    """One fit: the model, its best SPEC values, their covariance and lmfit's result.
+
+    The minimiser varies the internal parameters only (``log_…``, see
+    :mod:`viscoforce.fitting._params`); the SPEC values and their covariance follow from them
+    exactly (J C Jᵀ with the analytic Jacobian of the transform), which avoids evaluating lmfit
+    expressions on every residual call (they cost more than the models themselves).
+    """
 
     model: FitModel
-    result: lmfit.model.ModelResult
+    result: lmfit.minimizer.MinimizerResult
+    values: dict[str, float]
+    covariance: np.ndarray | None
 
     @property
     def criterion(self) -> dict[str, float]:
         """AIC and BIC of the fit."""
         return {"aic": float(self.result.aic), "bic": float(self.result.bic)}
+
+    def evaluate(self, x: np.ndarray) -> np.ndarray:
+        """The best-fit model over ``x`` (ω or t)."""
+        return self.model.func(x, **self.values)
+
+
+def _residual(model: FitModel, data: FitData):
+    func, layout, x, y = model.func, model.layout, data.x, data.y
+    weights = None if data.weights is None else (
+        data.weights.view(float) if np.iscomplexobj(data.weights) else data.weights)
+
+    def residual(params: lmfit.Parameters) -> np.ndarray:
+        values, _ = _params.to_reported(layout, params.valuesdict())
+        diff = np.asarray(y - func(x, **values))
+        if np.iscomplexobj(diff):
+            diff = diff.view(float)
+        if weights is not None:
+            diff = diff * weights
+        if not np.all(np.isfinite(diff)):
+            raise ArithmeticError("the model gave NaN or inf at these parameters")
+        return diff
+
+    return residual
+
+
+def _outcome(model: FitModel, res: lmfit.minimizer.MinimizerResult) -> Outcome:
+    values, grads = _params.to_reported(model.layout, res.params.valuesdict())
+    cov = None
+    if res.errorbars and res.covar is not None and np.all(np.isfinite(res.covar)):
+        jac = np.array([[grads[n].get(v, 0.0) for v in res.var_names] for n in model.names])
+        cov = jac @ res.covar @ jac.T
+    return Outcome(model, res, {n: values[n] for n in model.names}, cov)
 
 
 def fit_once(model: FitModel, data: FitData, *, starts: int = 2) -> Outcome:
@@ -136,21 +175,21 @@ def fit_once(model: FitModel, data: FitData, *, starts: int = 2) -> Outcome:
     ConvergenceError
         No start gave a finite fit.
     """
-    first = model.guess(data.y, data.x)
+    first = _params.internal_parameters(model.guess(data.y, data.x))
     n_free = sum(1 for p in first.values() if p.vary)
     if data.n_values <= n_free:
         raise ParameterError(
             f"model {model.spec.name!r} with {model.spec.modes} mode(s) has {n_free} free "
             f"parameters but the data give only {data.n_values} values "
             f"({data.y.size} points): fit fewer modes or measure more points")
+    residual = _residual(model, data)
     best: Outcome | None = None
     errors: list[str] = []
     for params in [first, *_alternative_starts(model, first, starts - 1)]:
         try:
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore", RuntimeWarning)
-                res = model.fit(data.y, params, weights=data.weights, method="leastsq",
-                                nan_policy="raise", **{model.independent: data.x})
+                res = lmfit.minimize(residual, params, method="leastsq")
         except (ValueError, ArithmeticError, ParameterError, ConvergenceError) as exc:
             errors.append(str(exc).splitlines()[0])
             continue
@@ -158,7 +197,7 @@ def fit_once(model: FitModel, data: FitData, *, starts: int = 2) -> Outcome:
             errors.append("non-finite chi-square")
             continue
         if best is None or res.chisqr < best.result.chisqr:
-            best = Outcome(model, res)
+            best = _outcome(model, res)
     if best is None:
         raise ConvergenceError(f"model {model.spec.name!r} could not be fitted from any start: "
                                + "; ".join(errors[:3]))
@@ -185,23 +224,22 @@ def _alternative_starts(model: FitModel, first: lmfit.Parameters,
 def summary(outcome: Outcome) -> dict[str, Any]:
     """Values, stderr, correlations and statistics of a fit (SPEC names, SI)."""
     res, names = outcome.result, outcome.model.names
-    uvars = getattr(res, "uvars", None) or {}
-    values = {n: float(res.params[n].value) for n in names}
-    stderr: dict[str, float | None] = {}
+    values = dict(outcome.values)
     corr = np.where(np.eye(len(names), dtype=bool), 1.0, np.nan)
-    if res.errorbars and all(n in uvars for n in names):
-        u = [uvars[n] for n in names]
-        stderr = {n: float(x.std_dev) for n, x in zip(names, u, strict=True)}
-        with np.errstate(invalid="ignore", divide="ignore"):
-            corr = np.asarray(uncertainties.correlation_matrix(u), dtype=float)
-    else:
-        stderr = {n: None for n in names}
-    bounded = _params.at_bound(res.params)
-    message = str(res.message)
+    stderr: dict[str, float | None] = {n: None for n in names}
+    if outcome.covariance is not None:
+        var = np.diag(outcome.covariance)
+        if np.all(var >= 0):
+            sd = np.sqrt(var)
+            stderr = {n: float(e) for n, e in zip(names, sd, strict=True)}
+            with np.errstate(invalid="ignore", divide="ignore"):
+                corr = outcome.covariance / np.outer(sd, sd)
+            np.fill_diagonal(corr, 1.0)
     success = bool(res.success) and all(math.isfinite(v) for v in values.values())
     return {"values": values, "stderr": stderr, "correlation": corr, "success": success,
             "redchi": float(res.redchi), "aic": float(res.aic), "bic": float(res.bic),
-            "nfev": int(res.nfev), "at_bound": bounded, "message": message}
+            "nfev": int(res.nfev), "at_bound": _params.at_bound(res.params),
+            "message": str(res.message)}
 
 
 def result_dataset(outcome: Outcome, data: FitData, *,
@@ -216,11 +254,11 @@ def result_dataset(outcome: Outcome, data: FitData, *,
     if model.independent == "omega":
         lo, hi = float(np.min(data.x)), float(np.max(data.x))
         omega = np.geomspace(lo / 2, hi * 2, FIT_CURVE_POINTS)
-        k = model.eval(outcome.result.params, omega=omega)
+        k = outcome.evaluate(omega)
         curves = {"omega": omega, "fit_stiffness": np.abs(k), "fit_phase": np.degrees(np.angle(k))}
     else:
         t = np.sort(data.x)
-        curves = {"time": t, "fit_force": model.eval(outcome.result.params, t=t)}
+        curves = {"time": t, "fit_force": outcome.evaluate(t)}
     ds = make_fit_result({n: (info["values"][n], info["stderr"][n]) for n in model.names},
                          correlation=info["correlation"], success=info["success"],
                          redchi=info["redchi"], aic=info["aic"], bic=info["bic"],

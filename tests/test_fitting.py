@@ -1,0 +1,300 @@
+"""Fitting layer (issue 13): models recover known parameters, model selection, maps, bad input.
+
+Truths are synthetic spectra from the project's independent forward computations (the SVDA
+closed forms, the exact linear response, the complex compliance), with seeded noise; every fit
+starts from the model's own guess (no hand-set starting values).
+"""
+
+from __future__ import annotations
+
+import warnings
+
+import numpy as np
+import pytest
+
+from viscoforce import PAPER
+from viscoforce.exceptions import ModelValidityError, ParameterError
+from viscoforce.experiments.linear_response import linear_stiffness
+from viscoforce.fitting import fit_spectrum, make_model
+from viscoforce.fitting.fit import fit_data, spectrum_data
+from viscoforce.fitting.maps import fit_map
+from viscoforce.fitting.models import power_law_compliance, svda_position
+from viscoforce.physics.materials import PronySeries, StandardLinearSolid
+from viscoforce.physics.paper import paper_pressure_law
+from viscoforce.physics.particle import Sphere
+from viscoforce.problem import ContactProblem
+from viscoforce.schema import make_spectrum, validate_fit_result
+from viscoforce.svda import svda_complex_stiffness
+
+OMEGA = np.geomspace(10.0, 1e6, 30)
+SVDA_FIXED = {"position": 2e-9, "radius": PAPER.R, "P": PAPER.P,
+              "debye_length": PAPER.debye_length}
+
+
+def _noisy(k, seed, noise=0.01):
+    rng = np.random.default_rng(seed)
+    return k * (1 + noise * rng.standard_normal(k.shape)) * np.exp(
+        1j * noise * rng.standard_normal(k.shape))
+
+
+def _spectrum(k, noise=0.01, mean_force=1e-7, **kw):
+    shape = k.shape
+    return make_spectrum(OMEGA, k, np.full(shape, mean_force), 1e-10,
+                         stderr={"stiffness": noise * np.abs(k),
+                                 "phase": np.full(shape, np.degrees(noise))}, **kw)
+
+
+def _svda_truth():
+    return svda_complex_stiffness(OMEGA, 2e-9, PAPER.E0, PAPER.E_inf, PAPER.tau, PAPER.R,
+                                  PAPER.P, PAPER.debye_length)
+
+
+def _contact_truth(material, radius=PAPER.R, depth=50e-9):
+    return np.sqrt(radius * depth) / material.complex_compliance(OMEGA)
+
+
+TRUTH = {"tau": PAPER.tau, "E0": PAPER.E0, "E_inf": PAPER.E_inf}
+
+
+@pytest.fixture(scope="module")
+def problem():
+    law = paper_pressure_law(PAPER.P, PAPER.debye_length, PAPER.Pw, PAPER.z0)
+    material = StandardLinearSolid(PAPER.E0, PAPER.E_inf, PAPER.tau)
+    return ContactProblem.create(sphere=Sphere(PAPER.R), surface_force=law, material=material,
+                                 deepest_position=-5e-9)
+
+
+# ── each model recovers its parameters ──────────────────────────────────────────────────────────
+
+def test_svda_recovers_noise_free_parameters_from_its_own_guess():
+    result = fit_spectrum(_spectrum(_svda_truth()), "svda", **SVDA_FIXED)
+    validate_fit_result(result)
+    assert int(result["success"]) == 1
+    for name, value in TRUTH.items():
+        assert float(result[name]) == pytest.approx(value, rel=1e-6)
+    assert list(result["param_i"].values) == ["E_inf", "E0", "tau"]
+
+
+def test_svda_position_from_the_mean_force_is_the_static_svda_state():
+    from viscoforce.closed_form import derjaguin_force
+    from viscoforce.svda import svda_static_deformation
+
+    u0 = float(svda_static_deformation(2e-9, PAPER.E_inf, PAPER.R, PAPER.P, PAPER.debye_length))
+    force = float(derjaguin_force(2e-9 - u0, PAPER.R, PAPER.P, PAPER.debye_length))
+    assert svda_position(force, PAPER.E_inf, PAPER.R, PAPER.P, PAPER.debye_length) == \
+        pytest.approx(2e-9, abs=1e-18)
+    fixed = {**SVDA_FIXED, "position": None, "mean_force": force}
+    result = fit_spectrum(_spectrum(_svda_truth()), "svda", **fixed)
+    for name, value in TRUTH.items():
+        assert float(result[name]) == pytest.approx(value, rel=1e-5)
+
+
+@pytest.mark.parametrize("position", [2e-9, -5e-9])
+def test_exact_one_mode_recovers_parameters(problem, position):
+    k, mean = linear_stiffness(problem, position, OMEGA)
+    result = fit_spectrum(_spectrum(k, mean_force=mean), "exact", position=position,
+                          problem=problem)
+    for name, value in TRUTH.items():
+        assert float(result[name]) == pytest.approx(value, rel=1e-5)
+    by_load = fit_spectrum(_spectrum(k, mean_force=mean), "exact", mean_force=mean,
+                           problem=problem)
+    for name, value in TRUTH.items():
+        assert float(by_load[name]) == pytest.approx(value, rel=1e-4)
+
+
+def test_contact_sls_and_prony_and_power_law_recover_parameters():
+    sls = StandardLinearSolid(2e6, 5e5, 0.01)
+    fixed = {"radius": 5e-6, "indentation": 50e-9}
+    r = fit_spectrum(_spectrum(_contact_truth(sls, 5e-6)), "contact", **fixed)
+    for name, value in {"E0": 2e6, "E_inf": 5e5, "tau": 0.01}.items():
+        assert float(r[name]) == pytest.approx(value, rel=1e-6)
+    two = PronySeries.from_moduli([4e6, 1.5e6, 5e5], [1e-4, 1e-2])
+    r = fit_spectrum(_spectrum(_contact_truth(two, 5e-6)), "contact", modes=2, material="prony",
+                     **fixed)
+    for name, value in {"E0": 4e6, "E_1": 1.5e6, "E_inf": 5e5, "tau_1": 1e-4,
+                        "tau_2": 1e-2}.items():
+        assert float(r[name]) == pytest.approx(value, rel=1e-5)
+    k = np.sqrt(5e-6 * 50e-9) / power_law_compliance(OMEGA, 1e7, 2e-7, 0.3)
+    r = fit_spectrum(_spectrum(k), "contact", material="power-law", **fixed)
+    for name, value in {"E0": 1e7, "C1": 2e-7, "m": 0.3}.items():
+        assert float(r[name]) == pytest.approx(value, rel=1e-5)
+
+
+def test_prony_stiffness_recovers_two_modes():
+    k = 10.0 + sum(dk * 1j * OMEGA * t / (1 + 1j * OMEGA * t) for dk, t in ((5.0, 1e-5),
+                                                                              (20.0, 1e-3)))
+    r = fit_spectrum(_spectrum(k), "prony", modes=2)
+    for name, value in {"k_inf": 10.0, "dk_1": 5.0, "dk_2": 20.0, "tau_1": 1e-5,
+                        "tau_2": 1e-3}.items():
+        assert float(r[name]) == pytest.approx(value, rel=1e-5)
+
+
+def test_contact_is_the_deep_contact_limit_of_exact():
+    """k*_exact / (E(ω)√(Rδ0)) → 1 as the force range / indentation → 0 (glassy end slowest)."""
+    material = StandardLinearSolid(1e10, 1e9, 1e-3)
+    omega = np.array([10.0, 1e6])
+    errors = []
+    for decay in (1e-9, 0.3e-9, 0.1e-9):
+        law = paper_pressure_law(1e8, decay, 1e8, decay / 2)
+        prob = ContactProblem.create(sphere=Sphere(PAPER.R), surface_force=law,
+                                     material=material, deepest_position=-100e-9)
+        from viscoforce.solvers.static import static_equilibrium
+
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            state = static_equilibrium(prob, -100e-9)
+        depth = 100e-9 + float(state["h_center"])
+        k, _ = linear_stiffness(prob, -100e-9, omega)
+        ratio = k / (material.complex_modulus(omega) * np.sqrt(PAPER.R * depth))
+        assert abs(ratio[0] - 1) < 2e-3  # relaxed end: Hertz already
+        errors.append(abs(ratio[1] - 1))
+    assert errors[0] > errors[1] > errors[2]
+    assert errors[2] < 0.06
+
+
+# ── model selection ─────────────────────────────────────────────────────────────────────────────
+
+@pytest.mark.parametrize("modes_true", [1, 2])
+def test_modes_auto_picks_the_true_number_and_covers_the_truth(modes_true):
+    material = (StandardLinearSolid(4e6, 5e5, 1e-3) if modes_true == 1 else
+                PronySeries.from_moduli([4e6, 1.5e6, 5e5], [1e-5, 1e-3]))
+    truth = ({"E0": 4e6, "E_inf": 5e5, "tau": 1e-3} if modes_true == 1 else
+             {"E0": 4e6, "E_1": 1.5e6, "E_inf": 5e5, "tau_1": 1e-5, "tau_2": 1e-3})
+    fixed = {"radius": 5e-6, "indentation": 50e-9, "material": "prony"}
+    picked, covered, total = [], 0, 0
+    for seed in range(12):
+        data = _spectrum(_noisy(_contact_truth(material, 5e-6), seed))
+        r = fit_spectrum(data, "contact", modes="auto", **fixed)
+        picked.append(int(r["modes"]))
+        assert list(r["selection_modes"].values)[:2] == [1, 2]
+        if picked[-1] == modes_true:
+            for name, value in truth.items():
+                total += 1
+                covered += abs(float(r[name]) - value) <= 2 * float(r[f"{name}_stderr"])
+    assert picked.count(modes_true) >= 11, picked
+    assert covered >= 0.9 * total, (covered, total)
+
+
+def test_aic_criterion_is_used_and_recorded():
+    data = _spectrum(_noisy(_contact_truth(StandardLinearSolid(4e6, 5e5, 1e-3), 5e-6), 3))
+    r = fit_spectrum(data, "contact", modes="auto", criterion="aic", radius=5e-6,
+                     indentation=50e-9, material="prony")
+    assert r.attrs["criterion"] == "aic"
+    assert float(r["aic"]) == pytest.approx(float(r["selection_aic"].min()))
+
+
+# ── maps ───────────────────────────────────────────────────────────────────────────────────────
+
+def _map_spectrum(ny=2, nx=3):
+    k = np.empty((ny, nx, OMEGA.size), complex)
+    for i in range(ny):
+        for j in range(nx):
+            k[i, j] = _noisy(svda_complex_stiffness(
+                OMEGA, 2e-9, PAPER.E0, PAPER.E_inf * (1 + 0.2 * i), PAPER.tau * (1 + 0.3 * j),
+                PAPER.R, PAPER.P, PAPER.debye_length), 10 * i + j)
+    k[1, 2, 5] = np.nan  # a bad pixel: a failed lock-in point, not flagged
+    return _spectrum(k, dims=("y", "x", "omega"), source="synthetic")
+
+
+def test_map_pixels_are_independent_and_failures_flagged():
+    ds = _map_spectrum()
+    result = fit_map(ds, "svda", scheduler="synchronous", **SVDA_FIXED)
+    validate_fit_result(result)
+    assert result["tau"].dims == ("y", "x")
+    assert result.attrs["n_fits"] == 6 and result.attrs["n_failed"] == 1
+    assert int(result["success"][1, 2]) == 0
+    assert "NaN" in str(result["message"].values[1, 2])
+    single = fit_spectrum(ds.isel(y=0, x=1), "svda", **SVDA_FIXED)
+    assert float(result["tau"][0, 1]) == float(single["tau"])
+    flipped = fit_map(ds.isel(x=slice(None, None, -1)), "svda", scheduler="synchronous",
+                      **SVDA_FIXED)
+    np.testing.assert_array_equal(flipped["tau"].values[:, ::-1], result["tau"].values)
+
+
+def test_map_on_a_local_dask_cluster_equals_the_serial_map():
+    ds = _map_spectrum()
+    serial = fit_map(ds, "svda", scheduler="synchronous", **SVDA_FIXED)
+    parallel = fit_map(ds, "svda", workers=2, progress=False, **SVDA_FIXED)
+    np.testing.assert_array_equal(parallel["tau"].values, serial["tau"].values)
+    np.testing.assert_array_equal(parallel["success"].values, serial["success"].values)
+
+
+def test_unreachable_scheduler_is_a_parameter_error():
+    with pytest.raises(ParameterError, match="cannot reach the dask scheduler"):
+        fit_map(_map_spectrum(), "svda", scheduler="tcp://127.0.0.1:9", progress=False,
+                **SVDA_FIXED)
+
+
+# ── a model that cannot describe the scene, and bad input ───────────────────────────────────────
+
+def test_svda_refuses_contact_and_contact_refuses_precontact(problem):
+    k, mean = linear_stiffness(problem, -5e-9, OMEGA)
+    with pytest.raises(ModelValidityError, match="pre-contact"):
+        fit_spectrum(_spectrum(k, mean_force=mean), "svda", **{**SVDA_FIXED, "position": -5e-9})
+    with pytest.raises(ModelValidityError, match="pre-contact"):
+        fit_spectrum(_spectrum(_svda_truth()), "contact", radius=PAPER.R)
+    with pytest.raises(ModelValidityError, match="indentation"):
+        fit_spectrum(_spectrum(_svda_truth()), "contact", radius=PAPER.R, indentation=-1e-9)
+
+
+@pytest.mark.parametrize("change, match", [
+    (lambda ds: ds.isel(omega=slice(0, 1)), "free parameters"),
+    (lambda ds: ds.assign(stiffness=-ds["stiffness"]), "stiffness must be > 0"),
+    (lambda ds: ds.assign(stiffness=ds["stiffness"].where(ds.omega > 20)), "NaN"),
+    (lambda ds: ds.assign(quality=ds["stiffness"].astype("int8") * 0 + 1), "flagged"),
+])
+def test_bad_spectra_are_refused(change, match):
+    ds = _spectrum(_svda_truth())
+    ds = change(ds)
+    if "quality" in ds:
+        ds["quality"].attrs.update({"flag_values": np.array([0, 1], dtype=np.int8),
+                                    "flag_meanings": "ok phase_outside_passive_range"})
+    with pytest.raises(ParameterError, match=match):
+        fit_spectrum(ds, "svda", **SVDA_FIXED)
+
+
+@pytest.mark.parametrize("kwargs, match", [
+    ({"modes": 0}, "modes"), ({"modes": -1}, "modes"), ({"modes": "two"}, "modes"),
+    ({"modes": "auto"}, "several modes"), ({"criterion": "chi2", "modes": 1}, "criterion"),
+])
+def test_bad_modes_and_criterion(kwargs, match):
+    with pytest.raises(ParameterError, match=match):
+        fit_spectrum(_spectrum(_svda_truth()), "svda", **{**SVDA_FIXED, **kwargs})
+
+
+def test_position_is_required_and_named():
+    with pytest.raises(ParameterError, match="--h0.*median mean_force"):
+        fit_spectrum(_spectrum(_svda_truth()), "svda", radius=PAPER.R, P=PAPER.P,
+                     debye_length=PAPER.debye_length)
+    with pytest.raises(ParameterError, match="model"):
+        make_model("maxwell")
+
+
+def test_a_relaxation_time_outside_the_window_is_not_a_confident_number():
+    """τ far beyond the measured window: it ends on its bound or with a huge stderr."""
+    sls = StandardLinearSolid(2e6, 5e5, 1e3)  # creep time 1000 s, data 10 .. 1e6 rad/s
+    data = _spectrum(_noisy(_contact_truth(sls, 5e-6), 1))
+    r = fit_spectrum(data, "contact", radius=5e-6, indentation=50e-9)
+    tau, err = float(r["tau"]), float(r["tau_stderr"])
+    assert "tau" in r.attrs["at_bound"] or not np.isfinite(err) or err > tau
+
+
+def test_fit_data_of_a_relaxation_recovers_two_exponentials():
+    from viscoforce.fitting.fit import FitData
+
+    t = np.linspace(0, 30, 3000)
+    f = 1e-8 + 5e-8 * np.exp(-t / 0.5) + 2e-8 * np.exp(-t / 8.0)
+    f = f + 1e-11 * np.random.default_rng(0).standard_normal(t.size)
+    r = fit_data(FitData(t, f, None, {}), "relaxation", modes="auto")
+    assert int(r["modes"]) == 2
+    for name, value in {"F_inf": 1e-8, "dF_1": 5e-8, "dF_2": 2e-8, "tau_1": 0.5,
+                        "tau_2": 8.0}.items():
+        assert abs(float(r[name]) - value) < 5 * float(r[f"{name}_stderr"]) + 1e-3 * abs(value)
+
+
+def test_spectrum_weights_follow_the_stderr_columns():
+    ds = _spectrum(_svda_truth(), noise=0.02)
+    data = spectrum_data(ds)
+    k = data.y
+    # χ ≈ 0 at low ω: the real part is weighted by the stiffness stderr
+    assert data.weights.real[0] == pytest.approx(1 / (0.02 * abs(k[0])), rel=0.05)
