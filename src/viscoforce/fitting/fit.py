@@ -107,6 +107,8 @@ def spectrum_data(ds: xr.Dataset) -> FitData:
               "data_flagged": int((~keep).sum())}
     if "source" in ds.attrs:
         source["data_source"] = str(ds.attrs["source"])
+    if "mean_indentation" in ds.variables:
+        source["mean_indentation"] = float(np.nanmedian(ds["mean_indentation"].values))
     return FitData(omega[keep], k[keep], weights[keep], source)
 
 

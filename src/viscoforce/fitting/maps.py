@@ -66,8 +66,11 @@ def fit_block(items: Sequence[FitData | str], model: str, modes: int | str, crit
         if isinstance(data, str):
             out.append({"success": False, "message": data})
             continue
+        own = fixed
+        if model == "contact" and fixed.get("indentation") is None:  # each pixel's own depth
+            own = {**fixed, "indentation": data.source.get("mean_indentation")}
         try:
-            best, _ = select(data, model, modes=modes, criterion=criterion, **fixed)
+            best, _ = select(data, model, modes=modes, criterion=criterion, **own)
         except (ViscoforceError, ValueError, ArithmeticError) as exc:
             out.append({"success": False, "message": str(exc).splitlines()[0]})
             continue
@@ -88,7 +91,7 @@ def cluster(scheduler: str | None = None, workers: int | None = None) -> Iterato
 
     if scheduler is None:
         with LocalCluster(n_workers=workers or 2, threads_per_worker=1, processes=True,
-                          dashboard_address=None) as local, Client(local) as client:
+                          dashboard_address=":0") as local, Client(local) as client:
             yield client
         return
     try:
