@@ -251,6 +251,8 @@ def _single_json(result) -> dict[str, Any]:
             result["selection_modes"].values, result["selection_aic"].values,
             result["selection_bic"].values, strict=True)]
         out["criterion"] = result.attrs.get("criterion", "bic")
+        if "selection_note" in result.attrs:
+            out["selection_note"] = str(result.attrs["selection_note"])
     return out
 
 
@@ -283,6 +285,8 @@ def _print_single(info: dict[str, Any]) -> None:
         print(f"  at a bound (not identified by these data): {', '.join(info['at_bound'])}")
     for row in info.get("selection", []):
         print(f"  candidate {row['modes']} mode(s): AIC {row['aic']:.4g}, BIC {row['bic']:.4g}")
+    if "selection_note" in info:
+        print(f"  note: {info['selection_note']}")
 
 
 def run_fit(args: argparse.Namespace) -> int:

@@ -343,6 +343,10 @@ def fit_data(data: FitData, name: str, *, modes: int | str = 1, criterion: str =
     ds = result_dataset(best, data, selection=selection if modes == "auto" else None)
     if modes == "auto":
         ds.attrs["criterion"] = criterion
+        if best.model.spec.modes == max(row["modes"] for row in selection) >= max_modes:
+            ds.attrs["selection_note"] = (
+                f"the {criterion.upper()} still improved at the largest number of modes tried "
+                f"({max_modes}): more modes may describe these data better")
     return ds
 
 
