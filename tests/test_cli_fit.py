@@ -134,3 +134,18 @@ def test_real_modulation_map_contact_fit(capsys, tmp_path):
     assert 50 < e_inf["value"] < 5e3 and e_inf["stderr"] < e_inf["value"]  # R = 10 µm assumed
     e0 = info["params"]["E0"]  # not identified: the glassy plateau lies beyond 100 Hz
     assert not (e0["stderr"] < e0["value"]) or "E0" in info["at_bound"]
+
+
+def test_fit_and_bode_read_a_spectrum_csv(capsys, tmp_path):
+    k = 10.0 + 20.0 * 1j * OMEGA * 1e-3 / (1 + 1j * OMEGA * 1e-3)
+    path = tmp_path / "spectrum.csv"
+    rows = ["frequency (Hz),stiffness (N/m),phase (deg)"]
+    rows += [f"{w / (2 * np.pi):.10g},{abs(x):.10g},{np.degrees(np.angle(x)):.10g}"
+             for w, x in zip(OMEGA, k, strict=True)]
+    path.write_text("\n".join(rows) + "\n")
+    code, out, err = _run(capsys, "fit", path, "--model", "prony", "--json")
+    assert code == 0, err
+    info = json.loads(out)
+    assert info["params"]["tau_1"]["value"] == pytest.approx(1e-3, rel=1e-6)
+    code, _, err = _run(capsys, "bode", path, "--model", "prony", "--out", tmp_path / "b.png")
+    assert code == 0, err

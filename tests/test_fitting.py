@@ -298,3 +298,20 @@ def test_spectrum_weights_follow_the_stderr_columns():
     k = data.y
     # χ ≈ 0 at low ω: the real part is weighted by the stiffness stderr
     assert data.weights.real[0] == pytest.approx(1 / (0.02 * abs(k[0])), rel=0.05)
+
+
+def test_step_model_recovers_the_material_of_a_simulated_step(problem):
+    """The Fig. 1 step (−5 → −7 nm in 0.1 ms): the exact model's own response, fitted back."""
+    from viscoforce.experiments.drives import Step
+    from viscoforce.fitting.curves import fit_step
+    from viscoforce.solvers.simulate import simulate
+
+    deep = ContactProblem.create(sphere=problem.sphere, surface_force=problem.surface_force,
+                                 material=problem.material, deepest_position=-7e-9)
+    run = simulate(deep, Step(-5e-9, -7e-9, 1e-4), t_end=5e-3,
+                   t_eval=np.linspace(0, 5e-3, 101))
+    guess_material = StandardLinearSolid(3e9, 5e8, 1e-4)  # the fit must not start from truth
+    r = fit_step(run, problem=deep.with_material(guess_material))
+    for name, value in TRUTH.items():
+        assert float(r[name]) == pytest.approx(value, rel=1e-3)
+    assert r["fit_force"].dims == ("time",)
