@@ -49,3 +49,15 @@ def test_readme_python_snippet_runs():
 def test_import_layers_hold():
     proc = subprocess.run(["lint-imports"], cwd=REPO, capture_output=True, text=True, timeout=120)
     assert proc.returncode == 0, proc.stdout[-2000:]
+
+
+def test_top_level_entry_points_are_lazy_and_complete():
+    """The quickstart's names live at the top level; lmfit/matplotlib load only on use."""
+    import subprocess
+    import sys
+
+    code = ("import sys, viscoforce as vf; heavy = [m for m in ('lmfit', 'matplotlib', "
+            "'distributed') if m in sys.modules]; assert not heavy, heavy; "
+            "missing = [n for n in vf.__all__ if getattr(vf, n, None) is None]; "
+            "assert not missing, missing; assert 'fit_spectrum' in dir(vf)")
+    subprocess.run([sys.executable, "-c", code], check=True)

@@ -32,6 +32,47 @@ from viscoforce.solvers.static import static_equilibrium
 
 __version__ = "0.1.0"
 
+#: Entry points imported on first use (``vf.simulate``, ``vf.fit_spectrum``, …): ``import
+#: viscoforce`` stays cheap, and lmfit, dask or matplotlib load only for the jobs that need them.
+_LAZY = {
+    "Hold": "viscoforce.experiments.drives", "Ramp": "viscoforce.experiments.drives",
+    "Step": "viscoforce.experiments.drives", "Triangle": "viscoforce.experiments.drives",
+    "Sinusoid": "viscoforce.experiments.drives", "Sequence": "viscoforce.experiments.drives",
+    "MeasuredTrace": "viscoforce.experiments.drives",
+    "simulate": "viscoforce.solvers.simulate",
+    "spectrum": "viscoforce.experiments.spectroscopy",
+    "sweep": "viscoforce.experiments.spectroscopy",
+    "linear_response": "viscoforce.experiments.linear_response",
+    "load": "viscoforce.io.instruments",
+    "modulation_spectrum": "viscoforce.experiments.modulation",
+    "fit_spectrum": "viscoforce.fitting.fit",
+    "fit_hold": "viscoforce.fitting.curves",
+    "fit_step": "viscoforce.fitting.curves",
+    "fit_map": "viscoforce.fitting.maps",
+    "make_model": "viscoforce.fitting.models",
+    "bode_plot": "viscoforce.plotting", "hysteresis_plot": "viscoforce.plotting",
+    "contact_radius_plot": "viscoforce.plotting", "profile_plot": "viscoforce.plotting",
+    "force_time_plot": "viscoforce.plotting", "fit_curve_plot": "viscoforce.plotting",
+}
+#: Public names whose attribute in the module differs (``vf.load`` is ``load_instrument``).
+_RENAMED = {"load": "load_instrument"}
+
+
+def __getattr__(name: str):
+    """Import a lazy entry point (PEP 562)."""
+    if name not in _LAZY:
+        raise AttributeError(f"module 'viscoforce' has no attribute {name!r}")
+    import importlib
+
+    value = getattr(importlib.import_module(_LAZY[name]), _RENAMED.get(name, name))
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(_LAZY))
+
+
 __all__ = [
     "ContactProblem",
     "ConvergenceError",
@@ -59,4 +100,5 @@ __all__ = [
     "paper_pressure_law",
     "static_equilibrium",
     "__version__",
+    *_LAZY,
 ]
