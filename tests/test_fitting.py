@@ -315,3 +315,14 @@ def test_step_model_recovers_the_material_of_a_simulated_step(problem):
     for name, value in TRUTH.items():
         assert float(r[name]) == pytest.approx(value, rel=1e-3)
     assert r["fit_force"].dims == ("time",)
+
+
+def test_svda_kernel_equals_the_checked_closed_form():
+    from viscoforce.svda import svda_stiffness_kernel
+
+    for position in (0.5e-9, 2e-9, 20e-9):
+        checked = svda_complex_stiffness(OMEGA, position, PAPER.E0, PAPER.E_inf, PAPER.tau,
+                                         PAPER.R, PAPER.P, PAPER.debye_length)
+        fast = svda_stiffness_kernel(OMEGA, position, PAPER.E0, PAPER.E_inf, PAPER.tau, PAPER.R,
+                                     PAPER.P, 1 / PAPER.debye_length)
+        np.testing.assert_allclose(fast, checked, rtol=1e-14)

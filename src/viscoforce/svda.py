@@ -397,6 +397,23 @@ def svda_harmonic_response(omega: ArrayLike, position: float, eta: float, E0: fl
     return response
 
 
+def svda_stiffness_kernel(omega: FloatArray, position: float, E0: float, E_inf: float,  # noqa: N803
+                          tau: float, radius: float, P: float, kappa: float) -> np.ndarray:
+    """SVDA k*(ω) [N/m] without input checks, for inner loops (fits) over validated inputs.
+
+    The same algebra as :func:`svda_complex_stiffness` for a repulsion (P > 0): u0 = −W0(z)/κ
+    with log z = ½ log(8πRκ) + log(P/E_inf) − κh̄0, c = −κu0 E_inf/E0, F̄ = (2πRP/κ) e^{−κ(h̄0−u0)}.
+    The caller guarantees ω ≥ 0, R, P, κ > 0 and E0 > E_inf > 0, τ > 0 (all finite).
+    """
+    log_z = (0.5 * (math.log(8.0 * math.pi) + math.log(radius) + math.log(kappa))
+             + math.log(P) - math.log(E_inf) - kappa * position)
+    u0 = -float(_omega_log_w(np.array([log_z]))[0]) / kappa
+    c = -kappa * u0 * E_inf / E0
+    mean_force = 2.0 * math.pi * radius * P / kappa * math.exp(-kappa * (position - u0))
+    x = omega * tau
+    return (mean_force * kappa) * (1.0 + 1j * x) / ((1.0 + (E0 / E_inf) * c) + 1j * x * (1.0 + c))
+
+
 def svda_complex_stiffness(omega: ArrayLike, position: float, E0: float, E_inf: float,
                            tau: float, radius: float, P: float,
                            debye_length: float) -> np.ndarray:

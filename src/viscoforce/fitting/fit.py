@@ -67,12 +67,42 @@ def spectrum_data(ds: xr.Dataset) -> FitData:
     if extra:
         raise ParameterError(f"one spectrum is over 'omega' only; this one also has {extra} "
                              "(fit it as a map, or select one)")
-    omega = np.asarray(ds["omega"].values, dtype=float)
-    stiffness = np.asarray(ds["stiffness"].values, dtype=float)
-    phase = np.radians(np.asarray(ds["phase"].values, dtype=float))
-    keep = np.ones(omega.size, dtype=bool)
-    if "quality" in ds.variables:
-        keep &= np.asarray(ds["quality"].values) == 0
+    arrays = spectrum_arrays(ds, ())
+    source = {"data_kind": "spectrum"}
+    if "source" in ds.attrs:
+        source["data_source"] = str(ds.attrs["source"])
+    return pixel_fit_data(np.asarray(ds["omega"].values, dtype=float),
+                          {k: v[0] for k, v in arrays.items()}, source)
+
+
+def spectrum_arrays(ds: xr.Dataset, dims: tuple[str, ...]) -> dict[str, np.ndarray]:
+    """The spectrum's variables as (pixel, omega) arrays (pixels in C order over ``dims``).
+
+    Keys: ``stiffness``, ``phase`` [rad], ``stiffness_stderr``, ``phase_stderr`` [rad] (NaN when
+    absent), ``quality`` (0 when absent), ``mean_indentation`` (NaN when absent).
+    """
+    order = (*dims, "omega")
+    n_omega = ds.sizes["omega"]
+
+    def grab(name: str, fill: float) -> np.ndarray:
+        if name not in ds.variables:
+            return np.full((int(np.prod([ds.sizes[d] for d in dims])), n_omega), fill)
+        da = ds[name]
+        da = da.broadcast_like(ds["stiffness"]).transpose(*order)
+        return np.asarray(da.values, dtype=float).reshape(-1, n_omega)
+
+    out = {"stiffness": grab("stiffness", np.nan), "phase": np.radians(grab("phase", np.nan)),
+           "stiffness_stderr": grab("stiffness_stderr", np.nan),
+           "phase_stderr": np.radians(grab("phase_stderr", np.nan)),
+           "quality": grab("quality", 0.0), "mean_indentation": grab("mean_indentation", np.nan)}
+    return out
+
+
+def pixel_fit_data(omega: np.ndarray, a: Mapping[str, np.ndarray],
+                   source: Mapping[str, Any]) -> FitData:
+    """FitData of one pixel's arrays (see :func:`spectrum_arrays`), with the checks of one spectrum."""
+    stiffness, phase = a["stiffness"], a["phase"]
+    keep = a["quality"] == 0
     if not keep.any():
         raise ParameterError(f"every one of the {omega.size} spectrum points is flagged in "
                              "'quality' (see its comment): nothing to fit; correct the phase "
@@ -89,11 +119,9 @@ def spectrum_data(ds: xr.Dataset) -> FitData:
                              f"{omega[i]:.4g} rad/s (point {i})")
     k = stiffness * np.exp(1j * phase)
     weights = None
-    if "stiffness_stderr" in ds.variables or "phase_stderr" in ds.variables:
-        s_err = (np.asarray(ds["stiffness_stderr"].values, dtype=float)
-                 if "stiffness_stderr" in ds.variables else np.full(omega.size, np.nan))
-        p_err = (np.radians(np.asarray(ds["phase_stderr"].values, dtype=float))
-                 if "phase_stderr" in ds.variables else s_err / stiffness)
+    s_err, p_err = a["stiffness_stderr"], a["phase_stderr"]
+    if np.isfinite(s_err[keep]).any() or np.isfinite(p_err[keep]).any():
+        p_err = np.where(np.isfinite(p_err), p_err, s_err / stiffness)
         s_err = np.where(np.isfinite(s_err), s_err, p_err * stiffness)
         c, s = np.cos(phase), np.sin(phase)
         sig_re = np.sqrt((c * s_err) ** 2 + (stiffness * s * p_err) ** 2)
@@ -103,13 +131,11 @@ def spectrum_data(ds: xr.Dataset) -> FitData:
             weights = 1.0 / sig_re + 1j / sig_im
     if weights is None:
         weights = (1.0 + 1j) / np.abs(k)
-    source = {"data_kind": "spectrum", "data_points": int(keep.sum()),
-              "data_flagged": int((~keep).sum())}
-    if "source" in ds.attrs:
-        source["data_source"] = str(ds.attrs["source"])
-    if "mean_indentation" in ds.variables:
-        source["mean_indentation"] = float(np.nanmedian(ds["mean_indentation"].values))
-    return FitData(omega[keep], k[keep], weights[keep], source)
+    info = {**source, "data_points": int(keep.sum()), "data_flagged": int((~keep).sum())}
+    depth = a["mean_indentation"]
+    if np.isfinite(depth).any():
+        info["mean_indentation"] = float(np.nanmedian(depth))
+    return FitData(omega[keep], k[keep], weights[keep], info)
 
 
 # ── one fit ─────────────────────────────────────────────────────────────────────────────────────

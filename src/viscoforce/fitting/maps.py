@@ -21,9 +21,9 @@ import xarray as xr
 
 from viscoforce.exceptions import ParameterError, ViscoforceError
 from viscoforce.fitting.curves import hold_data
-from viscoforce.fitting.fit import FitData, select, spectrum_data, summary
+from viscoforce.fitting.fit import FitData, pixel_fit_data, select, spectrum_arrays, summary
 from viscoforce.fitting.models import SPECTRUM_MODELS
-from viscoforce.schema import validate_fit_result
+from viscoforce.schema import validate_fit_result, validate_spectrum
 from viscoforce.schema.fit import SUCCESS_FLAGS, parameter_units
 
 #: Seconds to wait for a scheduler before giving up.
@@ -36,12 +36,15 @@ def pixel_data(ds: xr.Dataset, model: str, *, segment: int | None = None
                ) -> tuple[list[FitData | str], tuple[str, ...], dict[str, Any]]:
     """Per-pixel fit data of a map (or the reason it has none), the map dims and coords."""
     if model in SPECTRUM_MODELS:
+        validate_spectrum(ds, require=("stiffness", "phase"))
         dims = tuple(str(d) for d in ds["stiffness"].dims if d != "omega")
-        stacked = ds.stack(pixel=dims) if dims else ds.expand_dims(pixel=[0])
-        out: list[FitData | str] = []
-        for i in range(stacked.sizes["pixel"]):
-            pixel = stacked.isel(pixel=i).drop_vars(["pixel", *dims], errors="ignore")
-            out.append(_or_reason(lambda p=pixel: spectrum_data(p)))
+        arrays = spectrum_arrays(ds, dims)
+        omega = np.asarray(ds["omega"].values, dtype=float)
+        source = {"data_kind": "spectrum"}
+        out: list[FitData | str] = [
+            _or_reason(lambda i=i: pixel_fit_data(omega, {k: v[i] for k, v in arrays.items()},
+                                                  source))
+            for i in range(arrays["stiffness"].shape[0])]
         coords = {d: ds[d].values for d in dims if d in ds.coords}
         shape = {d: ds.sizes[d] for d in dims}
         return out, dims, {"coords": coords, "shape": shape}

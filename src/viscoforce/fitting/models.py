@@ -307,8 +307,14 @@ def _svda_model(spec: ModelSpec) -> FitModel:
             return float(position)
         return svda_position(mean_force, v["E_inf"], radius, p_amp, debye)
 
+    from viscoforce.closed_form import require_exponential_law
+    from viscoforce.svda import svda_stiffness_kernel
+
+    radius, p_amp, kappa = require_exponential_law(radius, p_amp, debye)  # once, not per call
+
     def function(omega: np.ndarray, v: Mapping[str, float]) -> np.ndarray:
-        return closed_form_svda(omega, mean_position(v), v, radius, p_amp, debye)
+        return svda_stiffness_kernel(np.asarray(omega, dtype=float), mean_position(v), v["E0"],
+                                     v["E_inf"], v["tau"], radius, p_amp, kappa)
 
     def guesser(k: np.ndarray, omega: np.ndarray) -> dict[str, float]:
         feats = SpectrumFeatures.of(k, omega)
@@ -319,15 +325,6 @@ def _svda_model(spec: ModelSpec) -> FitModel:
     model = FitModel(spec, function, _material_layout(1), "omega", guesser, _omega_window)
     model.mean_position = mean_position  # type: ignore[attr-defined]
     return model
-
-
-def closed_form_svda(omega: np.ndarray, position: float, v: Mapping[str, float], radius: float,
-                     P: float, debye_length: float) -> np.ndarray:  # noqa: N803
-    """SVDA k*(ω) (Eqs. 23–26) for SPEC parameters ``v``."""
-    from viscoforce.svda import svda_complex_stiffness
-
-    return svda_complex_stiffness(omega, position, v["E0"], v["E_inf"], v["tau"], radius, P,
-                                  debye_length)
 
 
 def check_svda_precontact(position: float, E_inf: float, radius: float, P: float,  # noqa: N803
