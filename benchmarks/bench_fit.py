@@ -327,10 +327,12 @@ class StepTimers:
     """
 
     def __init__(self):
+        from viscoforce import svda
         from viscoforce.experiments import linear_response
         from viscoforce.fitting import fit, models
 
-        self.targets = {"evaluations": [(models, "closed_form_svda"), (models, "exact_stiffness")],
+        self.targets = {"evaluations": [(svda, "svda_stiffness_kernel"),
+                                        (models, "exact_stiffness")],
                         "states": [(linear_response, "linearized_state")],
                         "guess": [(models.FitModel, "guess")],
                         "spectrum_data": [(fit, "spectrum_data")],
