@@ -21,8 +21,9 @@ from viscoforce.cli._args import DIRECTORY, Output, UsageError, add_outputs
 __all__ = ["SUBCOMMANDS", "find_examples"]
 
 #: The bundled files (in ``data_examples/``) the demo reads.
-SYNTHETIC = "modulation_example.jpk-force"
-SYNTHETIC_TRUTH = "modulation_example.json"
+SYNTHETIC = "sls_modulation.jpk-force"
+#: Its truth (``data_examples/make_examples.py``: TRUE_SLS at H0 with the paper's system).
+SYNTHETIC_TRUTH = {"E0": 5e9, "E_inf": 1e9, "tau": 5e-3, "h0": -5e-9}
 REAL = "real/modulation-map.jpk-force-map"
 #: Tip radius assumed for the real file (the file does not say).
 REAL_TIP_RADIUS = 10e-6
@@ -76,19 +77,18 @@ def _synthetic(folder: Path, out: Path, report: dict[str, Any]) -> Any:
     from viscoforce.fitting.fit import fit_spectrum
     from viscoforce.io.instruments import load_instrument
     from viscoforce.physics.materials import StandardLinearSolid
-    from viscoforce.physics.paper import paper_pressure_law
+    from viscoforce.physics.paper import PAPER, paper_pressure_law
     from viscoforce.physics.particle import Sphere
     from viscoforce.plotting import bode_plot
     from viscoforce.problem import ContactProblem
     from viscoforce.schema import select_curve
 
-    truth = json.loads((folder / SYNTHETIC_TRUTH).read_text())
+    truth = dict(SYNTHETIC_TRUTH)
     start = time.perf_counter()
     curves = load_instrument(folder / SYNTHETIC)
     spec = modulation_spectrum(select_curve(curves, 0) if curves.sizes["curve"] > 1 else curves)
     spec = spec.isel(curve=0) if "curve" in spec.dims else spec
-    law = paper_pressure_law(truth["P"], truth["debye_length"], truth["Pw"], truth["z0"])
-    problem = ContactProblem.create(sphere=Sphere(truth["R"]), surface_force=law,
+    problem = ContactProblem.create(sphere=Sphere(PAPER.R), surface_force=paper_pressure_law(),
                                     material=StandardLinearSolid(1e10, 1e9, 1e-3),
                                     deepest_position=truth["h0"])
     fit = fit_spectrum(spec, "exact", modes="auto", position=truth["h0"], problem=problem)
@@ -116,9 +116,12 @@ def _loop(fit, problem, out: Path, report: dict[str, Any]) -> None:
     material = material_from({n: float(fit[n]) for n in fit["param_i"].values}, modes)
     deep = problem.with_material(material)
     start = time.perf_counter()
-    run = simulate(deep, Triangle.from_speed(10e-9, -5e-9, 5e-6), progress=False)
+    run = simulate(deep, Triangle(10e-9, -5e-9, 5e-6), progress=False)
     elapsed = time.perf_counter() - start
-    _save_figure(hysteresis_plot(run), str(out / "loop.png"))
+    handle = hysteresis_plot(run)
+    handle.ax.set_title("exact solver, fitted material, 5 µm/s: loading (solid), unloading "
+                        "(dashed)", fontsize="medium")
+    _save_figure(handle, str(out / "loop.png"))
     peak = float(run["force"].max())
     print(f"2. exact solver, fitted material, triangle 10 → −5 → 10 nm at 5 µm/s: peak force "
           f"{peak * 1e6:.3g} µN, hysteresis loop in loop.png ({elapsed:.1f} s)")
