@@ -5,8 +5,11 @@ next), so the results do not depend on the order or on the partition into tasks.
 cannot be fitted is flagged (``success`` = 0, the reason in ``message``) and never stops the map.
 
 ``scheduler=None`` starts a local cluster (``workers`` processes × 1 thread; BLAS inside the
-workers is the user's setting); an address (``tcp://host:8786``) uses a running scheduler and
-computes nothing locally; ``"synchronous"`` fits in this process (tests, tiny maps).
+workers is the user's setting) — except for maps of at most :data:`SMALL_MAP` pixels without
+``workers``, fitted in this process (a cluster would cost more than it saves); an address
+(``tcp://host:8786``) uses a running scheduler and computes nothing locally; ``"synchronous"``
+fits in this process. A script that starts a local cluster must guard its entry point with
+``if __name__ == "__main__":`` (dask starts the workers as fresh processes that import it).
 """
 
 from __future__ import annotations
@@ -30,6 +33,9 @@ from viscoforce.schema.fit import SUCCESS_FLAGS, parameter_units
 CONNECT_TIMEOUT = 10.0
 #: Pixels per task: enough to amortise the task overhead, small enough to balance the load.
 MAX_BLOCK = 64
+#: Maps up to this many pixels are fitted in this process when neither ``scheduler`` nor
+#: ``workers`` is given: starting a local cluster (3–4 s) costs more than fitting them.
+SMALL_MAP = 64
 
 
 def pixel_data(ds: xr.Dataset, model: str, *, segment: int | None = None
@@ -121,6 +127,8 @@ def fit_map(ds: xr.Dataset, model: str, *, modes: int | str = 1, criterion: str 
     """
     items, dims, layout = pixel_data(ds, model, segment=segment)
     n = len(items)
+    if scheduler is None and workers is None and n <= SMALL_MAP:
+        scheduler = "synchronous"
     if scheduler == "synchronous":
         results = fit_block(items, model, modes, criterion, fixed)
     else:
