@@ -61,3 +61,21 @@ def test_top_level_entry_points_are_lazy_and_complete():
             "missing = [n for n in vf.__all__ if getattr(vf, n, None) is None]; "
             "assert not missing, missing; assert 'fit_spectrum' in dir(vf)")
     subprocess.run([sys.executable, "-c", code], check=True)
+
+
+def test_readme_quickstart_runs(tmp_path, monkeypatch):
+    """The README's Python block runs as written (top-level names only) and prints τ back."""
+    import re
+    from pathlib import Path
+
+    root = Path(__file__).resolve().parents[1]
+    block = re.search(r"## Python\n\n```python\n(.*?)```", (root / "README.md").read_text(),
+                      re.S).group(1)
+    assert "from viscoforce." not in block and len(block.splitlines()) <= 30
+    monkeypatch.chdir(root)
+    block = block.replace('savefig("loop.png")', f'savefig(r"{tmp_path / "loop.png"}")')
+    block = block.replace('savefig("bode.png")', f'savefig(r"{tmp_path / "bode.png"}")')
+    namespace: dict = {}
+    exec(compile(block, "README.md", "exec"), namespace)  # noqa: S102
+    assert abs(float(namespace["fit"].tau) - 1e-3) < 1e-9
+    assert (tmp_path / "bode.png").stat().st_size > 0
