@@ -10,21 +10,25 @@ What it measures:
    (extend, pause, six sine segments 300, 3, 100, 30, 1, 10 Hz, retract; its point counts and
    durations), written into a temporary folder with the property/encoder helpers of
    tests/test_jpk.py, then read and demodulated in blocks of ``--block`` curves: each block is
-   ``jpk_to_curves(read_jpk(path), curves=block)`` then ``modulation_spectrum`` (spectra
-   concatenated along ``curve``), timed three ways:
+   ``modulation_spectrum(archive, curves=block)`` (the library path: ``jpk_to_curves`` then the
+   lock-in; spectra concatenated along ``curve``), timed three ways:
 
    - ``dask``: one task per block on a ``LocalCluster(n_workers=2, threads_per_worker=1)`` (or
      the scheduler at ``--scheduler ADDRESS``); memory = peak RSS of the workers plus this process;
    - ``serial``: the same blocks one after the other in this process, on the first
      ``--serial-curves`` curves, extrapolated linearly to the whole map;
-   - ``as_is``: one block of ``--as-is-curves`` curves through ``JPKArchive.curve``, which reopens
-     the zip (and re-parses its whole central directory) for every curve, extrapolated.
+   - ``reopen``: ``--reopen-curves`` curves in one block that reads the map itself
+     (``--open path``: ``read_jpk`` scans the member list and parses the zip's whole central
+     directory per block), extrapolated: what not sharing an archive between blocks costs.
 
-   By default (``--open worker``) dask and serial use an archive wrapper (:class:`OpenArchive`)
-   scanned and opened once per process and kept open — a prototype of the library fix;
-   ``--open task`` opens it once per block, ``--open library`` times the library as is. One
-   block is profiled (cProfile) and its time split into zip directory, inflation, property
-   parsing, raw decoding, dataset building and lock-in.
+   By default (``--open archive``) the map is read once (``read_jpk``: member list, headers and
+   the zip's central directory, timed inside the dask wall time) and its
+   :class:`~viscoforce.io.jpk.JPKArchive` is what the blocks receive: sent once to every dask
+   worker (``client.scatter(..., broadcast=True)``; it pickles with its member index and
+   without its file handle), where it opens the file on its first block and keeps it open, and
+   used directly by the serial run; ``--open path`` gives every block the path instead. One block is profiled
+   (cProfile) and its time split into zip directory, inflation, property parsing, raw decoding,
+   dataset building and lock-in.
 3. PASS/FAIL of the dask run against the targets (<= 30 s, <= 1 GiB on 2 cores).
 
 BLAS is pinned to one thread (OPENBLAS_NUM_THREADS=1 before NumPy loads, plus threadpoolctl) here
@@ -50,7 +54,6 @@ import sys  # noqa: E402
 import tempfile  # noqa: E402
 import time  # noqa: E402
 import tracemalloc  # noqa: E402
-import types  # noqa: E402
 import zipfile  # noqa: E402
 from contextlib import contextmanager  # noqa: E402
 from pathlib import Path  # noqa: E402
@@ -94,13 +97,13 @@ LAYOUT = (("extend", "z-extend-force", 1200, 0.6, None),
 AMPLITUDE = 1.5e-8            # height modulation amplitude [m], as in the real map
 V_ENC_MULT = 1e-6             # finer vDeflection encoder than test_jpk's (2e-14 m per count)
 HEIGHT0 = 2e-5                # absolute height of the contact point [m]
-#: How a block reaches the archive: ``library`` read_jpk + JPKArchive.curve (the zip reopened
-#: per curve), ``task`` one read_jpk + open zip per block, ``worker`` one per process (cached).
-OPEN_MODES = ("library", "task", "worker")
+#: What a block receives: ``archive`` the JPKArchive read once (its member index travels with
+#: it; one open file per process, kept across blocks), ``path`` the file (read_jpk per block).
+OPEN_MODES = ("archive", "path")
 DEFAULT_GRID, QUICK_GRID = 64, 4
 DEFAULT_BLOCK, QUICK_BLOCK = 16, 4
 DEFAULT_SERIAL, QUICK_SERIAL = 512, 8
-DEFAULT_AS_IS, QUICK_AS_IS = 4, 2
+DEFAULT_REOPEN, QUICK_REOPEN = 4, 2
 #: Top-level keys of load.json.
 JSON_KEYS = ("schema", "created", "quick", "machine", "target", "settings", "real", "synthetic",
              "summary", "files")
@@ -237,69 +240,14 @@ def write_synthetic_map(path: Path, grid: int, *, seed: int = 0) -> dict:
 
 # ── reading blocks ───────────────────────────────────────────────────────────────────────────────
 
-class OpenArchive(jpk.JPKArchive):
-    """A JPKArchive whose ``curve(i)`` reuses one open zip (prototype of the library fix).
+def block_spectrum(source: jpk.JPKArchive | str, indices: list[int]) -> xr.Dataset:
+    """Read curves ``indices`` and demodulate them (one dask task); see :data:`OPEN_MODES`.
 
-    ``JPKArchive.curve`` opens the file for every curve, and ``zipfile.ZipFile`` parses the
-    whole central directory on opening — O(members) per curve, O(curves²) per map. Use as a
-    context manager; outside it, ``curve`` falls back to the library method.
+    ``source`` is the map's JPKArchive (its file handle kept open across blocks) or its path
+    (read and closed within the block).
     """
-
-    def __enter__(self):
-        (layout,) = self._layouts          # a plain force map (no zip of archives)
-        object.__setattr__(self, "_zf", zipfile.ZipFile(self.path))
-        object.__setattr__(self, "_layout", layout)
-        return self
-
-    def __exit__(self, *exc):
-        self.__dict__.pop("_zf").close()
-
-    def curve(self, i: int) -> jpk.JPKCurve:
-        zf = self.__dict__.get("_zf")
-        if zf is None:
-            return super().curve(i)
-        return jpk._read_curve(zf, self._layout, i, i)
-
-
-def open_archive(path: str | Path) -> OpenArchive:
-    a = jpk.read_jpk(path)
-    return OpenArchive(path=a.path, kind=a.kind, n_curves=a.n_curves, grid=a.grid,
-                       metadata=a.metadata, _layouts=a._layouts)
-
-
-def worker_archive(path: str) -> OpenArchive:
-    """This process's open :class:`OpenArchive` of ``path`` (scanned and opened once)."""
-    cache = sys.modules.setdefault("_bench_load_cache", types.ModuleType("_bench_load_cache"))
-    key = (str(path), os.stat(path).st_mtime_ns)
-    archive = cache.__dict__.get("archives", {}).get(key)
-    if archive is None:
-        archive = open_archive(path).__enter__()
-        cache.__dict__.setdefault("archives", {})[key] = archive
-    return archive
-
-
-def close_worker_archives() -> None:
-    cache = sys.modules.get("_bench_load_cache")
-    for archive in getattr(cache, "archives", {}).values():
-        archive.__exit__(None, None, None)
-    if cache is not None:
-        cache.archives = {}
-
-
-def load_block(path: str, indices: list[int], open_mode: str) -> xr.Dataset:
-    """The curves dataset of ``indices``; see :data:`OPEN_MODES` for ``open_mode``."""
-    if open_mode == "worker":
-        return jpk_to_curves(worker_archive(path), curves=indices)
-    if open_mode == "task":
-        with open_archive(path) as archive:
-            return jpk_to_curves(archive, curves=indices)
-    return jpk_to_curves(jpk.read_jpk(path), curves=indices)
-
-
-def block_spectrum(path: str, indices: list[int], open_mode: str = "worker") -> xr.Dataset:
-    """Read curves ``indices`` of the map at ``path`` and demodulate them (one dask task)."""
     with threadpool_limits(limits=1, user_api="blas"):
-        spec = modulation_spectrum(load_block(path, indices, open_mode))
+        spec = modulation_spectrum(source, curves=indices)
     return spec.assign_coords(curve=np.asarray(indices, dtype=np.int32))
 
 
@@ -355,19 +303,28 @@ def run_real(path: Path, rows: list[dict]) -> dict:
 
 
 def run_serial(path: Path, n: int, block: int, open_mode: str) -> dict:
+    """Blocks one after the other in this process (``archive``: read once first, not timed)."""
     times, peaks = [], []
-    for indices in blocks_of(n, block):
-        box: dict = {}
-        t0 = time.perf_counter()
-        block_spectrum(str(path), indices, open_mode)
-        times.append(time.perf_counter() - t0)
-        if not peaks:  # one traced block for its memory
-            with traced(box):
-                block_spectrum(str(path), indices, open_mode)
-            peaks.append(box["peak_bytes"])
+    t0 = time.perf_counter()
+    source = jpk.read_jpk(path) if open_mode == "archive" else str(path)
+    read_s = time.perf_counter() - t0
+    try:
+        for indices in blocks_of(n, block):
+            box: dict = {}
+            t0 = time.perf_counter()
+            block_spectrum(source, indices)
+            times.append(time.perf_counter() - t0)
+            if not peaks:  # one traced block for its memory
+                with traced(box):
+                    block_spectrum(source, indices)
+                peaks.append(box["peak_bytes"])
+    finally:
+        if isinstance(source, jpk.JPKArchive):
+            source.close()
     total = sum(times)
     return {"curves": n, "blocks": len(times), "wall_s": total, "per_curve_s": total / n,
-            "block_tracemalloc_peak_bytes": peaks[0], "open_mode": open_mode}
+            "read_jpk_s": read_s, "block_tracemalloc_peak_bytes": peaks[0],
+            "open_mode": open_mode}
 
 
 def profile_block(path: Path, indices: list[int], open_mode: str) -> dict:
@@ -375,16 +332,10 @@ def profile_block(path: Path, indices: list[int], open_mode: str) -> dict:
     prof = cProfile.Profile()
     t0 = time.perf_counter()
     prof.enable()
-    if open_mode == "worker":
-        archive = worker_archive(str(path))
-    elif open_mode == "task":
-        archive = open_archive(path).__enter__()
-    else:
-        archive = jpk.read_jpk(path)
+    archive = jpk.read_jpk(path)   # both modes read the map once here
     t_open = time.perf_counter()
     curves = jpk_to_curves(archive, curves=indices)
-    if open_mode == "task":
-        archive.__exit__(None, None, None)
+    archive.close()
     t_load = time.perf_counter()
     modulation_spectrum(curves)
     t_spec = time.perf_counter()
@@ -403,7 +354,7 @@ def profile_block(path: Path, indices: list[int], open_mode: str) -> dict:
               "raw_decode_s": cum("jpk.py", "_decode_raw"),
               "jpk_to_curves_s": t_load - t_open,
               "lockin_modulation_spectrum_s": t_spec - t_load,
-              "demodulate_s": cum("lockin", "demodulate")}
+              "demodulate_s": cum("lockin", "demodulate") + cum("lockin", "harmonics")}
     return {"curves": len(indices), "open_mode": open_mode, "profiled_wall_s": t_spec - t0,
             "note": "cProfile cumulative times (inflated by profiling); stages overlap: "
                     "jpk_to_curves includes the zip directory, inflation, property parsing "
@@ -437,7 +388,14 @@ def run_dask(path: Path, n: int, block: int, open_mode: str, scheduler: str | No
         threads = sum(w["nthreads"] for w in info["workers"].values())
         blas = client.run(_worker_blas)
         t0 = time.perf_counter()
-        futures = [client.submit(block_spectrum, str(path), idx, open_mode, pure=False)
+        if open_mode == "archive":  # read once, one copy per worker (without its file handle)
+            archive = jpk.read_jpk(path)
+            source = client.scatter(archive, broadcast=True, hash=False)
+            archive.close()
+        else:
+            source = str(path)
+        t_read = time.perf_counter() - t0
+        futures = [client.submit(block_spectrum, source, idx, pure=False)
                    for idx in blocks_of(n, block)]
         wait(futures)
         parts = client.gather(futures)
@@ -449,7 +407,8 @@ def run_dask(path: Path, n: int, block: int, open_mode: str, scheduler: str | No
         client.close()
         if cluster is not None:
             cluster.close()
-    return {"curves": n, "blocks": len(futures), "wall_s": wall, "tasks_s": t_tasks,
+    return {"curves": n, "blocks": len(futures), "wall_s": wall, "read_scatter_s": t_read,
+            "tasks_s": t_tasks,
             "concat_s": wall - t_tasks, "cluster_startup_s": startup,
             "per_curve_s": wall / n, "workers": n_workers, "threads": threads,
             "worker_blas_threads": sorted({t for v in blas.values() for t in v}),
@@ -492,12 +451,12 @@ def parse(argv: list[str] | None) -> argparse.Namespace:
     p.add_argument("--block", type=int, default=None, help="curves per task")
     p.add_argument("--serial-curves", type=int, default=None,
                    help=f"curves timed serially (default {DEFAULT_SERIAL}; 0: all)")
-    p.add_argument("--as-is-curves", type=int, default=None,
-                   help="curves timed through the unmodified JPKArchive.curve")
-    p.add_argument("--open", dest="open_mode", choices=OPEN_MODES, default="worker",
-                   help="how serial and dask blocks open the archive (default worker: scanned "
-                        "and opened once per process; task: once per block; library: "
-                        "JPKArchive.curve as is, the zip reopened per curve)")
+    p.add_argument("--reopen-curves", type=int, default=None,
+                   help=f"curves timed in one block that reads the map itself (default "
+                        f"{DEFAULT_REOPEN}, {QUICK_REOPEN} quick)")
+    p.add_argument("--open", dest="open_mode", choices=OPEN_MODES, default="archive",
+                   help="what serial and dask blocks receive (default archive: the JPKArchive "
+                        "read once, one open zip per process; path: the file, read per block)")
     p.add_argument("--real", type=Path, default=REAL_MAP, help="the real 4x4 map")
     return p.parse_args(argv)
 
@@ -510,7 +469,7 @@ def main(argv: list[str] | None = None) -> int:
     serial_n = args.serial_curves if args.serial_curves is not None else (
         QUICK_SERIAL if args.quick else DEFAULT_SERIAL)
     serial_n = n if serial_n <= 0 else min(serial_n, n)
-    as_is_n = min(args.as_is_curves or (QUICK_AS_IS if args.quick else DEFAULT_AS_IS), n)
+    reopen_n = min(args.reopen_curves or (QUICK_REOPEN if args.quick else DEFAULT_REOPEN), n)
     t_start = time.perf_counter()
     threadpool_limits(limits=1, user_api="blas")
     machine = machine_facts()
@@ -552,21 +511,24 @@ def main(argv: list[str] | None = None) -> int:
         print(f"dask ({dask_res['scheduler']}, {dask_res['workers']} workers x 1 thread, worker "
               f"BLAS threads {dask_res['worker_blas_threads']}), {dask_res['blocks']} tasks of "
               f"{block} curves: {dask_res['wall_s']:.2f} s "
-              f"({dask_res['per_curve_s'] * 1e3:.1f} ms/curve; cluster start-up "
+              f"({dask_res['per_curve_s'] * 1e3:.1f} ms/curve, of which read_jpk + scatter "
+              f"{dask_res['read_scatter_s']:.2f} s, concat {dask_res['concat_s']:.2f} s; cluster start-up "
               f"{dask_res['cluster_startup_s']:.1f} s not counted); peak RSS workers "
               + " + ".join(f"{b / 2**20:.0f}" for b in dask_res["worker_peak_rss_bytes"])
               + f" MiB + this process {dask_res['client_peak_rss_bytes'] / 2**20:.0f} MiB = "
               f"{dask_res['total_peak_rss_bytes'] / 2**20:.0f} MiB; spectrum check "
               f"{'ok' if dask_res['check']['ok'] else 'FAILED'}")
 
-        as_is = run_serial(path, as_is_n, as_is_n, "library")
-        as_is["extrapolated_wall_s"] = as_is["per_curve_s"] * n
-        rows.append({"part": "synthetic", "mode": "as_is serial", "curves": as_is_n,
-                     "wall_s": as_is["extrapolated_wall_s"], "per_curve_s": as_is["per_curve_s"],
-                     "memory_bytes": as_is["block_tracemalloc_peak_bytes"], "extrapolated": True})
-        print(f"as is (JPKArchive.curve reopens the zip per curve), {as_is_n} curves: "
-              f"{as_is['wall_s']:.2f} s = {as_is['per_curve_s']:.3f} s/curve -> "
-              f"{as_is['extrapolated_wall_s']:.0f} s for {n} curves (extrapolated)")
+        reopen = run_serial(path, reopen_n, reopen_n, "path")
+        reopen["extrapolated_wall_s"] = reopen["per_curve_s"] * n
+        rows.append({"part": "synthetic", "mode": "reopen serial", "curves": reopen_n,
+                     "wall_s": reopen["extrapolated_wall_s"],
+                     "per_curve_s": reopen["per_curve_s"],
+                     "memory_bytes": reopen["block_tracemalloc_peak_bytes"], "extrapolated": True})
+        print(f"reopen (each block reads the map: read_jpk + zip central directory), one block "
+              f"of {reopen_n} curves: {reopen['wall_s']:.2f} s = {reopen['per_curve_s']:.3f} "
+              f"s/curve -> {reopen['extrapolated_wall_s']:.0f} s for {n} curves in blocks of "
+              f"{reopen_n} (extrapolated)")
 
         serial = run_serial(path, serial_n, block, args.open_mode)
         serial["extrapolated_wall_s"] = serial["per_curve_s"] * n
@@ -575,7 +537,8 @@ def main(argv: list[str] | None = None) -> int:
                      "per_curve_s": serial["per_curve_s"],
                      "memory_bytes": serial["block_tracemalloc_peak_bytes"],
                      "extrapolated": serial_n < n})
-        print(f"serial (open={args.open_mode}), {serial_n} curves in blocks of {block}: "
+        print(f"serial (open={args.open_mode}; read_jpk {serial['read_jpk_s']:.2f} s not "
+              f"counted), {serial_n} curves in blocks of {block}: "
               f"{serial['wall_s']:.2f} s = {serial['per_curve_s'] * 1e3:.1f} ms/curve -> "
               f"{serial['extrapolated_wall_s']:.1f} s for {n} curves"
               f"{' (extrapolated)' if serial_n < n else ''}; one block's tracemalloc peak "
@@ -586,7 +549,6 @@ def main(argv: list[str] | None = None) -> int:
               f"{profile['profiled_wall_s']:.2f} s): " + ", ".join(
                   f"{k[:-2]} {v:.3f}" for k, v in profile.items()
                   if k.endswith("_s") and k != "profiled_wall_s"))
-        close_worker_archives()
 
     time_ok = dask_res["wall_s"] <= TARGET_S
     mem_ok = dask_res["total_peak_rss_bytes"] <= TARGET_BYTES
@@ -595,9 +557,7 @@ def main(argv: list[str] | None = None) -> int:
     print(f"summary: synthetic {grid}x{grid} read + demodulate with dask: "
           f"{dask_res['wall_s']:.1f} s (target <= {TARGET_S:g} s: {pf(time_ok)}), "
           f"{dask_res['total_peak_rss_bytes'] / GIB:.2f} GiB (target <= 1 GiB: {pf(mem_ok)}): "
-          f"{verdict} [open={args.open_mode}"
-          + ("]" if args.open_mode == "library" else ": OpenArchive prototype, not the library "
-             "as is]"))
+          f"{verdict} [open={args.open_mode}]")
 
     args.out.mkdir(parents=True, exist_ok=True)
     json_path, csv_path, png_path = (args.out / f"load.{e}" for e in ("json", "csv", "png"))
@@ -608,11 +568,11 @@ def main(argv: list[str] | None = None) -> int:
         "target": {"wall_s": TARGET_S, "memory_bytes": TARGET_BYTES, "cores": 2,
                    "applies_to": "synthetic map, dask run; memory = peak RSS of workers + client"},
         "settings": {"grid": grid, "block": block, "serial_curves": serial_n,
-                     "as_is_curves": as_is_n, "open_mode": args.open_mode,
+                     "reopen_curves": reopen_n, "open_mode": args.open_mode,
                      "scheduler": args.scheduler, "workers": args.workers,
                      "env": {"OPENBLAS_NUM_THREADS": "1"}, "layout": [list(s) for s in LAYOUT]},
         "real": real,
-        "synthetic": {"archive": facts, "as_is": as_is, "serial": serial, "profile": profile,
+        "synthetic": {"archive": facts, "reopen": reopen, "serial": serial, "profile": profile,
                       "dask": dask_res},
         "summary": {"wall_s": dask_res["wall_s"], "memory_bytes": dask_res["total_peak_rss_bytes"],
                     "time_passed": time_ok, "memory_passed": mem_ok, "passed": passed,

@@ -13,11 +13,12 @@ pytest.importorskip("dask.distributed")
 
 TOP_KEYS = {"schema", "created", "quick", "machine", "target", "settings", "real", "synthetic",
             "summary", "files"}
-SYNTHETIC_KEYS = {"archive", "as_is", "serial", "profile", "dask"}
-DASK_KEYS = {"curves", "blocks", "wall_s", "tasks_s", "concat_s", "cluster_startup_s",
-             "per_curve_s", "workers", "threads", "worker_blas_threads", "scheduler", "open_mode",
-             "worker_peak_rss_bytes", "workers_peak_rss_sum_bytes", "check",
-             "client_peak_rss_bytes", "client_peak_rss_before_bytes", "total_peak_rss_bytes"}
+SYNTHETIC_KEYS = {"archive", "reopen", "serial", "profile", "dask"}
+DASK_KEYS = {"curves", "blocks", "wall_s", "read_scatter_s", "tasks_s", "concat_s",
+             "cluster_startup_s", "per_curve_s", "workers", "threads", "worker_blas_threads",
+             "scheduler", "open_mode", "worker_peak_rss_bytes", "workers_peak_rss_sum_bytes",
+             "check", "client_peak_rss_bytes", "client_peak_rss_before_bytes",
+             "total_peak_rss_bytes"}
 SUMMARY_KEYS = {"wall_s", "memory_bytes", "time_passed", "memory_passed", "passed", "verdict",
                 "wall_time_s", "loadavg_end"}
 

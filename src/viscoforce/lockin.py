@@ -193,11 +193,10 @@ def _window(signal: ArrayLike, time: ArrayLike, omega: float, *, settle: float, 
         # Per-period means are exact for periodic content of any harmonic order plus a line, so
         # their slope is the drift alone (a least-squares line through the raw samples would also
         # pick up the oscillation's own projection on t and bias X̂).
-        blocks = np.zeros((periods, n_nodes))
-        for p in range(periods):
-            blocks[p, p * per_period:(p + 1) * per_period + 1] = spacing
-            blocks[p, p * per_period] = blocks[p, (p + 1) * per_period] = 0.5 * spacing
-        means = values @ (blocks.T / period)
+        # trapezoid mean of each period: full weight inside, half weight on its two end nodes
+        inner = values[..., :-1].reshape(*values.shape[:-1], periods, per_period).sum(axis=-1)
+        ends = values[..., ::per_period]
+        means = (inner - 0.5 * ends[..., :-1] + 0.5 * ends[..., 1:]) * (spacing / period)
         mids = t_start + (np.arange(periods) + 0.5) * period
         centred = mids - mids.mean()
         slope = (means @ centred) / (centred @ centred)
@@ -209,9 +208,19 @@ def _window(signal: ArrayLike, time: ArrayLike, omega: float, *, settle: float, 
 
 def _project(win: _Window, omega: float, orders: NDArray[np.int_]) -> NDArray[np.complex128]:
     """Complex amplitudes of the given harmonic orders; the harmonic axis is last."""
-    kernel = win.weights[:, np.newaxis] * np.exp(-1j * np.outer(win.nodes * omega, orders))
+    # The real signal against the real and imaginary parts of e^{-inωt} (no complex copy of the
+    # signal); order 0 is the plain weighted sum (cos 0 = 1, sin 0 = 0: no trigonometry).
+    weights = win.weights[:, np.newaxis]
+    cos = np.repeat(weights, orders.size, axis=1)
+    sin = np.zeros_like(cos)
+    moving = np.flatnonzero(orders != 0)
+    if moving.size:
+        phase = np.outer(win.nodes * omega, orders[moving])
+        cos[:, moving] = weights * np.cos(phase)
+        sin[:, moving] = weights * np.sin(phase)
+    projected = win.values @ cos - 1j * (win.values @ sin)
     scale = np.where(orders == 0, 1.0, 2.0) / win.duration
-    return (win.values @ kernel) * scale
+    return projected * scale
 
 
 def demodulate(signal: ArrayLike, time: ArrayLike, omega: float, *, harmonic: int = 1,

@@ -12,11 +12,13 @@ Per modulation segment of each curve (``segment_name == "modulation"``, frequenc
 * δ(t) = ``tip_position`` (tip displacement toward the sample = −height − deflection) up to an
   offset, i.e. the indentation into the sample. With it a stiff elastic contact gives k* > 0 and
   phase ≈ 0: pushing the tip in (δ up) pushes the cantilever away (deflection, force up) in phase.
-* Lock-in (:func:`viscoforce.lockin.demodulate`) of F and δ over the largest whole number m of
-  periods that ends at the segment's last sample and starts after ``settle``; default ``settle``
-  = ``settle_periods`` periods minus one sampling interval (so that a 5-period segment keeps 4
-  whole periods after skipping the first); ``detrend="linear"`` removes a linear drift first.
-  Harmonic 0 gives the mean force F̄.
+* Lock-in (:func:`viscoforce.lockin.harmonics`, orders 0 and 1) of F and δ over the largest
+  whole number m of periods that ends at the segment's last sample and starts after ``settle``;
+  default ``settle`` = ``settle_periods`` periods minus one sampling interval (so that a
+  5-period segment keeps 4 whole periods after skipping the first); ``detrend="linear"``
+  removes a linear drift first. Harmonic 0 gives the mean force F̄. F, δ and the height share
+  one window: it is selected, resampled and detrended once per segment (one call on a stacked
+  array).
 * k* = F̂/δ̂ [N/m]; ``stiffness`` = |k*|, ``phase`` = arg k* [degree] (lead of the force over
   the indentation), ``drive_amplitude`` = |δ̂| [m], ``mean_force`` = F̄ [N].
 * Corrections, in this order: an instrument ``phase_lag`` λ [degree] (a scalar, or a mapping
@@ -95,13 +97,14 @@ from scipy.optimize import minimize_scalar
 from viscoforce.exceptions import ParameterError
 from viscoforce.io.curves import jpk_to_curves
 from viscoforce.io.jpk import JPKArchive, read_jpk
-from viscoforce.lockin import demodulate
+from viscoforce.lockin import harmonics
 from viscoforce.schema import make_spectrum, phase_quality, validate_curves
 
 __all__ = ["demodulate_segment", "find_contact_point", "modulation_spectrum"]
 
 _CONVEX_T = 8.0  # t-statistic of the baseline's x² term above which the window holds a contact
 _SLACK = 1e-9  # as lockin: fraction of a period the record may fall short of a whole period
+_FIT_CHUNK = 1 << 20  # matrix entries per chunk of the vectorised contact-point grid search
 
 
 def demodulate_segment(time: np.ndarray, force: np.ndarray, indentation: np.ndarray,
@@ -136,18 +139,27 @@ def demodulate_segment(time: np.ndarray, force: np.ndarray, indentation: np.ndar
             and math.isfinite(frequency)):
         raise ParameterError(f"modulation frequency must be > 0 and finite, got {frequency!r}")
     t = np.asarray(time, dtype=float)
-    omega = 2.0 * math.pi * float(frequency)
-    both = np.vstack([np.asarray(force, dtype=float), np.asarray(indentation, dtype=float)])
-    amp = np.asarray(demodulate(both, t, omega, settle=settle, detrend=detrend))
-    mean = np.asarray(demodulate(both, t, omega, harmonic=0, settle=settle, detrend=detrend)).real
-    period = 1.0 / float(frequency)
+    signals = [force, indentation] + ([] if height is None else [height])
+    stacked = np.vstack([np.asarray(x, dtype=float) for x in signals])
+    return _demodulate_stacked(t, stacked, float(frequency), settle=settle, detrend=detrend,
+                               dt=float(np.median(np.diff(t))))
+
+
+def _demodulate_stacked(t: np.ndarray, stacked: np.ndarray, frequency: float, *, settle: float,
+                        detrend: str | None, dt: float) -> dict[str, Any]:
+    """:func:`demodulate_segment` of rows F, δ[, height] of ``stacked``; ``dt`` the median step."""
+    omega = 2.0 * math.pi * frequency
+    # one lock-in window (selection, resampling, detrend) for every signal and both harmonics
+    coef = harmonics(stacked, t, omega, 1, settle=settle, detrend=detrend)
+    amp, mean = coef[:2, 1], coef[:2, 0].real
+    period = 1.0 / frequency
     periods = math.floor((t[-1] - t[0] - settle) / period + _SLACK)
     start = t[-1] - periods * period
-    dt = float(np.median(np.diff(t)))
-    win = t >= start - 1e-6 * dt
-    tw = t[win]
-    model = mean[:, None] + (amp[:, None] * np.exp(1j * omega * tw)).real
-    resid = both[:, win] - model
+    first = int(np.searchsorted(t, start - 1e-6 * dt, side="left"))  # t increasing: a suffix
+    tw, both = t[first:], stacked[:2, first:]
+    phase = omega * tw
+    model = mean[:, None] + (amp.real[:, None] * np.cos(phase) - amp.imag[:, None] * np.sin(phase))
+    resid = both - model
     n = int(tw.size)
     p = 3
     if detrend == "linear":
@@ -167,11 +179,9 @@ def demodulate_segment(time: np.ndarray, force: np.ndarray, indentation: np.ndar
         rho2 = (2.0 / n) * (var_f / af**2 + var_d / ad**2 - 2.0 * cov * math.cos(chi) / (af * ad))
         rho = math.sqrt(max(rho2, 0.0))
     return {"F": f_hat, "d": d_hat, "mean_force": float(mean[0]),
-            "mean_position": float(np.mean(both[1, win])), "sigma_F": math.sqrt(var_f),
+            "mean_position": float(np.mean(both[1])), "sigma_F": math.sqrt(var_f),
             "sigma_d": math.sqrt(var_d), "cov": cov, "n": n, "periods": periods, "rho": rho,
-            "h": None if height is None else complex(demodulate(
-                np.asarray(height, dtype=float), t, omega, settle=settle, detrend=detrend))}
-
+            "h": None if stacked.shape[0] < 3 else complex(coef[2, 1])}
 
 def find_contact_point(position: np.ndarray, force: np.ndarray, *,
                        baseline_fraction: float = 0.3, k_sigma: float = 5.0,
@@ -250,42 +260,83 @@ def find_contact_point(position: np.ndarray, force: np.ndarray, *,
         return None
     p = float(exponent)
 
-    def sse(zc: float) -> tuple[float, float]:
-        g = np.clip(zs - zc, 0.0, None) ** p
-        gg = float(g @ g)
-        amp = float(g @ rs) / gg if gg > 0 else 0.0
-        res = rs - amp * g
-        return float(res @ res), amp
+    def sse(zc: float) -> float:
+        return float(_power_law_fits(zs, rs, np.array([zc]), p)[0][0])
 
     grid = np.unique(np.clip(zs[(zs >= lo) & (zs <= hi)], lo, hi))
     grid = np.concatenate([[lo], grid, [hi]])
     if grid.size > 400:
         grid = np.linspace(lo, hi, 400)
-    costs = np.array([sse(g)[0] for g in grid])
+    costs = _power_law_fits(zs, rs, grid, p)[0]
     i = int(np.argmin(costs))
     a_lo, a_hi = grid[max(i - 1, 0)], grid[min(i + 1, grid.size - 1)]
     zc = float(grid[i])
     if a_hi > a_lo:
-        opt = minimize_scalar(lambda c: sse(c)[0], bounds=(a_lo, a_hi), method="bounded",
+        opt = minimize_scalar(sse, bounds=(a_lo, a_hi), method="bounded",
                               options={"xatol": 1e-6 * (hi - lo) + 1e-15})
         if opt.fun <= costs[i]:
             zc = float(opt.x)
-    amp = sse(zc)[1]
+    amp = float(_power_law_fits(zs, rs, np.array([zc]), p)[1][0])
     if not amp > 0:
         return None
     return {"z_contact": zc, "z_threshold": hi, "sigma": sigma, "baseline": (float(a), float(b)),
             "amplitude": amp, "rise": float(r[-1] / sigma)}
 
 
-def _approach_contact(tip: np.ndarray, force: np.ndarray, seg: np.ndarray, names: np.ndarray,
-                      options: Mapping[str, Any]) -> dict[str, Any] | None:
+def _power_law_fits(z: np.ndarray, r: np.ndarray, z_contact: np.ndarray, exponent: float
+                    ) -> tuple[np.ndarray, np.ndarray]:
+    """Least squares of r = A·max(z − z_c, 0)^p for each candidate z_c, all at once.
+
+    Returns the sums of squared residuals and the amplitudes A (closed form; 0 where the model
+    vanishes on every sample), one per entry of ``z_contact``. The candidates are processed in
+    chunks of about :data:`_FIT_CHUNK` matrix entries, so memory stays bounded for long curves;
+    the powers 1, 1.5 and 2 are taken as products and square roots (the power function is the
+    cost of the search).
+    """
+    costs = np.empty(z_contact.size)
+    amps = np.empty(z_contact.size)
+    step = max(1, _FIT_CHUNK // max(z.size, 1))
+    for k in range(0, z_contact.size, step):
+        g = z - z_contact[k:k + step, None]
+        np.maximum(g, 0.0, out=g)
+        if exponent == 1.5:
+            g *= np.sqrt(g)
+        elif exponent == 2.0:
+            g *= g
+        elif exponent != 1.0:
+            np.power(g, exponent, out=g)
+        gg = np.einsum("ij,ij->i", g, g)
+        amp = np.divide(g @ r, gg, out=np.zeros_like(gg), where=gg > 0)
+        g *= -amp[:, None]
+        g += r
+        costs[k:k + step] = np.einsum("ij,ij->i", g, g)
+        amps[k:k + step] = amp
+    return costs, amps
+
+def _segment_samples(seg: np.ndarray) -> dict[int, slice | np.ndarray]:
+    """Samples of each segment-table row of one curve, rows in order of first appearance.
+
+    A slice where the row's samples are contiguous (as :func:`~viscoforce.io.curves.
+    jpk_to_curves` writes them), else a boolean mask.
+    """
+    where: dict[int, slice | np.ndarray] = {}
+    if seg.size == 0:
+        return where
+    cut = (np.flatnonzero(seg[1:] != seg[:-1]) + 1).tolist()
+    for a, b in zip([0, *cut], [*cut, seg.size], strict=True):
+        row = int(seg[a])
+        where[row] = slice(a, b) if row not in where else seg == row
+    return where
+
+
+def _approach_contact(tip: np.ndarray, force: np.ndarray, where: Mapping[int, slice | np.ndarray],
+                      names: np.ndarray, options: Mapping[str, Any]) -> dict[str, Any] | None:
     """Contact point on the curve's (first) approach segment, or None."""
-    rows = [row for row in dict.fromkeys(seg.tolist()) if names[row] == "approach"]
+    rows = [row for row in where if names[row] == "approach"]
     if not rows:
         return None
-    m = seg == rows[0]
+    m = where[rows[0]]
     return find_contact_point(tip[m], force[m], **options)
-
 
 def _reference_lags(reference: Any, fr: np.ndarray) -> np.ndarray:
     """Instrument lag [degree] per frequency from a hard-surface reference spectrum."""
@@ -335,7 +386,8 @@ def _curves_of(data: Any, curves: int | Iterable[int] | None, height_channel: st
                ) -> tuple[xr.Dataset, np.ndarray | None]:
     """The curves dataset and the rows of ``curve`` to use (None: all)."""
     if isinstance(data, str | Path):
-        data = read_jpk(data)
+        with read_jpk(data) as archive:  # opened here, so closed here
+            return jpk_to_curves(archive, curves=curves, height_channel=height_channel), None
     if isinstance(data, JPKArchive):
         return jpk_to_curves(data, curves=curves, height_channel=height_channel), None
     if isinstance(data, xr.Dataset):
@@ -462,10 +514,11 @@ def modulation_spectrum(data: Any, *, curves: int | Iterable[int] | None = None,
     for r in rows:
         sl = slice(int(starts[r]), int(starts[r] + counts[r]))
         found: dict[float, tuple[int, dict[str, Any]]] = {}
-        s_seg = seg[sl]
+        c_time, c_force, c_tip, c_height = time[sl], force[sl], tip[sl], height[sl]
+        where = _segment_samples(seg[sl])
         contacts.append(None if contact_options is None else _approach_contact(
-            tip[sl], force[sl], s_seg, names, contact_options))
-        for row in np.unique(s_seg):
+            c_tip, c_force, where, names, contact_options))
+        for row in sorted(where):
             if names[row] != "modulation":
                 continue
             f = float(freq[row])
@@ -475,12 +528,12 @@ def modulation_spectrum(data: Any, *, curves: int | Iterable[int] | None = None,
             if any(math.isclose(f, g, rel_tol=1e-9) for g in found):
                 raise ParameterError(f"curve {r}: frequency {f:g} Hz is modulated twice; select "
                                      "segments first")
-            m = s_seg == row
-            t = time[sl][m]
+            m = where[row]
+            t = c_time[m]
             dt = float(np.median(np.diff(t)))
             wait = settle if settle is not None else max(settle_periods / f - dt, 0.0)
-            out = demodulate_segment(t, force[sl][m], tip[sl][m], f, settle=wait,
-                                     detrend=detrend, height=height[sl][m])
+            out = _demodulate_stacked(t, np.vstack([c_force[m], c_tip[m], c_height[m]]), f,
+                                      settle=wait, detrend=detrend, dt=dt)
             out["settle"] = wait
             found[f] = (int(row), out)
         results.append(found)

@@ -189,10 +189,7 @@ def jpk_to_curves(archive: JPKArchive, *, curves: int | Iterable[int] | None = N
         raise ParameterError(f"archive must be a JPKArchive (from read_jpk), got "
                              f"{type(archive).__name__}")
     picked = _select(archive, curves)
-    if list(picked) == list(range(archive.n_curves)):
-        decoded = list(archive.curves())  # the whole file: the archive is opened once
-    else:
-        decoded = [archive.curve(i) for i in picked]  # a selection: opened per curve
+    decoded = [archive.curve(i) for i in picked]  # through the archive's one open zip
     height = _height_channel(decoded, height_channel)
 
     cols: dict[str, list[np.ndarray]] = {"time": [], "force": [], "height": [], "deflection": [],
