@@ -107,7 +107,7 @@ def test_simulate_trace_and_prony_files_and_netcdf(capsys, tmp_path):
     (["simulate", "--drive", "triangle", "--from", "10nm", "--to", "-5nm", "--speed", "5um/s",
       "--E", "1e9", "--tau", "1ms"], "give one material"),
     (["simulate", "--drive", "sine", "--h0", "2nm", "--eta", "0.1nm"], "needs --omega"),
-    (["simulate", "--drive", "trace", "--trace", "/nonexistent.csv"], "file not found"),
+    (["simulate", "--drive", "trace", "--trace", "/nonexistent.csv"], "no such file"),
     (["simulate", "--drive", "triangle", "--from", "10nm", "--to", "-10nm", "--speed", "5um/s",
       "--method", "euler", "--dt", "0.5ms", "--samples", "2"], "unstable"),
     (["simulate", "--drive", "step", "--from", "-5nm", "--to", "-7nm", "--E0", "1e9",
@@ -121,7 +121,7 @@ def test_simulate_user_errors(capsys, argv, message):
 
 def test_trace_reader_errors(tmp_path):
     from viscoforce.exceptions import UnitError
-    from viscoforce.io.tables import read_trace
+    from viscoforce.io.csv_formats import read_trace
 
     p = tmp_path / "t.csv"
     p.write_text("time,position (nm)\n0,1\n1,2\n")
@@ -134,7 +134,7 @@ def test_trace_reader_errors(tmp_path):
     with pytest.raises(ValueError, match="no column 'position"):
         read_trace(p)
     p.write_text("")
-    with pytest.raises(ValueError, match="not a readable CSV"):
+    with pytest.raises(ValueError, match="empty table"):
         read_trace(p)
 
 

@@ -21,9 +21,9 @@ from viscoforce.experiments.linear_response import linear_stiffness
 from viscoforce.experiments.modulation import modulation_spectrum
 from viscoforce.fitting import fit_spectrum
 from viscoforce.io._properties import parse_properties
+from viscoforce.io.csv_formats import read_trace
 from viscoforce.io.instruments import load_instrument
 from viscoforce.io.jpk import read_jpk
-from viscoforce.io.tables import read_trace
 from viscoforce.schema import validate_spectrum
 
 EXAMPLES_DIR = Path(__file__).resolve().parents[1] / "data_examples"

@@ -65,7 +65,7 @@ def material_from_args(args: argparse.Namespace) -> ViscoelasticMaterial:
     if args.E is not None:
         return Elastic(args.E)
     if args.prony is not None:
-        from viscoforce.io.tables import read_prony_moduli
+        from viscoforce.io.csv_formats import read_prony_moduli
 
         return PronySeries.from_moduli(*read_prony_moduli(args.prony))
     defaults = (PAPER.E0, PAPER.E_inf, PAPER.tau)
@@ -238,7 +238,7 @@ def drive_from_args(args: argparse.Namespace) -> SeparationHistory:
         need("h0", "eta", "omega")
         return Sinusoid(args.h0, args.eta, args.omega, periods=args.periods)
     need("trace")
-    from viscoforce.io.tables import read_trace
+    from viscoforce.io.csv_formats import read_trace
 
     time, position = read_trace(args.trace)
     return MeasuredTrace(time, position)

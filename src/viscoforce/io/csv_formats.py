@@ -1,9 +1,9 @@
-"""Generic CSV/TSV readers with ``name (unit)`` headers: time series → curves, spectra → spectrum.
+"""Generic CSV/TSV readers with ``name (unit)`` headers: curves, spectra, drive traces, Prony tables.
 
-Table rules (both readers):
+Table rules (every reader):
 
 * The first line that is neither blank nor a ``#`` comment is the header; every cell reads
-  ``name (unit)`` (the header grammar of :mod:`viscoforce.io.tables`), except the label
+  ``name (unit)`` (the header grammar shared by every table reader here), except the label
   columns ``curve`` and ``segment``, which take no unit. A column without a unit is an error
   (:class:`~viscoforce.exceptions.UnitError`), so is a unit unknown for the column's quantity
   (the message names the column). Columns whose name is not known here are ignored and listed in
@@ -49,8 +49,8 @@ import numpy as np
 import pandas as pd
 import xarray as xr
 
+from viscoforce._validation import require_path
 from viscoforce.exceptions import InstrumentFormatError, ParameterError, UnitError
-from viscoforce.io.tables import _HEADER
 from viscoforce.schema import make_curves, make_spectrum, validate_spectrum
 from viscoforce.units import parse_quantity, unit_factor
 
@@ -80,6 +80,8 @@ _SEGMENT_WORDS = (
     ("indent", "approach"),
 )
 _SEGMENT_SHORT = {"ext": "approach", "app": "approach", "ret": "retract", "mod": "modulation"}
+#: A header cell ``name (unit)``.
+_HEADER = re.compile(r"^\s*([A-Za-z_][\w ]*?)\s*\(\s*([^)]*)\s*\)\s*$")
 _MAX_HEADER_SCAN = 200  # lines looked at for the header when sniffing
 
 
@@ -130,7 +132,7 @@ class _Table:
             bad &= (raw != "").to_numpy()
         if np.any(bad):
             row = int(np.flatnonzero(bad)[0])
-            hint = "" if self.decimal_comma else (
+            hint = "" if self.decimal_comma or "," not in raw.iloc[row] else (
                 "; decimal commas need a semicolon or tab delimiter")
             raise ParameterError(f"{self.path}: column '{col.header}' {self.where(row)} is not a "
                                  f"finite number ({raw.iloc[row]!r}){hint}")
@@ -623,3 +625,67 @@ def read_spectrum_csv(path: str | Path, *, drive_amplitude: float | str | None =
                                        "force_amplitude_stderr") if v in ds.variables])
         ds.attrs["drive_amplitude_known"] = 0
     return validate_spectrum(ds)
+
+
+# ── small tables: a measured drive trace, a Prony spectrum ──────────────────────────────────────
+
+TRACE_COLUMNS = {"time": "time", "position": "length"}
+PRONY_COLUMNS = {"modulus": "pressure", "tau": "time"}
+
+
+def _table_for(path: str | Path, known: Mapping[str, str]) -> _Table:
+    path = require_path("path", path)
+    try:
+        return _read_table(path, known)
+    except InstrumentFormatError as exc:
+        raise ParameterError(str(exc)) from None
+
+
+def _required(table: _Table, name: str, known: Mapping[str, str], *,
+              allow_missing: bool = False) -> np.ndarray:
+    values = _quantity(table, name, known, allow_missing=allow_missing)
+    if values is None:
+        raise ParameterError(f"{table.path}: no column '{name} (<unit>)'; columns are "
+                             f"{', '.join(c.header for c in table.columns)}")
+    return values
+
+
+def read_trace(path: str | Path) -> tuple[np.ndarray, np.ndarray]:
+    """A measured position trace: columns ``time (<unit>)`` and ``position (<unit>)``.
+
+    Returns
+    -------
+    time, position : numpy.ndarray
+        Times [s] and positions h0 [m] (monotonic time is checked by the drive).
+
+    Raises
+    ------
+    ParameterError
+        Not a path, missing or empty file, a missing column, a cell that is not a finite number.
+    UnitError
+        A column without a unit, or with a unit unknown for its quantity.
+    """
+    table = _table_for(path, TRACE_COLUMNS)
+    return (_required(table, "time", TRACE_COLUMNS),
+            _required(table, "position", TRACE_COLUMNS))
+
+
+def read_prony_moduli(path: str | Path) -> tuple[np.ndarray, np.ndarray]:
+    """A Prony spectrum in the paper's Eq. 8 form.
+
+    Columns ``modulus (<pressure unit>)`` and ``tau (<time unit>)``: rows E_0 … E_n (decreasing,
+    E_n = E_inf) with creep times τ_0 … τ_{n−1}; the last row's tau is empty.
+
+    Returns
+    -------
+    moduli, taus : numpy.ndarray
+        [Pa] (n + 1 values) and [s] (n values).
+    """
+    table = _table_for(path, PRONY_COLUMNS)
+    moduli = _required(table, "modulus", PRONY_COLUMNS)
+    taus = _required(table, "tau", PRONY_COLUMNS, allow_missing=True)
+    if not np.isnan(taus[-1]) or np.any(np.isnan(taus[:-1])):
+        raise ParameterError(
+            f"{table.path}: every row but the last (E_inf) needs a tau; the last row's tau is "
+            "empty")
+    return moduli, taus[:-1]
