@@ -37,14 +37,6 @@ def test_import_has_no_side_effects_on_threads_or_matplotlib():
     subprocess.run([sys.executable, "-c", code], check=True, env=env, timeout=120)
 
 
-def test_readme_python_snippet_runs():
-    text = (REPO / "README.md").read_text()
-    block = re.search(r"```python\n(.*?)```", text, re.S).group(1)
-    namespace: dict = {}
-    exec(compile(block, "README.md", "exec"), namespace)  # noqa: S102 - our own README
-    assert float(namespace["static"].force) == pytest.approx(1.08e-6, abs=5e-9)
-
-
 @pytest.mark.skipif(shutil.which("lint-imports") is None, reason="import-linter not installed")
 def test_import_layers_hold():
     proc = subprocess.run(["lint-imports"], cwd=REPO, capture_output=True, text=True, timeout=120)
@@ -78,4 +70,5 @@ def test_readme_quickstart_runs(tmp_path, monkeypatch):
     namespace: dict = {}
     exec(compile(block, "README.md", "exec"), namespace)  # noqa: S102
     assert abs(float(namespace["fit"].tau) - 1e-3) < 1e-9
+    assert float(namespace["static"].force) == pytest.approx(1.08e-6, abs=5e-9)
     assert (tmp_path / "bode.png").stat().st_size > 0
