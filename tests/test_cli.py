@@ -168,7 +168,7 @@ def test_spectrum_methods_and_auto(capsys):
     (["spectrum", "--h0", "2nm", "--eta", "0.1nm"], "give either --omega"),
     (["spectrum", "--h0", "2nm", "--eta", "0.1nm", "--omega-range", "100", "10", "5"],
      "0 < LO < HI"),
-    (["spectrum", "--h0", "2nm", "--eta", "0.1nm", "--omega", "-5"], "omega must be >= 0"),
+    (["spectrum", "--h0", "2nm", "--eta", "0.1nm", "--omega", "-5"], "omega must be > 0"),
     (["spectrum", "--h0", "2nm", "--eta", "-1nm", "--omega", "5"], "eta must be > 0"),
 ])
 def test_spectrum_user_errors(capsys, argv, message):

@@ -202,19 +202,12 @@ NUMERIC_STRINGS = [
 ]
 
 
-@bug("numeric strings ('1e9', '2e-9', ['100']) are silently converted with float() by the "
-     "scalar validators (StandardLinearSolid, Elastic, Sphere, DoubleLayer, static_equilibrium, "
-     "spectrum, simulate), while '1GPa' or '5 nm' are refused: a str must be refused as a wrong "
-     "type, as vf.ContactProblem.create(deepest_position='5 nm') already is")
 @pytest.mark.parametrize(("call", "match"), NUMERIC_STRINGS)
 def test_numeric_strings_are_refused(call, match):
     with pytest.raises(ParameterError, match=match):
         call()
 
 
-@bug("a bool omega is taken as 1 rad/s: vf.spectrum(problem, 2e-9, 1e-11, True) and "
-     "vf.linear_response(..., [True]) return a spectrum at omega = 1; every scalar parameter "
-     "refuses bool ('E must be a real number, got True')")
 @pytest.mark.parametrize("omega", [True, [True, False]], ids=["bool", "bool-list"])
 @pytest.mark.parametrize("entry", [vf.spectrum, vf.linear_response],
                          ids=["spectrum", "linear_response"])
@@ -290,7 +283,7 @@ API_CASES = [
     ("spectrum-omega-inf", lambda: vf.spectrum(SLS_PROBLEM, 2 * NM, 1e-11, [100.0, INF]),
      ParameterError, r"omega must be finite; entry 1 is inf"),
     ("spectrum-omega-negative", lambda: vf.spectrum(SLS_PROBLEM, 2 * NM, 1e-11, [-100.0]),
-     ParameterError, r"omega must be >= 0 rad/s; entry 0 is -100.0"),
+     ParameterError, r"omega must be > 0 rad/s; entry 0 is -100.0"),
     ("spectrum-omega-None", lambda: vf.spectrum(SLS_PROBLEM, 2 * NM, 1e-11, None),
      ParameterError, r"omega must be a 1-D array of real numbers, got None"),
     ("spectrum-omega-complex", lambda: vf.spectrum(SLS_PROBLEM, 2 * NM, 1e-11, [100 + 1j]),
@@ -331,13 +324,13 @@ API_CASES = [
      r"model must be one of svda, exact, contact, prony, relaxation, step, got 'foo'"),
     ("model-None", lambda: vf.make_model(None), ParameterError, r"model must be one of"),
     ("model-modes-0", lambda: vf.make_model("prony", 0), ParameterError,
-     r"modes must be an integer >= 1, got 0"),
+     r"modes must be an integer in \[1, 12\], got 0"),
     ("model-modes-str", lambda: vf.make_model("prony", "two"), ParameterError,
-     r"modes must be an integer >= 1, got 'two'"),
+     r"modes must be an integer in \[1, 12\], got 'two'"),
     ("model-modes-float", lambda: vf.make_model("prony", 1.5), ParameterError,
-     r"modes must be an integer >= 1, got 1.5"),
+     r"modes must be an integer in \[1, 12\], got 1.5"),
     ("model-modes-bool", lambda: vf.make_model("prony", True), ParameterError,
-     r"modes must be an integer >= 1, got True"),
+     r"modes must be an integer in \[1, 12\], got True"),
     ("model-svda-modes-2", lambda: vf.make_model("svda", 2, **SVDA_FIXED), ParameterError,
      r"model 'svda' has one mode \(modes=1\), got modes=2"),
     ("model-svda-missing", lambda: vf.make_model("svda", position=2 * NM), ParameterError,
@@ -371,11 +364,11 @@ API_CASES = [
     ("fit-model-curves", lambda: vf.fit_spectrum(SPECTRUM, "relaxation"), ParameterError,
      r"model 'relaxation' fits force curves, not spectra"),
     ("fit-modes-0", lambda: vf.fit_spectrum(SPECTRUM, "prony", modes=0), ParameterError,
-     r"modes must be an integer >= 1 or 'auto', got 0"),
+     r"modes must be an integer in \[1, 12\] or 'auto', got 0"),
     ("fit-criterion", lambda: vf.fit_spectrum(SPECTRUM, "prony", modes="auto", criterion="xyz"),
      ParameterError, r"criterion must be one of bic, aic, got 'xyz'"),
     ("fit-too-many-modes", lambda: vf.fit_spectrum(SPECTRUM, "prony", modes=50), ParameterError,
-     r"model 'prony' with 50 mode\(s\) has 101 free parameters but the data give only 24"),
+     r"modes must be an integer in \[1, 12\] or 'auto', got 50"),
     ("fit-nan-data", lambda: vf.fit_spectrum(SPECTRUM.assign(stiffness=SPECTRUM.stiffness * NAN),
                                              "svda", **SVDA_FIXED),
      ParameterError, r"stiffness or phase is NaN/inf at omega = 10 rad/s \(point 0\)"),
@@ -443,10 +436,6 @@ def test_unknown_keywords_raise_type_error(call):
 
 # ── API defects ────────────────────────────────────────────────────────────────────────────────
 
-@bug("fit_spectrum/fit_map do not validate the svda fixed input 'position': NaN gives a numpy "
-     "RuntimeWarning (NaN fit without -W error), inf and True a ZeroDivisionError, '2nm' a "
-     "ValueError, [2e-9] and 2e-9+0j a TypeError; make_model('svda', position=nan or '2nm', ...) "
-     "accepts them")
 @pytest.mark.parametrize("position", [NAN, INF, "2nm", [2e-9], 2e-9 + 0j, True],
                          ids=["nan", "inf", "str", "list", "complex", "bool"])
 def test_fit_spectrum_validates_the_position(position):
@@ -454,15 +443,11 @@ def test_fit_spectrum_validates_the_position(position):
         vf.fit_spectrum(SPECTRUM, "svda", **{**SVDA_FIXED, "position": position})
 
 
-@bug("make_model('svda', position=nan, ...) returns a model; the fixed input is not validated")
 def test_make_model_validates_the_position():
     with pytest.raises(ParameterError, match="position"):
         vf.make_model("svda", **{**SVDA_FIXED, "position": NAN})
 
 
-@bug("unknown fixed inputs are silently ignored: make_model('svda', ..., bogus=1), "
-     "fit_spectrum(ds, 'svda', ..., bogus=1) and fit_map(ds, 'svda', ..., bogus=1) succeed; "
-     "STYLE §1.12 asks for TypeError")
 @pytest.mark.parametrize("call", [
     lambda: vf.make_model("svda", **SVDA_FIXED, bogus=1),
     lambda: vf.fit_spectrum(SPECTRUM, "svda", **SVDA_FIXED, bogus=1),
@@ -474,61 +459,42 @@ def test_unknown_fixed_inputs_raise_type_error(call):
         call()
 
 
-@bug("make_model('exact', problem='p', position=2e-9) accepts a str as the problem")
 def test_make_model_checks_the_problem_type():
     with pytest.raises(ParameterError, match="problem must be a ContactProblem"):
         vf.make_model("exact", problem="p", position=2 * NM)
 
 
-@bug("a negative drag is accepted: make_model('contact', radius=1e-5, indentation=5e-9, "
-     "drag=-1.0) and `viscoforce fit ... --model contact --drag -1N*s/m` fit with B < 0")
 def test_contact_model_refuses_negative_drag():
     with pytest.raises(ParameterError, match="drag"):
         vf.make_model("contact", radius=1e-5, indentation=5 * NM, drag=-1.0)
 
 
-@bug("fit_map(ds, 'foo', scheduler='synchronous') reports 'no pixel of the 2 could be fitted: "
-     "curves is missing 'time' [s], ...' instead of naming the unknown model")
 def test_fit_map_names_an_unknown_model():
     with pytest.raises(ParameterError, match=r"model must be one of|model 'foo'"):
         vf.fit_map(MAP, "foo", scheduler="synchronous", progress=False)
 
 
-@bug("fit_map(ds, 'svda', scheduler=3, ...) raises dask's TypeError 'Scheduler address must be "
-     "a string or a Cluster instance' instead of a ParameterError naming scheduler")
 def test_fit_map_checks_the_scheduler_type():
     with pytest.raises(ParameterError, match="scheduler"):
         vf.fit_map(MAP, "svda", scheduler=3, progress=False, **SVDA_FIXED)
 
 
-@bug("fit_map(..., progress='yes') is accepted; simulate refuses it ('progress must be True or "
-     "False')")
 def test_fit_map_checks_progress():
     with pytest.raises(ParameterError, match="progress must be True or False"):
         vf.fit_map(MAP, "svda", scheduler="synchronous", progress="yes", **SVDA_FIXED)
 
 
-@bug("no effort limit on modes: fit_spectrum(ds, 'prony', modes=10**6) (and make_model('prony', "
-     "10**6)) builds the lmfit model first (O(modes^2); 10**4 modes take ~14 s, 10**7 ran out of "
-     "memory) and only then compares the free parameters with the data")
 def test_huge_modes_are_refused_up_front():
     with time_limit(2.0), pytest.raises(ViscoforceError, match="modes"):
         vf.fit_spectrum(SPECTRUM, "prony", modes=10**6)
 
 
-@bug("a hand-built RadialGrid has no size limit: static_equilibrium on "
-     "ContactProblem(..., RadialGrid(1e-6, 10**6, 8)) raises MemoryError ('Unable to allocate "
-     "1.02 PiB') instead of an EffortError; ContactProblem.create caps the grid at 4000 nodes")
 def test_huge_hand_built_grid_is_refused():
-    problem = vf.ContactProblem(vf.Sphere(10e-6), vf.paper_pressure_law(), vf.Elastic(1e9),
-                                RadialGrid(1e-6, 10**6, 8))
-    with pytest.raises(EffortError):
-        vf.static_equilibrium(problem, 2 * NM)
+    with pytest.raises(EffortError, match="dense influence matrix would need"):
+        vf.ContactProblem(vf.Sphere(10e-6), vf.paper_pressure_law(), vf.Elastic(1e9),
+                          RadialGrid(1e-6, 10**6, 8))
 
 
-@bug("omega = 0 passes the up-front check of spectrum/linear_response ('omega must be >= 0') "
-     "and is refused only after computing, by the schema, as a SchemaError: \"spectrum: 'omega' "
-     "must be finite and > 0 rad/s, got min np.float64(0.0)\"")
 @pytest.mark.parametrize("entry", [vf.spectrum, vf.linear_response],
                          ids=["spectrum", "linear_response"])
 def test_zero_omega_is_refused_up_front(entry):
@@ -536,8 +502,6 @@ def test_zero_omega_is_refused_up_front(entry):
         entry(SLS_PROBLEM, 2 * NM, 1e-11, [0.0])
 
 
-@bug("messages show numpy reprs instead of the values: 'got np.float64(-1e-10)', "
-     "'(np.float64(1.0) s after np.float64(2.0) s)', 'got min np.float64(0.0)'")
 @pytest.mark.parametrize("call", [
     lambda: vf.PronySeries(1e10, (-1e-10,), (1e-3,)),
     lambda: vf.PronySeries(1e10, (1e-10,), (0.0,)),
@@ -877,7 +841,7 @@ CLI_CASES = [
     ("fit-debye-zero", _with(FIT, "--model", "svda", "--h0", "2nm", "--debye-length", "0"),
      r"debye_length must be > 0"),
     ("fit-mean-force-negative", _with(FIT, "--model", "svda", "--mean-force", "-1nN"),
-     r"mean_force must be > 0 N for the svda model"),
+     r"mean_force must be > 0"),
     ("fit-mean-force-nan", _with(FIT, "--model", "svda", "--mean-force", "nan"),
      r"argument --mean-force"),
     ("fit-contact-indentation-negative", _with(FIT, "--model", "contact", "--indentation",
@@ -907,12 +871,7 @@ CLI_CASES = [
 ]
 
 
-CLI_BUGS = {
-    "sim-trace-binary": "`viscoforce simulate --drive trace --trace random.jpk-force` (binary "
-                        "bytes) prints the pandas tokenizer message with its trailing newline: "
-                        "'... not a readable table (Error tokenizing data. C error: Expected 2 "
-                        "fields in line 29, saw 3\\n)', two lines on stderr instead of one",
-}
+CLI_BUGS: dict[str, str] = {}  # case id → "BUG: ..." for a known defect (none open)
 
 
 @pytest.mark.parametrize(("argv", "match"), [
@@ -922,16 +881,11 @@ def test_cli_user_error(capsys, untouched, argv, match):
     run_user_error(capsys, argv, match, untouched)
 
 
-@bug("`viscoforce fit spectrum.csv --model contact --indentation 5nm --drag -1N*s/m` exits 0 "
-     "and fits with a negative hydrodynamic drag")
 def test_cli_fit_refuses_negative_drag(capsys, untouched):
     run_user_error(capsys, _with(FIT, "--model", "contact", "--indentation", "5nm", "--drag",
                                  "-1N*s/m"), r"drag", untouched)
 
 
-@bug("an option of another command (`viscoforce static --h0 2nm --E 1e9 --E0 1e10`) is reported "
-     "by the top-level parser as 'viscoforce: error: unrecognized arguments: --E0 1e10', not "
-     "with the 'viscoforce static: error:' prefix of every other error of the command")
 def test_cli_unrecognised_option_names_the_command(capsys, untouched):
     run_user_error(capsys, _with(STATIC, "--E0", "1e10"), r"unrecognized arguments: --E0",
                    untouched)

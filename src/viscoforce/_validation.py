@@ -22,7 +22,12 @@ def describe_value(value: Any) -> str:
     """Short text for a rejected value in a message: ``None``, ``str 'abc'``, ``ndarray array([...])``."""
     if value is None:
         return "None"
-    return f"{type(value).__name__} {reprlib.repr(value)}"
+    return f"{type(value).__name__} {reprlib.repr(shown(value))}"
+
+
+def shown(value: Any) -> Any:
+    """``value`` with numpy scalars as plain Python numbers (``-1e-10``, not ``np.float64(-1e-10)``)."""
+    return value.item() if isinstance(value, np.generic) else value
 
 
 def require_instance(name: str, value: Any, cls: type | tuple[type, ...], *,
@@ -61,12 +66,13 @@ def _is_complex(value: Any) -> bool:
 def _as_real_float(name: str, value: Any) -> float:
     if isinstance(value, float):  # fast path (also numpy float64)
         return float(value)
-    if isinstance(value, bool) or _is_complex(value):
-        raise ParameterError(f"{name} must be a real number, got {value!r}")
+    if isinstance(value, bool | str | bytes | np.bool_) or _is_complex(value):
+        # text is refused, not parsed: "1e9" may be a quantity without its unit (the CLI parses)
+        raise ParameterError(f"{name} must be a real number, got {shown(value)!r}")
     try:
         x = float(value)
     except (TypeError, ValueError):
-        raise ParameterError(f"{name} must be a real number, got {value!r}") from None
+        raise ParameterError(f"{name} must be a real number, got {shown(value)!r}") from None
     return x
 
 
@@ -74,7 +80,7 @@ def require_finite(name: str, value: Any) -> float:
     """Return ``value`` as a float, raising if it is not a finite real number."""
     x = _as_real_float(name, value)
     if not math.isfinite(x):
-        raise ParameterError(f"{name} must be finite, got {value!r}")
+        raise ParameterError(f"{name} must be finite, got {shown(value)!r}")
     return x
 
 
@@ -82,7 +88,7 @@ def require_positive(name: str, value: Any) -> float:
     """Return ``value`` as a float, raising unless it is finite and > 0."""
     x = require_finite(name, value)
     if x <= 0:
-        raise ParameterError(f"{name} must be > 0, got {value!r}")
+        raise ParameterError(f"{name} must be > 0, got {shown(value)!r}")
     return x
 
 
@@ -90,7 +96,7 @@ def require_nonnegative(name: str, value: Any) -> float:
     """Return ``value`` as a float, raising unless it is finite and >= 0."""
     x = require_finite(name, value)
     if x < 0:
-        raise ParameterError(f"{name} must be >= 0, got {value!r}")
+        raise ParameterError(f"{name} must be >= 0, got {shown(value)!r}")
     return x
 
 
@@ -103,17 +109,31 @@ def require_in_range(name: str, value: Any, low: float, high: float, *,
     if not (lo_ok and hi_ok):
         lb = "[" if inclusive[0] else "("
         rb = "]" if inclusive[1] else ")"
-        raise ParameterError(f"{name} must be in {lb}{low:g}, {high:g}{rb}, got {value!r}")
+        raise ParameterError(f"{name} must be in {lb}{low:g}, {high:g}{rb}, got {shown(value)!r}")
     return x
 
 
 def require_int(name: str, value: Any, minimum: int) -> int:
     """Return ``value`` as an int, raising unless it is an integer >= ``minimum``."""
     if isinstance(value, bool) or not isinstance(value, int | np.integer):
-        raise ParameterError(f"{name} must be an integer >= {minimum}, got {value!r}")
+        raise ParameterError(f"{name} must be an integer >= {minimum}, got {shown(value)!r}")
     if value < minimum:
-        raise ParameterError(f"{name} must be an integer >= {minimum}, got {value!r}")
+        raise ParameterError(f"{name} must be an integer >= {minimum}, got {shown(value)!r}")
     return int(value)
+
+
+def _has_bool_or_text(values: Any) -> bool:
+    """True for a bool or text array, or a sequence holding bools or text.
+
+    True is not 1 rad/s, and "100" may be a quantity without its unit.
+    """
+    if isinstance(values, np.ndarray):
+        return values.dtype == np.bool_ or values.dtype.kind in "USO" and any(
+            isinstance(v, bool | str | bytes) for v in values.ravel())
+    if isinstance(values, list | tuple):
+        return any(isinstance(v, bool | np.bool_ | str | bytes) or _has_bool_or_text(v)
+                   for v in values)
+    return False
 
 
 def as_real_array(name: str, values: Any, kind: str = "a number or an array") -> NDArray[np.float64]:
@@ -126,6 +146,9 @@ def as_real_array(name: str, values: Any, kind: str = "a number or an array") ->
         return values
     if values is None or isinstance(values, dict | str | bytes) or _is_complex(values):
         raise ParameterError(f"{name} must be {kind} of real numbers, got {describe_value(values)}")
+    if isinstance(values, bool | np.bool_) or _has_bool_or_text(values):
+        raise ParameterError(f"{name} must be {kind} of real numbers, got "
+                             f"{describe_value(values)}")
     try:
         arr = np.asarray(values, dtype=float)
     except (TypeError, ValueError):

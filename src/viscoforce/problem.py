@@ -22,7 +22,12 @@ from viscoforce._validation import (
     require_int,
     require_positive,
 )
-from viscoforce.exceptions import ModelValidityError, ModelValidityWarning, ParameterError
+from viscoforce.exceptions import (
+    EffortError,
+    ModelValidityError,
+    ModelValidityWarning,
+    ParameterError,
+)
 from viscoforce.physics.materials import ViscoelasticMaterial
 from viscoforce.physics.particle import Sphere
 from viscoforce.physics.surface_forces import SurfaceForceLaw
@@ -139,6 +144,12 @@ class ContactProblem:
         _check_geometry(self.sphere, self.surface_force)
         require_instance("material", self.material, ViscoelasticMaterial, what=_MATERIAL_KIND)
         require_instance("grid", self.grid, RadialGrid)
+        if self.grid.size > MAX_NODES:  # the influence matrix is dense: n² floats
+            need = 8.0 * self.grid.size ** 2
+            raise EffortError(
+                f"the grid has {self.grid.size} nodes (> {MAX_NODES}): its dense influence "
+                f"matrix would need {need / 2**30:.3g} GiB; use a coarser grid (fewer panels)",
+                estimate=float(self.grid.size), limit=float(MAX_NODES))
 
     @classmethod
     def create(cls, *, sphere: Sphere, surface_force: SurfaceForceLaw,

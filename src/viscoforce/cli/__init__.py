@@ -88,9 +88,10 @@ def _build_parser(command: Command | None) -> tuple[argparse.ArgumentParser,
 
 
 def _message(exc: BaseException) -> str:
+    """One line: the error's text with any line breaks (e.g. a parser's) folded."""
     if isinstance(exc, OSError) and exc.strerror and exc.filename is not None:
         return f"{exc.strerror}: {exc.filename}"
-    return str(exc)
+    return "; ".join(line.strip() for line in str(exc).splitlines() if line.strip())
 
 
 def _run(args: argparse.Namespace) -> int:
@@ -134,7 +135,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser, selected = _build_parser(_requested(argv))
     single, multi = value_options(parser, *([selected] if selected is not None else []))
     try:
-        args = parser.parse_args(normalize_negative_args(argv, single, multi))
+        args, extra = parser.parse_known_args(normalize_negative_args(argv, single, multi))
+        if extra:  # reported by the command's own parser, so the message names the command
+            (selected or parser).error(f"unrecognized arguments: {' '.join(extra)}")
     except SystemExit as exc:  # argparse printed the help, the version or its error message
         return 0 if exc.code is None else exc.code if isinstance(exc.code, int) else 2
     return _run(args)

@@ -449,7 +449,7 @@ def linear_response(problem: ContactProblem, position: float, eta: float,
     """
     problem = require_problem(problem)
     eta = require_number("eta", eta, require_positive, "> 0 [m] (finite)")
-    omega = require_frequencies(omega, allow_zero=True)
+    omega = require_frequencies(omega, allow_zero=False)
     k, mean = linear_stiffness(problem, position, omega)
     attrs = dict(problem.parameters())
     attrs.update({"method": "linear", "position": float(position), "eta": eta})

@@ -323,7 +323,7 @@ def svda_spectrum(problem: ContactProblem, position: float, eta: float,
         the position is in contact.
     """
     problem, params, position, eta, omega = _svda_inputs(problem, position, eta, omega,
-                                                         allow_zero=True)
+                                                         allow_zero=False)
     resp = svda_harmonic_response(omega, position, eta, **params)
     k = resp.stiffness * np.exp(1j * np.radians(resp.phase))
     attrs = dict(problem.parameters())

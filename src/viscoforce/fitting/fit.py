@@ -24,9 +24,11 @@ from viscoforce.exceptions import ConvergenceError, ModelValidityError, Paramete
 from viscoforce.fitting import _params
 from viscoforce.fitting.models import (
     MAX_AUTO_MODES,
+    MAX_MODES,
     MODAL_MODELS,
     SPECTRUM_MODELS,
     FitModel,
+    check_fixed,
     make_model,
 )
 from viscoforce.schema import make_fit_result, validate_spectrum
@@ -316,13 +318,15 @@ def _fixed_attrs(fixed: Mapping[str, Any]) -> dict[str, Any]:
 # ── public entry points ─────────────────────────────────────────────────────────────────────────
 
 def _check_modes(name: str, modes: Any) -> int | str:
-    if modes == "auto":
+    if isinstance(modes, str) and modes == "auto":
         if name not in MODAL_MODELS:
             raise ParameterError(f"modes='auto' needs a model with several modes "
                                  f"({', '.join(MODAL_MODELS)}), got {name!r}")
         return "auto"
-    if isinstance(modes, bool) or not isinstance(modes, int | np.integer) or modes < 1:
-        raise ParameterError(f"modes must be an integer >= 1 or 'auto', got {modes!r}")
+    if isinstance(modes, bool) or not isinstance(modes, int | np.integer) or not (
+            1 <= modes <= MAX_MODES):
+        raise ParameterError(f"modes must be an integer in [1, {MAX_MODES}] or 'auto', got "
+                             f"{modes!r}")
     return int(modes)
 
 
@@ -403,6 +407,7 @@ def fit_spectrum(spectrum: xr.Dataset, model: str, *, modes: int | str = 1,
     if model not in SPECTRUM_MODELS:
         raise ParameterError(f"model {model!r} fits force curves, not spectra; spectrum models: "
                              f"{', '.join(SPECTRUM_MODELS)}")
+    fixed = check_fixed(model, fixed)
     data = spectrum_data(spectrum)
     if model == "contact" and fixed.get("indentation") is None:
         fixed["indentation"] = _data_indentation(spectrum)

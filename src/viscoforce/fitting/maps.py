@@ -125,6 +125,16 @@ def fit_map(ds: xr.Dataset, model: str, *, modes: int | str = 1, criterion: str 
         ``<name>``, ``<name>_stderr``, ``correlation``, ``success``, ``message``, ``redchi``,
         ``aic``, ``bic``, ``modes`` over the map dims; ``attrs`` ``n_fits``, ``n_failed``.
     """
+    from viscoforce.fitting.models import MODEL_NAMES, check_fixed
+
+    if not isinstance(model, str) or model not in MODEL_NAMES:
+        raise ParameterError(f"model must be one of {', '.join(MODEL_NAMES)}, got {model!r}")
+    if scheduler is not None and not isinstance(scheduler, str):
+        raise ParameterError(f"scheduler must be a scheduler address (str, e.g. "
+                             f"'tcp://host:8786'), 'synchronous' or None, got {scheduler!r}")
+    if not isinstance(progress, bool):
+        raise ParameterError(f"progress must be True or False, got {progress!r}")
+    fixed = check_fixed(model, fixed)
     items, dims, layout = pixel_data(ds, model, segment=segment)
     n = len(items)
     if scheduler is None and workers is None and n <= SMALL_MAP:

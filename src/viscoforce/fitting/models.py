@@ -520,6 +520,52 @@ def _step_model(spec: ModelSpec) -> FitModel:
     return FitModel(spec, function, _material_layout(1), "t", guesser, _time_window)
 
 
+#: Most relaxation modes of one model (a fit needs several data points per mode).
+MAX_MODES = 12
+
+_FIXED: dict[str, tuple[str, ...]] = {
+    "svda": ("position", "mean_force", "radius", "P", "debye_length"),
+    "exact": ("position", "mean_force", "problem"),
+    "contact": ("radius", "indentation", "drag", "material"),
+    "prony": (), "relaxation": (), "step": ("problem", "position_trace")}
+
+
+def check_fixed(name: str, fixed: Mapping[str, Any]) -> dict[str, Any]:
+    """The fixed inputs of model ``name``, validated (None means not given).
+
+    Raises
+    ------
+    TypeError
+        An input the model does not take.
+    ParameterError
+        A value out of range (the message names it and the range).
+    """
+    from viscoforce._validation import (
+        require_finite,
+        require_instance,
+        require_nonnegative,
+        require_positive,
+    )
+
+    unknown = sorted(set(fixed) - set(_FIXED[name]))
+    if unknown:
+        raise TypeError(f"model {name!r} takes no input {', '.join(unknown)}; its inputs: "
+                        f"{', '.join(_FIXED[name]) or 'none'}")
+    checks: dict[str, Callable[[str, Any], Any]] = {
+        "position": require_finite, "mean_force": require_positive, "radius": require_positive,
+        "P": require_positive, "debye_length": require_positive, "indentation": require_finite,
+        "drag": require_nonnegative,
+        "problem": lambda n, v: require_instance(n, v, ContactProblem),
+        "material": lambda n, v: v if v in CONTACT_MATERIALS else _bad_material(v),
+        "position_trace": lambda n, v: v}
+    return {k: (None if v is None else checks[k](k, v)) for k, v in fixed.items()}
+
+
+def _bad_material(value: Any) -> None:
+    raise ParameterError(f"material must be one of {', '.join(CONTACT_MATERIALS)}, "
+                         f"got {value!r}")
+
+
 _BUILDERS: dict[str, Callable[[ModelSpec], FitModel]] = {
     "svda": _svda_model, "exact": _exact_model, "contact": _contact_model,
     "prony": _prony_model, "relaxation": _relaxation_model, "step": _step_model}
@@ -546,10 +592,12 @@ def make_model(name: str, modes: int = 1, **fixed: Any) -> FitModel:
     ModelValidityError
         The model cannot describe the scene (contact at no indentation).
     """
-    if name not in _BUILDERS:
+    if not isinstance(name, str) or name not in _BUILDERS:
         raise ParameterError(f"model must be one of {', '.join(MODEL_NAMES)}, got {name!r}")
-    if isinstance(modes, bool) or not isinstance(modes, int | np.integer) or modes < 1:
-        raise ParameterError(f"modes must be an integer >= 1, got {modes!r}")
+    if isinstance(modes, bool) or not isinstance(modes, int | np.integer) or not (
+            1 <= modes <= MAX_MODES):
+        raise ParameterError(f"modes must be an integer in [1, {MAX_MODES}], got {modes!r}")
+    fixed = check_fixed(name, fixed)
     if modes > 1 and name not in MODAL_MODELS:
         raise ParameterError(f"model {name!r} has one mode (modes=1), got modes={modes}; "
                              f"models with several: {', '.join(MODAL_MODELS)}")
