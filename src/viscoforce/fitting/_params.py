@@ -65,10 +65,13 @@ def reported_names(layout: Sequence[Item]) -> list[str]:
     return names
 
 
-def build_parameters(layout: Sequence[Item], guess: Mapping[str, float]) -> lmfit.Parameters:
+def build_parameters(layout: Sequence[Item], guess: Mapping[str, float], *,
+                     expressions: bool = True) -> lmfit.Parameters:
     """Lmfit Parameters for ``layout`` starting at ``guess`` (SPEC name → value in SI).
 
     Chain values out of order in ``guess`` are pushed apart to keep every ratio ≥ 1.
+    ``expressions=False`` leaves out the SPEC names of chains (their expressions): what the
+    minimiser varies, without lmfit evaluating expressions on every call.
     """
     params = lmfit.Parameters()
     for item in layout:
@@ -78,11 +81,12 @@ def build_parameters(layout: Sequence[Item], guess: Mapping[str, float]) -> lmfi
             value = min(max(float(guess[item.name]), item.low), item.high)
             params.add(item.name, value=value, min=item.low, max=item.high)
         else:
-            _add_chain(params, item, guess)
+            _add_chain(params, item, guess, expressions)
     return params
 
 
-def _add_chain(params: lmfit.Parameters, chain: Chain, guess: Mapping[str, float]) -> None:
+def _add_chain(params: lmfit.Parameters, chain: Chain, guess: Mapping[str, float],
+               expressions: bool = True) -> None:
     first, *rest = chain.names
     start = float(guess[first])
     if not (start > 0 and math.isfinite(start)):
@@ -90,14 +94,16 @@ def _add_chain(params: lmfit.Parameters, chain: Chain, guess: Mapping[str, float
     lo, hi = chain.bounds or (start * 10 ** -WINDOW_DECADES, start * 10 ** WINDOW_DECADES)
     start = min(max(start, lo), hi)
     params.add(f"log_{first}", value=math.log10(start), min=math.log10(lo), max=math.log10(hi))
-    params.add(first, expr=f"10**log_{first}")
+    if expressions:
+        params.add(first, expr=f"10**log_{first}")
     previous, value = first, start
     for name in rest:
         wanted = float(guess[name])
         ratio = wanted / value if wanted > value and math.isfinite(wanted) else 1.5
         log_ratio = min(math.log10(ratio), chain.max_ratio_decades - 1e-9)
         params.add(f"log_{name}", value=log_ratio, min=0.0, max=chain.max_ratio_decades)
-        params.add(name, expr=f"{previous}*10**log_{name}")
+        if expressions:
+            params.add(name, expr=f"{previous}*10**log_{name}")
         previous, value = name, value * 10 ** log_ratio
 
 

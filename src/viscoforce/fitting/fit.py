@@ -164,17 +164,17 @@ class Outcome:
 
     def evaluate(self, x: np.ndarray) -> np.ndarray:
         """The best-fit model over ``x`` (ω or t)."""
-        return self.model.func(x, **self.values)
+        return self.model.raw(np.asarray(x, dtype=float), self.values)
 
 
 def _residual(model: FitModel, data: FitData):
-    func, layout, x, y = model.func, model.layout, data.x, data.y
+    func, layout, x, y = model.raw, model.layout, data.x, data.y
     weights = None if data.weights is None else (
         data.weights.view(float) if np.iscomplexobj(data.weights) else data.weights)
 
     def residual(params: lmfit.Parameters) -> np.ndarray:
         values, _ = _params.to_reported(layout, params.valuesdict())
-        diff = np.asarray(y - func(x, **values))
+        diff = np.asarray(y - func(x, values))
         if np.iscomplexobj(diff):
             diff = diff.view(float)
         if weights is not None:
@@ -205,7 +205,7 @@ def fit_once(model: FitModel, data: FitData, *, starts: int = 2) -> Outcome:
     ConvergenceError
         No start gave a finite fit.
     """
-    first = _params.internal_parameters(model.guess(data.y, data.x))
+    first = model.internal_guess(data.y, data.x)
     n_free = sum(1 for p in first.values() if p.vary)
     if data.n_values <= n_free:
         raise ParameterError(
@@ -348,8 +348,7 @@ def select(data: FitData, name: str, *, modes: int | str = 1, criterion: str = "
     worse = 0
     for n in range(1, max_modes + 1):
         model = make_model(name, n, **fixed)
-        n_free = sum(1 for p in model.guess(data.y, data.x).values() if p.vary)
-        if n_free >= data.n_values:
+        if len(model.names) >= data.n_values:  # one internal parameter per SPEC name
             break
         try:
             outcomes.append(fit_once(model, data))

@@ -80,6 +80,9 @@ class FitModel(lmfit.Model):
         self.independent = independent
         self._guesser = guesser
         self._tau_window = tau_window
+        #: ``raw(x, values)``: the model function on a mapping of SPEC values (no signature
+        #: binding: what the fit loop calls).
+        self.raw = function
         names = P.reported_names(layout)
         super().__init__(_signed(function, independent, names), independent_vars=[independent],
                          name=spec.name)
@@ -89,8 +92,13 @@ class FitModel(lmfit.Model):
         """The SPEC parameter names, in layout order."""
         return P.reported_names(self.layout)
 
-    def parameters_from(self, values: Mapping[str, float], x: np.ndarray) -> lmfit.Parameters:
-        """Parameters starting at ``values`` (SPEC names), with the bounds for data over ``x``."""
+    def parameters_from(self, values: Mapping[str, float], x: np.ndarray, *,
+                        expressions: bool = True) -> lmfit.Parameters:
+        """Parameters starting at ``values`` (SPEC names), with the bounds for data over ``x``.
+
+        ``expressions=False``: the internal parameters only (see
+        :func:`viscoforce.fitting._params.build_parameters`).
+        """
         layout = self.layout
         if self._tau_window is not None:
             window = self._tau_window(x)
@@ -98,7 +106,7 @@ class FitModel(lmfit.Model):
                 "tau") else i for i in layout]
         layout = [P.Chain(i.names, MODULUS_BOUNDS) if isinstance(i, P.Chain) and i.names[0] in (
             "E_inf", "E0") else i for i in layout]
-        return P.build_parameters(layout, values)
+        return P.build_parameters(layout, values, expressions=expressions)
 
     def guess(self, data: np.ndarray, x: np.ndarray | None = None, **kws: Any) -> lmfit.Parameters:
         """Starting parameters from the data alone (complex k* over ω, or F over t)."""
@@ -108,6 +116,11 @@ class FitModel(lmfit.Model):
             raise ParameterError(f"guess needs the independent variable {self.independent!r}")
         x = np.asarray(x, dtype=float)
         return self.parameters_from(self._guesser(np.asarray(data), x), x)
+
+    def internal_guess(self, data: np.ndarray, x: np.ndarray) -> lmfit.Parameters:
+        """The internal (``log_…``) parameters of :meth:`guess`, without the expressions."""
+        x = np.asarray(x, dtype=float)
+        return self.parameters_from(self._guesser(np.asarray(data), x), x, expressions=False)
 
 
 def _signed(function: Callable[..., np.ndarray], independent: str,
