@@ -2,7 +2,9 @@ r"""Sine-modulation segments of measured force curves → spectrum (:func:`modul
 
 Placement: this module needs both :mod:`viscoforce.io` (to read JPK archives into curves) and
 :mod:`viscoforce.lockin` (to demodulate). Those two are siblings of one layer and may not import
-each other, so it lives in :mod:`viscoforce.experiments`, the layer above both.
+each other, so it lives in :mod:`viscoforce.experiments`, the layer above both. From a JPK
+archive the curves are demodulated segment by segment as decoded (the numbers
+:func:`~viscoforce.io.curves.jpk_to_curves` would store, without building that dataset).
 
 Per modulation segment of each curve (``segment_name == "modulation"``, frequency f from
 ``segment_frequency``, ω = 2πf):
@@ -87,6 +89,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Iterable, Mapping
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -95,10 +98,10 @@ import xarray as xr
 from scipy.optimize import minimize_scalar
 
 from viscoforce.exceptions import ParameterError
-from viscoforce.io.curves import jpk_to_curves
+from viscoforce.io.curves import _read_block
 from viscoforce.io.jpk import JPKArchive, read_jpk
 from viscoforce.lockin import harmonics
-from viscoforce.schema import make_spectrum, phase_quality, validate_curves
+from viscoforce.schema import clean_attrs, make_spectrum, phase_quality, validate_curves
 
 __all__ = ["demodulate_segment", "find_contact_point", "modulation_spectrum"]
 
@@ -329,15 +332,6 @@ def _segment_samples(seg: np.ndarray) -> dict[int, slice | np.ndarray]:
     return where
 
 
-def _approach_contact(tip: np.ndarray, force: np.ndarray, where: Mapping[int, slice | np.ndarray],
-                      names: np.ndarray, options: Mapping[str, Any]) -> dict[str, Any] | None:
-    """Contact point on the curve's (first) approach segment, or None."""
-    rows = [row for row in where if names[row] == "approach"]
-    if not rows:
-        return None
-    m = where[rows[0]]
-    return find_contact_point(tip[m], force[m], **options)
-
 def _reference_lags(reference: Any, fr: np.ndarray) -> np.ndarray:
     """Instrument lag [degree] per frequency from a hard-surface reference spectrum."""
     if not isinstance(reference, xr.Dataset) or "phase" not in reference.variables \
@@ -382,24 +376,105 @@ def _lag_for(phase_lag: float | Mapping[float, float] | None, frequency: float) 
     return float(phase_lag)
 
 
+@dataclass(frozen=True, eq=False)
+class _Input:
+    """What the lock-in reads, from a JPK archive or a curves dataset.
+
+    ``curves``: per selected curve, its segments as (segment-table row, time, force,
+    tip_position, height), rows in order of first appearance; ``rows`` the curve rows of the
+    dataset (for messages); per segment-table row ``names``, ``freq`` [Hz], ``nominal`` [m],
+    ``base`` [N]; per curve ``x``, ``y`` [m] and ``index``; ``attrs`` those of the curves dataset.
+    """
+
+    curves: list[list[tuple[int, np.ndarray, np.ndarray, np.ndarray, np.ndarray]]]
+    rows: list[int]
+    names: Any
+    freq: np.ndarray
+    nominal: np.ndarray
+    base: np.ndarray
+    x: np.ndarray
+    y: np.ndarray
+    index: np.ndarray
+    attrs: dict[str, Any]
+
+
+def _input_of_archive(archive: JPKArchive, curves: int | Iterable[int] | None,
+                      height_channel: str | None) -> _Input:
+    """The segments of the selected curves as decoded: what the curves dataset would hold.
+
+    Same numbers as :func:`~viscoforce.io.curves.jpk_to_curves` followed by the dataset path,
+    without flattening the curves into one dataset (tip_position = −height − deflection, per
+    segment as ``make_curves`` computes it per sample).
+    """
+    block = _read_block(archive, curves, height_channel)
+    table, cols = block.table, block.cols
+    segments: list[list[tuple[int, np.ndarray, np.ndarray, np.ndarray, np.ndarray]]] = [
+        [] for _ in block.picked]
+    for row, (t, f, h, d) in enumerate(zip(cols["time"], cols["force"], cols["height"],
+                                           cols["deflection"], strict=True)):
+        segments[table["curve"][row]].append((row, t, f, -h - d, h))
+    attrs = clean_attrs(block.attrs)
+    attrs["source"] = "jpk"
+    return _Input(curves=segments, rows=list(range(len(block.picked))), names=table["name"],
+                  freq=np.asarray(table["frequency"], dtype=float),
+                  nominal=np.asarray(table["amplitude"], dtype=float),
+                  base=np.asarray(table["baseline"], dtype=float),
+                  x=np.asarray([c.x for c in block.decoded], dtype=float),
+                  y=np.asarray([c.y for c in block.decoded], dtype=float),
+                  index=np.asarray(block.picked, dtype=np.int32), attrs=attrs)
+
+
+def _input_of_dataset(ds: xr.Dataset, rows: np.ndarray | None) -> _Input:
+    """The segments of curve ``rows`` (None: all) of a valid curves dataset."""
+    if "segment_frequency" not in ds.variables:
+        raise ParameterError("the curves dataset has no 'segment_frequency' [Hz] over "
+                             "segment_table: the modulation frequencies are unknown")
+    counts = np.asarray(ds["sample_count"].values)
+    starts = np.concatenate([[0], np.cumsum(counts)[:-1]])
+    rows = np.arange(counts.size) if rows is None else rows
+    freq = np.asarray(ds["segment_frequency"].values, dtype=float)
+    nominal = (np.asarray(ds["segment_amplitude"].values, dtype=float)
+               if "segment_amplitude" in ds.variables else np.full(freq.size, np.nan))
+    base = (np.asarray(ds["segment_baseline"].values, dtype=float)
+            if "segment_baseline" in ds.variables else np.full(freq.size, np.nan))
+    time = np.asarray(ds["time"].values, dtype=float)
+    force = np.asarray(ds["force"].values, dtype=float)
+    tip = np.asarray(ds["tip_position"].values, dtype=float)
+    height = np.asarray(ds["height"].values, dtype=float)
+    seg = np.asarray(ds["segment"].values)
+    segments = []
+    for r in rows:
+        sl = slice(int(starts[r]), int(starts[r] + counts[r]))
+        c_time, c_force, c_tip, c_height = time[sl], force[sl], tip[sl], height[sl]
+        segments.append([(row, c_time[m], c_force[m], c_tip[m], c_height[m])
+                         for row, m in _segment_samples(seg[sl]).items()])
+    return _Input(curves=segments, rows=[int(r) for r in rows],
+                  names=np.asarray(ds["segment_name"].values).astype(str), freq=freq,
+                  nominal=nominal, base=base,
+                  x=ds["x"].values[rows] if "x" in ds.variables else np.full(len(rows), np.nan),
+                  y=ds["y"].values[rows] if "y" in ds.variables else np.full(len(rows), np.nan),
+                  index=ds["curve"].values[rows] if "curve" in ds.coords else rows,
+                  attrs=dict(ds.attrs))
+
+
 def _curves_of(data: Any, curves: int | Iterable[int] | None, height_channel: str | None
-               ) -> tuple[xr.Dataset, np.ndarray | None]:
-    """The curves dataset and the rows of ``curve`` to use (None: all)."""
+               ) -> _Input:
+    """The segments to demodulate, from an archive, a path to one or a curves dataset."""
     if isinstance(data, str | Path):
         with read_jpk(data) as archive:  # opened here, so closed here
-            return jpk_to_curves(archive, curves=curves, height_channel=height_channel), None
+            return _input_of_archive(archive, curves, height_channel)
     if isinstance(data, JPKArchive):
-        return jpk_to_curves(data, curves=curves, height_channel=height_channel), None
+        return _input_of_archive(data, curves, height_channel)
     if isinstance(data, xr.Dataset):
         ds = validate_curves(data)
         if curves is None:
-            return ds, None
+            return _input_of_dataset(ds, None)
         picked = [curves] if isinstance(curves, int | np.integer) else list(curves)
         n = ds.sizes["curve"]
         if not picked or any(isinstance(c, bool) or not isinstance(c, int | np.integer)
                              or not -n <= c < n for c in picked):
             raise ParameterError(f"curves {picked} must be integers in [{-n}, {n})")
-        return ds, np.asarray([c % n for c in picked])
+        return _input_of_dataset(ds, np.asarray([c % n for c in picked]))
     raise ParameterError("modulation_spectrum needs a JPKArchive, a path to one, or a curves "
                          f"dataset, got {type(data).__name__}")
 
@@ -490,35 +565,17 @@ def modulation_spectrum(data: Any, *, curves: int | Iterable[int] | None = None,
     else:
         raise ParameterError(f"contact_point must be True, False or a mapping of "
                              f"find_contact_point options, got {contact_point!r}")
-    ds, rows = _curves_of(data, curves, height_channel)
-    if "segment_frequency" not in ds.variables:
-        raise ParameterError("the curves dataset has no 'segment_frequency' [Hz] over "
-                             "segment_table: the modulation frequencies are unknown")
-    counts = np.asarray(ds["sample_count"].values)
-    starts = np.concatenate([[0], np.cumsum(counts)[:-1]])
-    rows = np.arange(counts.size) if rows is None else rows
-    names = np.asarray(ds["segment_name"].values).astype(str)
-    freq = np.asarray(ds["segment_frequency"].values, dtype=float)
-    nominal = (np.asarray(ds["segment_amplitude"].values, dtype=float)
-               if "segment_amplitude" in ds.variables else np.full(freq.size, np.nan))
-    base = (np.asarray(ds["segment_baseline"].values, dtype=float)
-            if "segment_baseline" in ds.variables else np.full(freq.size, np.nan))
-    time = np.asarray(ds["time"].values, dtype=float)
-    force = np.asarray(ds["force"].values, dtype=float)
-    tip = np.asarray(ds["tip_position"].values, dtype=float)
-    height = np.asarray(ds["height"].values, dtype=float)
-    seg = np.asarray(ds["segment"].values)
+    inp = _curves_of(data, curves, height_channel)
+    names, freq, nominal, base = inp.names, inp.freq, inp.nominal, inp.base
 
     results: list[dict[float, tuple[int, dict[str, Any]]]] = []
     contacts: list[dict[str, Any] | None] = []
-    for r in rows:
-        sl = slice(int(starts[r]), int(starts[r] + counts[r]))
+    for r, segments in zip(inp.rows, inp.curves, strict=True):
         found: dict[float, tuple[int, dict[str, Any]]] = {}
-        c_time, c_force, c_tip, c_height = time[sl], force[sl], tip[sl], height[sl]
-        where = _segment_samples(seg[sl])
-        contacts.append(None if contact_options is None else _approach_contact(
-            c_tip, c_force, where, names, contact_options))
-        for row in sorted(where):
+        approach = [s for s in segments if names[s[0]] == "approach"]
+        contacts.append(None if contact_options is None or not approach else find_contact_point(
+            approach[0][3], approach[0][2], **contact_options))
+        for row, t, c_force, c_tip, c_height in sorted(segments, key=lambda s: s[0]):
             if names[row] != "modulation":
                 continue
             f = float(freq[row])
@@ -528,11 +585,9 @@ def modulation_spectrum(data: Any, *, curves: int | Iterable[int] | None = None,
             if any(math.isclose(f, g, rel_tol=1e-9) for g in found):
                 raise ParameterError(f"curve {r}: frequency {f:g} Hz is modulated twice; select "
                                      "segments first")
-            m = where[row]
-            t = c_time[m]
             dt = float(np.median(np.diff(t)))
             wait = settle if settle is not None else max(settle_periods / f - dt, 0.0)
-            out = _demodulate_stacked(t, np.vstack([c_force[m], c_tip[m], c_height[m]]), f,
+            out = _demodulate_stacked(t, np.vstack([c_force, c_tip, c_height]), f,
                                       settle=wait, detrend=detrend, dt=dt)
             out["settle"] = wait
             found[f] = (int(row), out)
@@ -545,7 +600,7 @@ def modulation_spectrum(data: Any, *, curves: int | Iterable[int] | None = None,
                              "select curves with the same set")
     fr = np.asarray(fsets[0])
     omega = 2.0 * math.pi * fr
-    shape = (len(rows), fr.size)
+    shape = (len(inp.rows), fr.size)
     k_raw = np.empty(shape, complex)
     arrays = {k: np.empty(shape) for k in ("eta", "eta_se", "mean", "mean_se", "rho", "snr",
                                            "nominal", "height", "periods", "n", "settle",
@@ -582,10 +637,8 @@ def modulation_spectrum(data: Any, *, curves: int | Iterable[int] | None = None,
     quality = phase_quality(phase)
     quality = np.where((quality == 0) & (arrays["snr"] < 3.0), 2, quality).astype(np.int8)
 
-    x = ds["x"].values[rows] if "x" in ds.variables else np.full(len(rows), np.nan)
-    y = ds["y"].values[rows] if "y" in ds.variables else np.full(len(rows), np.nan)
-    index = ds["curve"].values[rows] if "curve" in ds.coords else rows
-    attrs = {key: v for key, v in ds.attrs.items() if not key.startswith("segment_")}
+    x, y, index = inp.x, inp.y, inp.index
+    attrs = {key: v for key, v in inp.attrs.items() if not key.startswith("segment_")}
     attrs.update({
         "analysis": "lock-in of sine-modulation segments (viscoforce.experiments.modulation)",
         "indentation": "delta = tip_position (= -height - deflection) minus its mean: tip "
@@ -605,7 +658,7 @@ def modulation_spectrum(data: Any, *, curves: int | Iterable[int] | None = None,
                                     "hard-surface reference spectrum (plus its own phase_lag)")
         if "file" in phase_reference.attrs:
             attrs["phase_reference_file"] = str(phase_reference.attrs["file"])
-    source = str(ds.attrs.get("source", "jpk"))
+    source = str(inp.attrs.get("source", "jpk"))
     n_contact = int(np.isfinite(z_contact).sum())
     keep_indent = n_contact > 0 and (n_contact == z_contact.size or source != "simulation")
     if contact_options is None:
@@ -645,7 +698,7 @@ def modulation_spectrum(data: Any, *, curves: int | Iterable[int] | None = None,
                                       "long_name": "instrument phase lag subtracted"}),
         height_amplitude=(w, arrays["height"], {
             "units": "m", "long_name": "first-harmonic amplitude of the height channel",
-            "height_channel": str(ds.attrs.get("height_channel", "height"))}),
+            "height_channel": str(inp.attrs.get("height_channel", "height"))}),
         lockin_periods=(w, arrays["periods"].astype(np.int32),
                         {"units": "1", "long_name": "whole periods demodulated"}),
         lockin_samples=(w, arrays["n"].astype(np.int32),

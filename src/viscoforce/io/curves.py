@@ -35,6 +35,7 @@ from __future__ import annotations
 import math
 import operator
 from collections.abc import Iterable
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -90,7 +91,6 @@ def _select(archive: JPKArchive, curves: int | Iterable[int] | None) -> list[int
 
 
 def _height_channel(decoded: list[JPKCurve], wanted: str | None) -> str:
-    segments = [s for c in decoded for s in c.segments]
     if wanted is not None:
         if wanted not in HEIGHT_CHANNELS:
             raise ParameterError(f"height_channel must be one of {HEIGHT_CHANNELS}, got "
@@ -100,8 +100,14 @@ def _height_channel(decoded: list[JPKCurve], wanted: str | None) -> str:
         if missing:
             raise ParameterError(f"height_channel {wanted!r} is missing in {', '.join(missing[:5])}")
         return wanted
+    return _default_height([[s.units for s in c.segments] for c in decoded])
+
+
+def _default_height(units: list[list[dict[str, str]]]) -> str:
+    """The first of :data:`HEIGHT_CHANNELS` in metres in every segment (units per curve)."""
+    segments = [u for curve in units for u in curve]
     for name in HEIGHT_CHANNELS:
-        if all(name in s.channels and s.units.get(name, "m") == "m" for s in segments):
+        if all(u.get(name) == "m" for u in segments):
             return name
     raise InstrumentFormatError(
         "no height channel in metres is present in every segment (looked for "
@@ -155,6 +161,86 @@ def _file_attrs(archive: JPKArchive, first: JPKCurve, height: str) -> dict[str, 
     return attrs
 
 
+@dataclass(frozen=True, eq=False)
+class _Block:
+    """Decoded curves before they become a dataset (:func:`jpk_to_curves` flattens them).
+
+    ``cols`` holds one array per segment of every curve, in order (``time``, ``force``,
+    ``height``, ``deflection``) and, under ``segment``, the segment-table row of each;
+    ``table`` the segment table as lists; ``counts`` and ``baselines`` one entry per curve;
+    ``attrs`` the file attributes. Also read by :mod:`viscoforce.experiments.modulation`, which
+    demodulates the segments as they are instead of a flattened dataset.
+    """
+
+    picked: list[int]
+    decoded: list[JPKCurve]
+    height: str
+    cols: dict[str, list[Any]]
+    table: dict[str, list[Any]]
+    counts: list[int]
+    baselines: list[float]
+    attrs: dict[str, Any]
+
+
+def _read_block(archive: JPKArchive, curves: int | Iterable[int] | None,
+                height_channel: str | None) -> _Block:
+    """Decode and check the selected curves (see :func:`jpk_to_curves` for the errors)."""
+    if not isinstance(archive, JPKArchive):
+        raise ParameterError(f"archive must be a JPKArchive (from read_jpk), got "
+                             f"{type(archive).__name__}")
+    picked = _select(archive, curves)
+    if height_channel is None:  # chosen from the headers: the other heights are not decoded
+        height = _default_height([archive._units(i) for i in picked])
+        keep = frozenset(("vDeflection", height))
+        decoded = [archive._curve_only(i, keep) for i in picked]
+    else:
+        decoded = [archive.curve(i) for i in picked]  # through the archive's one open zip
+        height = _height_channel(decoded, height_channel)
+
+    cols: dict[str, list[Any]] = {"time": [], "force": [], "height": [], "deflection": [],
+                                 "segment": []}
+    table: dict[str, list[Any]] = {k: [] for k in (
+        "name", "type", "style", "curve", "index", "start_time", "duration", "num_points",
+        "frequency", "amplitude", "baseline")}
+    counts, baselines = [], []
+    for row, curve in enumerate(decoded):
+        n_curve = 0
+        for seg in curve.segments:
+            n = int(seg.num_points)
+            force = _require(seg, curve, "force", "N")
+            defl = _require(seg, curve, "vDeflection", "m")
+            h = _require(seg, curve, height, "m")
+            if not force.size == defl.size == h.size == n:
+                raise InstrumentFormatError(
+                    f"curve {curve.index} segment {seg.index}: channel lengths force {force.size}, "
+                    f"vDeflection {defl.size}, {height} {h.size} differ from num-points {n}")
+            cols["time"].append(seg.time)  # start_time + i * duration / num_points
+            cols["force"].append(force)
+            cols["deflection"].append(defl)
+            cols["height"].append(h)
+            cols["segment"].append(len(table["name"]))
+            mod = seg.modulation
+            table["name"].append(segment_name(seg.style, seg.type))
+            table["type"].append(seg.type)
+            table["style"].append(seg.style)
+            table["curve"].append(row)
+            table["index"].append(seg.index)
+            table["start_time"].append(float(seg.start_time))
+            table["duration"].append(float(seg.duration))
+            table["num_points"].append(n)
+            table["frequency"].append(math.nan if mod is None else float(mod.frequency))
+            table["amplitude"].append(math.nan if mod is None else float(mod.amplitude))
+            table["baseline"].append(_nan(seg.baseline))
+            n_curve += n
+        counts.append(n_curve)
+        known = [s.baseline for s in curve.segments if s.baseline is not None]
+        baselines.append(float(known[0]) if known else math.nan)
+
+    return _Block(picked=picked, decoded=decoded, height=height, cols=cols, table=table,
+                  counts=counts, baselines=baselines,
+                  attrs=_file_attrs(archive, decoded[0], height))
+
+
 def jpk_to_curves(archive: JPKArchive, *, curves: int | Iterable[int] | None = None,
                   height_channel: str | None = None) -> xr.Dataset:
     """The schema curves dataset of all (or the selected) curves of a JPK archive.
@@ -185,63 +271,22 @@ def jpk_to_curves(archive: JPKArchive, *, curves: int | Iterable[int] | None = N
     InstrumentFormatError
         If a segment lacks a calibrated ``vDeflection``/``force`` or any height channel.
     """
-    if not isinstance(archive, JPKArchive):
-        raise ParameterError(f"archive must be a JPKArchive (from read_jpk), got "
-                             f"{type(archive).__name__}")
-    picked = _select(archive, curves)
-    decoded = [archive.curve(i) for i in picked]  # through the archive's one open zip
-    height = _height_channel(decoded, height_channel)
-
-    cols: dict[str, list[np.ndarray]] = {"time": [], "force": [], "height": [], "deflection": [],
-                                         "segment": []}
-    table: dict[str, list[Any]] = {k: [] for k in (
-        "name", "type", "style", "curve", "index", "start_time", "duration", "num_points",
-        "frequency", "amplitude", "baseline")}
-    counts, baselines = [], []
-    for row, curve in enumerate(decoded):
-        n_curve = 0
-        for seg in curve.segments:
-            n = int(seg.num_points)
-            force = _require(seg, curve, "force", "N")
-            defl = _require(seg, curve, "vDeflection", "m")
-            h = _require(seg, curve, height, "m")
-            if not force.size == defl.size == h.size == n:
-                raise InstrumentFormatError(
-                    f"curve {curve.index} segment {seg.index}: channel lengths force {force.size}, "
-                    f"vDeflection {defl.size}, {height} {h.size} differ from num-points {n}")
-            cols["time"].append(seg.start_time + np.arange(n) * (seg.duration / n))
-            cols["force"].append(force)
-            cols["deflection"].append(defl)
-            cols["height"].append(h)
-            cols["segment"].append(np.full(n, len(table["name"]), dtype=np.int32))
-            mod = seg.modulation
-            table["name"].append(segment_name(seg.style, seg.type))
-            table["type"].append(seg.type)
-            table["style"].append(seg.style)
-            table["curve"].append(row)
-            table["index"].append(seg.index)
-            table["start_time"].append(float(seg.start_time))
-            table["duration"].append(float(seg.duration))
-            table["num_points"].append(n)
-            table["frequency"].append(math.nan if mod is None else float(mod.frequency))
-            table["amplitude"].append(math.nan if mod is None else float(mod.amplitude))
-            table["baseline"].append(_nan(seg.baseline))
-            n_curve += n
-        counts.append(n_curve)
-        known = [s.baseline for s in curve.segments if s.baseline is not None]
-        baselines.append(float(known[0]) if known else math.nan)
-
-    flat = {k: np.concatenate(v) for k, v in cols.items()}
+    block = _read_block(archive, curves, height_channel)
+    cols, table, decoded = block.cols, block.table, block.decoded
+    flat = {k: np.concatenate(v) for k, v in cols.items() if k != "segment"}
+    flat["segment"] = np.repeat(np.asarray(cols["segment"], dtype=np.int32),
+                                np.asarray(table["num_points"], dtype=np.intp))
     per_curve = {"x": [c.x for c in decoded], "y": [c.y for c in decoded],
                  "spring_constant": [c.spring_constant for c in decoded],
                  "sensitivity": [c.sensitivity for c in decoded]}
     ds = make_curves(flat["time"], flat["force"], flat["height"], flat["deflection"],
                      segment=flat["segment"], segment_names=table["name"],
-                     segment_types=table["type"], sample_count=counts, per_curve=per_curve,
-                     attrs=_file_attrs(archive, decoded[0], height), source="jpk")
+                     segment_types=table["type"], sample_count=block.counts,
+                     per_curve=per_curve,
+                     attrs=block.attrs, source="jpk")
     seg_dim = ("segment_table",)
     extra = {
-        "baseline": (("curve",), np.asarray(baselines, dtype=float),
+        "baseline": (("curve",), np.asarray(block.baselines, dtype=float),
                      {"units": "N", "long_name": "free-cantilever force baseline from the file "
                                                  "(not subtracted from force)"}),
         "segment_style": (seg_dim, np.asarray(table["style"], dtype=str),
@@ -264,6 +309,6 @@ def jpk_to_curves(archive: JPKArchive, *, curves: int | Iterable[int] | None = N
                              {"units": "N", "long_name": "free-cantilever force baseline"}),
     }
     ds = ds.assign(extra).assign_coords(
-        curve=("curve", np.asarray(picked, dtype=np.int32),
+        curve=("curve", np.asarray(block.picked, dtype=np.int32),
                {"units": "1", "long_name": "index of the curve in the archive"}))
     return validate_curves(ds)

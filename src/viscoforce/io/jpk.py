@@ -22,7 +22,11 @@ read and kept open for the next ones (one seek and read per member). After
 :meth:`JPKArchive.close`, after unpickling (an archive may be sent to dask workers; the handle
 is not pickled, the index is) and in a forked child, the next read reopens the file — without
 parsing the directory again. Reads of one archive are serialised by a lock, so threads may share
-it.
+it. The reader keeps, per segment-header text, its parsed and checked plan (the resolved
+properties, the dtype, encoder and calibration steps of every channel, the drive, the baseline;
+at most 256, then it starts again): a header repeated from curve to curve (a synthetic map's;
+real files differ by time stamp and position) is neither parsed nor resolved again, and
+:attr:`JPKSegment.settings` is a fresh copy each time.
 """
 
 from __future__ import annotations
@@ -49,6 +53,7 @@ from viscoforce._typing import FloatArray
 from viscoforce.exceptions import InstrumentFormatError
 from viscoforce.io._properties import (
     HeaderError,
+    conversion_steps,
     convert,
     encoder_prefix,
     get,
@@ -90,6 +95,8 @@ _HEADER = re.compile(r"^((?:index/\d+/)?)(?:segments/(\d+)/segment-)?header\.pro
 #: signature, name length and extra-field length of a zip local file header (30 bytes)
 _LOCAL_HEADER = struct.Struct("<4s22xHH")
 _LOCAL_SIGNATURE = b"PK\x03\x04"
+#: segment plans an archive reader keeps at most (then it forgets them all and starts again)
+_PLAN_CACHE = 256
 _ZIP_ERRORS = (zipfile.BadZipFile, zipfile.LargeZipFile, zlib.error, EOFError, NotImplementedError)
 
 
@@ -289,6 +296,8 @@ class _IndexedZip:
         self.source, self.index, self.where = source, index, where
         self._fp: BinaryIO | None = None
         self._zip: zipfile.ZipFile | None = None
+        #: segment header bytes -> its plan (headers repeat from curve to curve in a map)
+        self.plans: dict[bytes, _SegmentPlan] = {}
 
     def read(self, name: str) -> bytes:
         """Content of member ``name``; KeyError if absent, zipfile.BadZipFile if damaged."""
@@ -455,12 +464,7 @@ class JPKArchive:
             If the file cannot be reopened, or the curve's members are missing, corrupt or
             inconsistent.
         """
-        i = operator.index(i)
-        if not -self.n_curves <= i < self.n_curves:
-            raise IndexError(f"curve index {i} out of range for {self.n_curves} curves in {self.path}")
-        i %= self.n_curves
-        owner = bisect.bisect_right(self._first, i) - 1
-        return self._decode(owner, i - self._first[owner], i)
+        return self._decode(*self._locate(i))
 
     def curves(self) -> Iterator[JPKCurve]:
         """Decode the curves one after the other.
@@ -474,11 +478,36 @@ class JPKArchive:
             for local in range(len(layout.curves)):
                 yield self._decode(owner, local, self._first[owner] + local)
 
-    def _decode(self, owner: int, local: int, index: int) -> JPKCurve:
+    def _decode(self, owner: int, local: int, index: int,
+                only: frozenset[str] | None = None) -> JPKCurve:
         """Curve ``local`` of layout ``owner`` (global ``index``), under the lock."""
         layout = self._layouts[owner]
         with self._lock:
-            return _read_curve(self._zip_of(layout), layout, local, index)
+            return _read_curve(self._zip_of(layout), layout, local, index, only)
+
+    def _locate(self, i: int) -> tuple[int, int, int]:
+        """(layout, index in it, global index) of curve ``i``; IndexError when out of range."""
+        i = operator.index(i)
+        if not -self.n_curves <= i < self.n_curves:
+            raise IndexError(f"curve index {i} out of range for {self.n_curves} curves in {self.path}")
+        i %= self.n_curves
+        owner = bisect.bisect_right(self._first, i) - 1
+        return owner, i - self._first[owner], i
+
+    def _curve_only(self, i: int, channels: frozenset[str]) -> JPKCurve:
+        """:meth:`curve` decoding only the file channels ``channels`` (for the curves dataset)."""
+        return self._decode(*self._locate(i), channels)
+
+    def _units(self, i: int) -> list[dict[str, str]]:
+        """Per segment of curve ``i``, the unit of every output channel, from the headers only."""
+        owner, local, _ = self._locate(i)
+        layout = self._layouts[owner]
+        curve_dir, numbers = layout.curves[local]
+        with self._lock:
+            zf = self._zip_of(layout)
+            plans = [_plan_of(zf, layout, f"{curve_dir}segments/{s}/") for s in numbers]
+        return [{out: unit for channel in plan.channels for out, _, unit in channel.outputs}
+                for plan in plans]
 
     def _zip_of(self, layout: _Layout) -> _IndexedZip:
         """The reader of ``layout``'s members (opened on demand; call under the lock)."""
@@ -574,12 +603,17 @@ def _read_member(zf: _Members, name: str, where: _Where) -> bytes:
 def _read_props(zf: _Members, name: str, where: _Where,
                 blocks: dict[str, dict[str, str]] | None = None) -> dict[str, str]:
     """Parse header ``name``, resolving its shared-data references when ``blocks`` is given."""
-    data = _read_member(zf, name, where)
+    return _parse_props(_read_member(zf, name, where), where.at(name), blocks)
+
+
+def _parse_props(data: bytes, where: _Where,
+                 blocks: dict[str, dict[str, str]] | None = None) -> dict[str, str]:
+    """Parse header text ``data`` (member ``where``), resolving references when ``blocks``."""
     try:
         props = parse_properties(data)
         return resolve_references(props, blocks) if blocks is not None else props
     except HeaderError as exc:
-        raise where.at(name).error(str(exc)) from None
+        raise where.error(str(exc)) from None
 
 
 def _scan(zf: zipfile.ZipFile, where: _Where, member: str | None) -> _Layout:
@@ -639,7 +673,8 @@ def _located(where: _Where) -> Iterator[None]:
         raise where.error(str(exc)) from None
 
 
-def _read_curve(zf: _Members, layout: _Layout, local: int, index: int) -> JPKCurve:
+def _read_curve(zf: _Members, layout: _Layout, local: int, index: int,
+                only: frozenset[str] | None = None) -> JPKCurve:
     curve_dir, numbers = layout.curves[local]
     header = (layout.header if not curve_dir
               else _read_props(zf, f"{curve_dir}header.properties", layout.where, layout.blocks))
@@ -652,7 +687,7 @@ def _read_curve(zf: _Members, layout: _Layout, local: int, index: int) -> JPKCur
     segments: list[JPKSegment] = []
     start = 0.0
     for s in numbers:
-        segments.append(_read_segment(zf, layout, f"{curve_dir}segments/{s}/", s, start))
+        segments.append(_read_segment(zf, layout, f"{curve_dir}segments/{s}/", s, start, only))
         start += segments[-1].duration
     with_deflection = [seg for seg in segments if "vDeflection" in seg.channels]
     if not with_deflection:
@@ -666,34 +701,102 @@ def _read_curve(zf: _Members, layout: _Layout, local: int, index: int) -> JPKCur
                     sensitivity=sensitivity, metadata=header)
 
 
+@dataclass(frozen=True)
+class _ChannelPlan:
+    """How to decode one channel of a segment: everything its header fixes."""
+
+    name: str
+    dtype: str                                     # big-endian numpy dtype of the raw samples
+    file: str                                      # data file relative to the segment directory
+    declared: str | None                           # channel num-points as the header gives it
+    scaling: tuple[float, float] | None            # encoder (multiplier, offset); None: unencoded
+    outputs: tuple[tuple[str, tuple[tuple[float, float], ...], str], ...]  # (out, steps, unit)
+
+
+@dataclass(frozen=True, eq=False)
+class _SegmentPlan:
+    """The parsed, resolved and checked header of a segment: all but its samples and start."""
+
+    props: dict[str, str]
+    num_points: int
+    duration: float
+    style: str
+    type: str
+    channels: tuple[_ChannelPlan, ...]
+    modulation: JPKModulation | None
+    baseline: float | None
+    offsets: FloatArray                            # i * duration / num_points [s]
+
+
+def _segment_plan(props: dict[str, str]) -> _SegmentPlan:
+    """Plan of a resolved segment header; HeaderError naming the key when it is unusable."""
+    n = number(props, _SEG + "num-points", int)
+    duration = number(props, _SEG + "duration")
+    if n < 0 or not duration >= 0:
+        raise HeaderError(f"num-points={n}, duration={duration}: must be >= 0")
+    channels = []
+    for name in get(props, "channels.list").split():
+        dtype, scaling = _encoding(props, name)
+        pre = f"channel.{name}."
+        outputs = []
+        for out, slot, unit in _outputs(props, name):
+            steps = tuple(conversion_steps(props, name, slot))
+            found = slot_unit(props, name, slot)
+            if unit is not None and found != unit:
+                raise HeaderError(f"channel '{name}' slot '{slot}' is in {found!r}, "
+                                  f"expected {unit!r}")
+            outputs.append((out, steps, found))
+        channels.append(_ChannelPlan(name=name, dtype=dtype, file=get(props, pre + "data.file.name"),
+                                     declared=props.get(pre + "data.num-points"), scaling=scaling,
+                                     outputs=tuple(outputs)))
+    return _SegmentPlan(props=props, num_points=n, duration=duration,
+                        style=get(props, _SEG + "settings.style"), type=get(props, _SETTINGS + "type"),
+                        channels=tuple(channels), modulation=_modulation(props),
+                        baseline=_baseline(props),
+                        offsets=np.arange(n) * (duration / max(n, 1)))
+
+
+def _plan_of(zf: _Members, layout: _Layout, seg_dir: str) -> _SegmentPlan:
+    """The plan of segment ``seg_dir``'s header (kept by the reader, see the module docstring)."""
+    name = f"{seg_dir}segment-header.properties"
+    data = _read_member(zf, name, layout.where)
+    plans = zf.plans if isinstance(zf, _IndexedZip) else {}
+    plan = plans.get(data)
+    if plan is None:
+        props = _parse_props(data, layout.where.at(name), layout.blocks)
+        with _located(layout.where.at(name)):
+            plan = _segment_plan(props)
+        if len(plans) >= _PLAN_CACHE:
+            plans.clear()
+        plans[data] = plan
+    return plan
+
+
 def _read_segment(zf: _Members, layout: _Layout, seg_dir: str, seg_index: int,
-                  start_time: float) -> JPKSegment:
-    props = _read_props(zf, f"{seg_dir}segment-header.properties", layout.where, layout.blocks)
-    with _located(where := layout.where.at(f"{seg_dir}segment-header.properties")):
-        n = number(props, _SEG + "num-points", int)
-        duration = number(props, _SEG + "duration")
-        if n < 0 or not duration >= 0:
-            raise HeaderError(f"num-points={n}, duration={duration}: must be >= 0")
-        channels: dict[str, FloatArray] = {}
-        units: dict[str, str] = {}
-        for name in get(props, "channels.list").split():
-            base = _decode_raw(zf, props, name, seg_dir, n, where)
-            for out, slot, unit in _outputs(props, name):
-                channels[out] = convert(props, name, slot, base)
-                units[out] = slot_unit(props, name, slot)
-                if unit is not None and units[out] != unit:
-                    raise HeaderError(f"channel '{name}' slot '{slot}' is in {units[out]!r}, "
-                                      f"expected {unit!r}")
-        return JPKSegment(index=seg_index, style=get(props, _SEG + "settings.style"),
-                          type=get(props, _SETTINGS + "type"), start_time=start_time,
-                          duration=duration, num_points=n, channels=channels, units=units,
-                          time=start_time + np.arange(n) * (duration / max(n, 1)),
-                          modulation=_modulation(props), baseline=_baseline(props), settings=props)
+                  start_time: float, only: frozenset[str] | None = None) -> JPKSegment:
+    """Decode a segment: every channel, or the file channels named in ``only``."""
+    plan = _plan_of(zf, layout, seg_dir)
+    n = plan.num_points
+    channels: dict[str, FloatArray] = {}
+    units: dict[str, str] = {}
+    for channel in plan.channels:
+        if only is not None and channel.name not in only:
+            continue
+        base = _decode_raw(zf, channel, seg_dir, n, layout.where)
+        for out, steps, unit in channel.outputs:
+            values = base
+            for multiplier, offset in steps:  # as _properties.convert, step by step
+                values = values * multiplier + offset
+            channels[out] = values
+            units[out] = unit
+    return JPKSegment(index=seg_index, style=plan.style, type=plan.type, start_time=start_time,
+                      duration=plan.duration, num_points=n, channels=channels, units=units,
+                      time=start_time + plan.offsets, modulation=plan.modulation,
+                      baseline=plan.baseline, settings=dict(plan.props))
 
 
-def _decode_raw(zf: _Members, props: dict[str, str], name: str, seg_dir: str, n: int,
-                where: _Where) -> FloatArray:
-    """Samples of channel ``name`` in its base slot (raw * encoder multiplier + offset)."""
+def _encoding(props: dict[str, str], name: str) -> tuple[str, tuple[float, float] | None]:
+    """Raw dtype and encoder (multiplier, offset) of channel ``name`` (None: unencoded)."""
     pre, enc = f"channel.{name}.", encoder_prefix(props, name)
     fmt = props.get(pre + "data.file.format", "raw")
     if fmt != "raw":
@@ -703,25 +806,34 @@ def _decode_raw(zf: _Members, props: dict[str, str], name: str, seg_dir: str, n:
         if dtype is None:
             raise HeaderError(f"{enc}type={props[enc + 'type']!r} is an unknown encoder "
                               f"(known: {', '.join(_ENCODERS)})")
-    else:
-        data_type = props.get(pre + "type", props.get(pre + "data.type", ""))
-        dtype = _UNENCODED.get(data_type)
-        if dtype is None:
-            raise HeaderError(f"channel '{name}': unknown encoder (no {enc}type, and data type "
-                              f"{data_type!r} is not one of {', '.join(_UNENCODED)})")
-    member = seg_dir + get(props, pre + "data.file.name")
+        require_linear(props, enc + "scaling.")
+        return dtype, (number(props, enc + "scaling.multiplier"),
+                       number(props, enc + "scaling.offset"))
+    data_type = props.get(pre + "type", props.get(pre + "data.type", ""))
+    dtype = _UNENCODED.get(data_type)
+    if dtype is None:
+        raise HeaderError(f"channel '{name}': unknown encoder (no {enc}type, and data type "
+                          f"{data_type!r} is not one of {', '.join(_UNENCODED)})")
+    return dtype, None
+
+
+def _decode_raw(zf: _Members, channel: _ChannelPlan, seg_dir: str, n: int,
+                where: _Where) -> FloatArray:
+    """Samples of ``channel`` in its base slot (raw * encoder multiplier + offset)."""
+    member = seg_dir + channel.file
     data = _read_member(zf, member, where)
-    size = np.dtype(dtype).itemsize
-    declared = props.get(pre + "data.num-points")
+    size = np.dtype(channel.dtype).itemsize
+    declared = channel.declared
     if len(data) != n * size or (declared is not None and declared.strip() != str(n)):
         raise where.at(member).error(
-            f"holds {len(data)} bytes = {len(data) / size:g} samples of {dtype}, but the segment header "
-            f"says num-points={n} (channel num-points={declared}): truncated or inconsistent")
-    values = np.frombuffer(data, dtype=dtype).astype(np.float64)
-    if enc + "type" not in props:
+            f"holds {len(data)} bytes = {len(data) / size:g} samples of {channel.dtype}, but the "
+            f"segment header says num-points={n} (channel num-points={declared}): truncated or "
+            "inconsistent")
+    values = np.frombuffer(data, dtype=channel.dtype).astype(np.float64)
+    if channel.scaling is None:
         return values
-    require_linear(props, enc + "scaling.")
-    return values * number(props, enc + "scaling.multiplier") + number(props, enc + "scaling.offset")
+    multiplier, offset = channel.scaling
+    return values * multiplier + offset
 
 
 def _outputs(props: dict[str, str], name: str) -> tuple[tuple[str, str, str | None], ...]:
