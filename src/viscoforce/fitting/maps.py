@@ -99,8 +99,15 @@ def cluster(scheduler: str | None = None, workers: int | None = None) -> Iterato
     from distributed import Client, LocalCluster
 
     if scheduler is None:
-        with LocalCluster(n_workers=workers or 2, threads_per_worker=1, processes=True,
-                          dashboard_address=":0") as local, Client(local) as client:
+        import dask
+
+        # The fits are CPU-bound Python: dask's statistical profiler (a sampling thread in every
+        # worker) and fast system monitoring would take a share of the two cores.
+        quiet = {"distributed.worker.profile.enabled": False,
+                 "distributed.admin.system-monitor.interval": "2s"}
+        with dask.config.set(quiet), LocalCluster(
+                n_workers=workers or 2, threads_per_worker=1, processes=True,
+                dashboard_address=":0") as local, Client(local) as client:
             yield client
         return
     try:
