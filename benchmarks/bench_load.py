@@ -377,8 +377,13 @@ def run_dask(path: Path, n: int, block: int, open_mode: str, scheduler: str | No
     if scheduler:
         client = Client(scheduler)
     else:
-        cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
-                               dashboard_address=None, memory_limit=0)  # measure, not cap
+        import dask
+
+        # CPU-bound Python tasks: no statistical profiler thread in the workers (as fit_map)
+        with dask.config.set({"distributed.worker.profile.enabled": False,
+                              "distributed.admin.system-monitor.interval": "2s"}):
+            cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
+                                   dashboard_address=None, memory_limit=0)  # measure, not cap
         client = Client(cluster)
     startup = time.perf_counter() - t_c0
     try:
