@@ -121,15 +121,6 @@ def at_bound(params: lmfit.Parameters, *, rtol: float = 1e-6) -> list[str]:
     return hits
 
 
-def internal_parameters(params: lmfit.Parameters) -> lmfit.Parameters:
-    """The varied internal parameters of ``params`` alone (no expressions: fast to evaluate)."""
-    out = lmfit.Parameters()
-    for p in params.values():
-        if p.expr is None:
-            out.add(p.name, value=p.value, min=p.min, max=p.max, vary=p.vary)
-    return out
-
-
 def to_reported(layout: Sequence[Item], internal: Mapping[str, float]
                 ) -> tuple[dict[str, float], dict[str, dict[str, float]]]:
     """SPEC values from internal values, and their derivatives d(SPEC)/d(internal).
