@@ -9,6 +9,12 @@ import pytest
 
 from tests._bench import run_benchmark
 
+#: The paper's Fig. 3 scene (2 nm) is deliberately evaluated with the SVDA, which warns there
+#: (estimated error > 1 %, issue 15); the warning itself is tested in tests/test_failure_regions.py.
+pytestmark = pytest.mark.filterwarnings(
+    "ignore:the SVDA is about:viscoforce.exceptions.ModelValidityWarning")
+
+
 pytest.importorskip("dask.distributed")
 
 # documented in benchmarks/README.md, section bench_fit.py

@@ -26,6 +26,12 @@ from viscoforce.problem import ContactProblem
 from viscoforce.schema import make_spectrum, validate_fit_result
 from viscoforce.svda import svda_complex_stiffness
 
+#: The paper's Fig. 3 scene (2 nm) is deliberately evaluated with the SVDA, which warns there
+#: (estimated error > 1 %, issue 15); the warning itself is tested in tests/test_failure_regions.py.
+pytestmark = pytest.mark.filterwarnings(
+    "ignore:the SVDA is about:viscoforce.exceptions.ModelValidityWarning")
+
+
 OMEGA = np.geomspace(10.0, 1e6, 30)
 SVDA_FIXED = {"position": 2e-9, "radius": PAPER.R, "P": PAPER.P,
               "debye_length": PAPER.debye_length}

@@ -19,6 +19,7 @@ import contextlib
 import hashlib
 import re
 import signal
+import warnings
 import zipfile
 from pathlib import Path
 
@@ -41,6 +42,12 @@ from viscoforce.radial_grid import RadialGrid
 from viscoforce.schema import make_spectrum
 from viscoforce.svda import svda_complex_stiffness
 
+#: The paper's Fig. 3 scene (2 nm) is deliberately evaluated with the SVDA, which warns there
+#: (estimated error > 1 %, issue 15); the warning itself is tested in tests/test_failure_regions.py.
+pytestmark = pytest.mark.filterwarnings(
+    "ignore:the SVDA is about:viscoforce.exceptions.ModelValidityWarning")
+
+
 NM = 1e-9
 NAN = float("nan")
 INF = float("inf")
@@ -56,8 +63,10 @@ HOLD = vf.Hold(2 * NM, 1e-4)
 SVDA_FIXED = {"position": 2 * NM, "radius": PAPER.R, "P": PAPER.P,
               "debye_length": PAPER.debye_length}
 OMEGA = np.geomspace(10.0, 1e6, 12)
-K_SVDA = svda_complex_stiffness(OMEGA, 2 * NM, PAPER.E0, PAPER.E_inf, PAPER.tau, PAPER.R, PAPER.P,
-                                PAPER.debye_length)
+with warnings.catch_warnings():  # 2 nm: the SVDA warns (tested elsewhere)
+    warnings.simplefilter("ignore", vf.ModelValidityWarning)
+    K_SVDA = svda_complex_stiffness(OMEGA, 2 * NM, PAPER.E0, PAPER.E_inf, PAPER.tau, PAPER.R, PAPER.P,
+                                    PAPER.debye_length)
 SPECTRUM = make_spectrum(OMEGA, K_SVDA, np.full(OMEGA.size, 6e-8), 1e-10)
 MAP = make_spectrum(OMEGA, np.stack([K_SVDA, K_SVDA]), np.full((2, OMEGA.size), 6e-8), 1e-10,
                     dims=("curve", "omega"))

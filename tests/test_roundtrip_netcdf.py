@@ -27,6 +27,12 @@ from viscoforce.schema import (
     validate_fit_result,
 )
 
+#: The paper's Fig. 3 scene (2 nm) is deliberately evaluated with the SVDA, which warns there
+#: (estimated error > 1 %, issue 15); the warning itself is tested in tests/test_failure_regions.py.
+pytestmark = pytest.mark.filterwarnings(
+    "ignore:the SVDA is about:viscoforce.exceptions.ModelValidityWarning")
+
+
 HYPO = settings(max_examples=20, deadline=None,
                 suppress_health_check=[HealthCheck.function_scoped_fixture])
 ENGINES = ["h5netcdf", "scipy"]

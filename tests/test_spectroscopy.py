@@ -13,7 +13,6 @@ from viscoforce.exceptions import EffortError
 from viscoforce.experiments import Ramp
 from viscoforce.experiments.linear_response import linear_response, linear_stiffness
 from viscoforce.experiments.spectroscopy import (
-    choose_spectrum_method,
     spectrum,
     svda_spectrum,
     sweep,
@@ -22,6 +21,12 @@ from viscoforce.schema import SchemaError, validate_spectrum
 from viscoforce.solvers.simulate import simulate
 from viscoforce.solvers.svda_ode import solve_svda
 from viscoforce.svda import svda_peak_phase_frequency, svda_ramp_deformation
+
+#: The paper's Fig. 3 scene (2 nm) is deliberately evaluated with the SVDA, which warns there
+#: (estimated error > 1 %, issue 15); the warning itself is tested in tests/test_failure_regions.py.
+pytestmark = pytest.mark.filterwarnings(
+    "ignore:the SVDA is about:viscoforce.exceptions.ModelValidityWarning")
+
 
 TAU = vf.PAPER.tau
 SLS = vf.PAPER.material()
@@ -301,11 +306,13 @@ def test_spectrum_options_only_for_the_time_domain(make_problem):
         spectrum(make_problem(SLS, 1.9e-9), 2e-9, 1e-10, [1e3], method="linear", periods=2)
 
 
-def test_choose_spectrum_method_rejects_bad_arguments(make_problem):
-    with pytest.raises(vf.ParameterError, match=_PROBLEM):
-        choose_spectrum_method(None, 1e-10)
-    with pytest.raises(vf.ParameterError, match=_ETA):
-        choose_spectrum_method(make_problem(SLS, 1.9e-9), np.nan)
+def test_choose_spectrum_rejects_bad_arguments(make_problem):
+    from viscoforce.experiments.choice import choose_spectrum
+
+    with pytest.raises(vf.ParameterError, match="problem must be a ContactProblem"):
+        choose_spectrum(None, 2e-9, 1e-10, [1.0])
+    with pytest.raises(vf.ParameterError, match="eta must be"):
+        choose_spectrum(make_problem(SLS, 1.9e-9), 2e-9, np.nan, [1.0])
 
 
 # ── effort guards: refused before computing, the estimate in the message (fast) ────────────────

@@ -37,6 +37,7 @@ LEADS the compression −(h0 − h̄0); χ > 0 for a viscoelastic solid.
 from __future__ import annotations
 
 import math
+import warnings
 from typing import NamedTuple
 
 import numpy as np
@@ -58,7 +59,7 @@ from viscoforce.closed_form import (
     require_exponential_law,
     require_representable,
 )
-from viscoforce.exceptions import ParameterError
+from viscoforce.exceptions import ModelValidityWarning, ParameterError
 
 __all__ = [
     "svda_static_deformation",
@@ -67,6 +68,7 @@ __all__ = [
     "svda_harmonic_response",
     "svda_complex_stiffness",
     "svda_peak_phase_frequency",
+    "svda_error_estimate",
 ]
 
 
@@ -154,6 +156,41 @@ def svda_static_deformation(position: ArrayLike, E: float, radius: float, P: flo
     z = -np.exp(log_abs_z)
     return require_representable(-lambertw(z, k=0).real / kappa, "the SVDA static deformation u",
                                  "position, E, radius, P, debye_length")
+
+
+#: max over ω of |k*_SVDA/k*_exact − 1| ≈ SVDA_ERROR_COEFFICIENT·κ|u0| (u0 the relaxed central
+#: deformation): measured 0.585 for κ|u0| ≤ 0.03 (0.3–0.55 above) over R 1–100 µm, E 0.1–10 GPa,
+#: 1/κ 0.3–3 nm, E0/E_inf 3–100 (benchmarks/validity_maps.py).
+SVDA_ERROR_COEFFICIENT = 0.6
+#: Estimated SVDA error above which the closed forms warn (ModelValidityWarning).
+SVDA_WARN_ERROR = 1e-2
+
+
+def svda_error_estimate(position: ArrayLike, E_inf: float, radius: float, P: float,  # noqa: N803
+                        debye_length: float) -> FloatArray:
+    """Estimated relative error of the SVDA stiffness against the exact model: 0.6 κ|u0|.
+
+    u0 is the relaxed (E = E_inf) SVDA central deformation at ``position``
+    (:func:`svda_static_deformation`); see :data:`SVDA_ERROR_COEFFICIENT` for where the
+    coefficient was measured. The SVDA assumes a deformation uniform over the interaction zone,
+    so its error grows with the deformation measured in decay lengths.
+    """
+    u0 = svda_static_deformation(position, E_inf, radius, P, debye_length)
+    return SVDA_ERROR_COEFFICIENT * np.abs(u0) / float(debye_length)
+
+
+def warn_svda_error(position: float, E_inf: float, radius: float, P: float,  # noqa: N803
+                    debye_length: float, *, stacklevel: int = 3) -> float:
+    """Warn (ModelValidityWarning) when :func:`svda_error_estimate` exceeds 1 %; return it."""
+    error = float(np.max(svda_error_estimate(position, E_inf, radius, P, debye_length)))
+    if error > SVDA_WARN_ERROR:
+        warnings.warn(
+            f"the SVDA is about {100 * error:.2g} % off the exact model at position "
+            f"{float(position) * 1e9:.4g} nm (estimate 0.6 kappa|u0|; above "
+            f"{100 * SVDA_WARN_ERROR:g} %): the deformation is not small against the decay "
+            "length 1/kappa; use the exact model (method 'linear', model 'exact')",
+            ModelValidityWarning, stacklevel=stacklevel)
+    return error
 
 
 # ── SVDA ramp (Eqs. 19–21) ──────────────────────────────────────────────────────────────────────
@@ -375,6 +412,7 @@ def svda_harmonic_response(omega: ArrayLike, position: float, eta: float, E0: fl
     eta_ = require_nonnegative("eta", eta)
     u0, c, ratio, tau_, mean_force = _svda_mean_state(position, E0, E_inf, tau, radius,
                                                       P, debye_length)
+    warn_svda_error(position, E_inf, radius, P, debye_length)
     kappa = 1.0 / float(debye_length)
     with np.errstate(over="ignore", invalid="ignore"):
         x = w * tau_
@@ -456,6 +494,7 @@ def svda_complex_stiffness(omega: ArrayLike, position: float, E0: float, E_inf: 
     w = as_nonnegative_array("omega", omega)
     _, c, ratio, tau_, mean_force = _svda_mean_state(position, E0, E_inf, tau, radius, P,
                                                      debye_length)
+    warn_svda_error(position, E_inf, radius, P, debye_length)
     with np.errstate(over="ignore", invalid="ignore"):
         _, k_rel = _svda_transfer(w * tau_, c, ratio)
         k = (mean_force / float(debye_length)) * k_rel

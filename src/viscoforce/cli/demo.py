@@ -91,16 +91,18 @@ def _synthetic(folder: Path, out: Path, report: dict[str, Any]) -> Any:
     problem = ContactProblem.create(sphere=Sphere(PAPER.R), surface_force=paper_pressure_law(),
                                     material=StandardLinearSolid(1e10, 1e9, 1e-3),
                                     deepest_position=truth["h0"])
-    fit = fit_spectrum(spec, "exact", modes="auto", position=truth["h0"], problem=problem)
+    fit = fit_spectrum(spec, "auto", modes="auto", position=truth["h0"], problem=problem)
     elapsed = time.perf_counter() - start
     chosen = int(fit["modes"])
     print(f"1. {SYNTHETIC} (written by viscoforce from a simulation, {spec.sizes['omega']} "
-          f"frequencies): exact model at h0 = {truth['h0'] * 1e9:g} nm, --modes auto chose "
-          f"{chosen} mode(s) by BIC ({elapsed:.1f} s)")
+          f"frequencies): --model auto chose the {fit.attrs['model']} model at h0 = "
+          f"{truth['h0'] * 1e9:g} nm, --modes auto {chosen} mode(s) by BIC ({elapsed:.1f} s)")
+    print(f"   why: {fit.attrs['explanation']}")
     print("\n".join(_params(fit, truth)))
     _save_figure(bode_plot(spec, fit=fit, title="synthetic JPK archive: data and exact fit"),
                  str(out / "bode_synthetic.png"))
-    report["synthetic"] = {"modes": chosen, "seconds": elapsed, **{
+    report["synthetic"] = {"model": str(fit.attrs["model"]), "modes": chosen,
+                           "explanation": str(fit.attrs["explanation"]), "seconds": elapsed, **{
         n: [float(fit[n]), float(fit[f"{n}_stderr"])] for n in fit["param_i"].values}}
     return fit, problem, truth
 
@@ -116,7 +118,7 @@ def _loop(fit, problem, out: Path, report: dict[str, Any]) -> None:
     material = material_from({n: float(fit[n]) for n in fit["param_i"].values}, modes)
     deep = problem.with_material(material)
     start = time.perf_counter()
-    run = simulate(deep, Triangle(10e-9, -5e-9, 5e-6), progress=False)
+    run = simulate(deep, Triangle(10e-9, -5e-9, 5e-6), progress=False, stepper="auto")
     elapsed = time.perf_counter() - start
     handle = hysteresis_plot(run)
     handle.ax.set_title("exact solver, fitted material, 5 µm/s: loading (solid), unloading "
@@ -125,7 +127,9 @@ def _loop(fit, problem, out: Path, report: dict[str, Any]) -> None:
     peak = float(run["force"].max())
     print(f"2. exact solver, fitted material, triangle 10 → −5 → 10 nm at 5 µm/s: peak force "
           f"{peak * 1e6:.3g} µN, hysteresis loop in loop.png ({elapsed:.1f} s)")
-    report["loop"] = {"peak_force": peak, "seconds": elapsed}
+    print(f"   stepper: {run.attrs['explanation']}")
+    report["loop"] = {"peak_force": peak, "seconds": elapsed, "stepper": str(run.attrs["stepper"]),
+                      "explanation": str(run.attrs["explanation"])}
 
 
 def _real(folder: Path, out: Path, report: dict[str, Any]) -> None:

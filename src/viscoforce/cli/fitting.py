@@ -22,12 +22,13 @@ from viscoforce.cli._args import (
     add_flags,
     add_outputs,
     integer_type,
+    real_type,
 )
 from viscoforce.cli._output import print_json, print_written
 
 __all__ = ["SUBCOMMANDS", "modes_type", "read_data"]
 
-_MODELS = ("svda", "exact", "contact", "prony", "relaxation", "step")
+_MODELS = ("svda", "exact", "contact", "prony", "relaxation", "step", "auto")
 _MATERIALS = ("sls", "prony", "power-law")
 
 
@@ -53,6 +54,8 @@ FIT_FLAGS = FlagGroup("model", (
     Flag("--segment", integer_type(0), None, "N",
          "relaxation: the curve's N-th segment (from 0; default the pause after the approach)"),
     Flag("--curve", integer_type(0), None, "I", "fit only curve (pixel) I of a map"),
+    Flag("--accuracy", real_type(0.0), 1e-3, "REL",
+         "--model auto: the relative model error required, in [1e-5, 0.1] (default 1e-3)"),
 ))
 
 MAP_FLAGS = FlagGroup("maps (several spectra or curves)", (
@@ -136,7 +139,7 @@ def _fixed(args: argparse.Namespace, ds, kind: str) -> dict[str, Any]:
     if args.h0 is not None and args.mean_force is not None:
         raise UsageError("give --h0 or --mean-force, not both")
     fixed: dict[str, Any] = {}
-    if model in ("svda", "exact"):
+    if model in ("svda", "exact", "auto"):
         if args.h0 is None and args.mean_force is None:
             median = ""
             if "mean_force" in ds.variables:
@@ -150,8 +153,10 @@ def _fixed(args: argparse.Namespace, ds, kind: str) -> dict[str, Any]:
             args.h0 if args.h0 is not None else args.mean_force)
     if model == "svda":
         fixed.update(radius=args.R, P=args.P, debye_length=args.debye_length)
-    if model in ("exact", "step"):
+    if model in ("exact", "step", "auto"):
         fixed["problem"] = _problem(args, ds, kind)
+    if model == "auto" and args.drag is not None:
+        fixed["drag"] = args.drag
     if model == "contact":
         if args.material not in _MATERIALS:
             raise UsageError(f"--material must be one of {', '.join(_MATERIALS)}, got "
@@ -177,12 +182,13 @@ def _problem(args: argparse.Namespace, ds, kind: str):
 
 
 def _check_model(args: argparse.Namespace, kind: str) -> None:
-    spectrum_models = ("svda", "exact", "contact", "prony")
+    spectrum_models = ("svda", "exact", "contact", "prony", "auto")
     wanted = {"spectrum": spectrum_models, "curves": ("relaxation",), "trajectory": ("step",)}
     if args.model not in wanted[kind]:
         raise UsageError(f"--model {args.model} does not fit {kind} data; for {kind}: "
                          f"{', '.join(wanted[kind])}")
-    if args.modes == "auto" and args.model not in ("exact", "contact", "prony", "relaxation"):
+    if args.modes == "auto" and args.model not in ("exact", "contact", "prony", "relaxation",
+                                                   "auto"):
         raise UsageError(f"--modes auto needs a model with several modes, not {args.model}")
     if args.criterion not in ("bic", "aic"):
         raise UsageError(f"--criterion must be bic or aic, got {args.criterion!r}")
@@ -225,6 +231,8 @@ def fit_one(args: argparse.Namespace, ds, kind: str):
 
     fixed = _fixed(args, ds, kind)
     if kind == "spectrum":
+        if args.model == "auto":
+            fixed["accuracy"] = args.accuracy
         return fit_spectrum(ds, args.model, modes=args.modes, criterion=args.criterion, **fixed)
     if kind == "curves":
         return fit_hold(ds, segment=args.segment, modes=args.modes, criterion=args.criterion)
@@ -253,6 +261,9 @@ def _single_json(result) -> dict[str, Any]:
         out["criterion"] = result.attrs.get("criterion", "bic")
         if "selection_note" in result.attrs:
             out["selection_note"] = str(result.attrs["selection_note"])
+    if "explanation" in result.attrs:  # --model auto
+        out["explanation"] = str(result.attrs["explanation"])
+        out["estimated_model_error"] = float(result.attrs["estimated_model_error"])
     return out
 
 
@@ -287,6 +298,8 @@ def _print_single(info: dict[str, Any]) -> None:
         print(f"  candidate {row['modes']} mode(s): AIC {row['aic']:.4g}, BIC {row['bic']:.4g}")
     if "selection_note" in info:
         print(f"  note: {info['selection_note']}")
+    if "explanation" in info:
+        print(f"  model choice: {info['explanation']}")
 
 
 def run_fit(args: argparse.Namespace) -> int:
@@ -298,6 +311,9 @@ def run_fit(args: argparse.Namespace) -> int:
     is_map = bool(_extra_dims(ds, kind))
     if is_map and args.plot:
         raise UsageError("--plot draws one spectrum or curve: add --curve I")
+    if is_map and args.model == "auto":
+        raise UsageError("--model auto fits one spectrum: add --curve I, or name the model "
+                         "for the whole map")
     if is_map:
         from viscoforce.fitting.maps import fit_map
 

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import argparse
 import sys
+import warnings
 from typing import TYPE_CHECKING
 
 from viscoforce._limits import MAX_SAMPLES
@@ -32,6 +33,7 @@ from viscoforce.cli._args import (
     real_type,
 )
 from viscoforce.cli._output import print_json, print_table, print_written
+from viscoforce.exceptions import ModelValidityWarning
 from viscoforce.physics.materials import Elastic, PronySeries, StandardLinearSolid
 from viscoforce.physics.paper import PAPER, paper_pressure_law
 
@@ -196,8 +198,12 @@ def add_simulate(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--drive", required=True, choices=["step", "ramp", "triangle", "sine",
                                                            "trace"])
     add_flags(parser, SIMULATE_FLAGS)
-    parser.add_argument("--method", default=DEFAULT_METHOD, choices=sorted(METHODS),
-                        help=f"time stepper (default {DEFAULT_METHOD})")
+    parser.add_argument("--method", default=DEFAULT_METHOD, choices=[*sorted(METHODS), "auto"],
+                        help=f"time stepper (default {DEFAULT_METHOD}); auto: the stepper and "
+                             "tol that meet --accuracy")
+    parser.add_argument("--accuracy", type=real_type(0.0), default=None, metavar="REL",
+                        help="--method auto: relative force error required, in [1e-5, 0.1] "
+                             "(default 1e-3)")
     add_outputs(parser, [
         Output("--out", NETCDF, "FILE.nc", "write the dataset (netCDF)"),
         Output("--plot", FIGURE, "FILE.png", "write the force-position (hysteresis) plot"),
@@ -255,8 +261,11 @@ def run_simulate(args: argparse.Namespace) -> int:
     problem = problem_from_args(args, material, float(drive.extent()[0]))
     t_end = default_end_time(problem, drive) if args.t_end is None else args.t_end
     t_eval = np.linspace(0.0, t_end, args.samples)
+    if args.accuracy is not None and args.method != "auto":
+        raise UsageError("--accuracy needs --method auto")
     ds = simulate(problem, drive, t_end=t_end, t_eval=t_eval, stepper=args.method, dt=args.dt,
-                  tol=args.tol, profiles=args.profiles, progress=args.progress)
+                  tol=args.tol, profiles=args.profiles, progress=args.progress,
+                  accuracy=args.accuracy)
     if args.out:
         ds.to_netcdf(args.out, engine="scipy")
     if args.plot:
@@ -266,10 +275,14 @@ def run_simulate(args: argparse.Namespace) -> int:
         handle.ax.set_title(str(ds.attrs["drive"]), fontsize="small")
         _save_figure(handle, args.plot)
     settings = dict(ds.attrs)
+    chosen = {"explanation": settings["explanation"]} if "explanation" in settings else {}
     if args.json:
         print_json({name: ds[name].values for name in ("time", "position", "force", "u_center",
-                                                        "contact_radius")} | {"settings": settings})
+                                                        "contact_radius")}
+                   | {"settings": settings} | chosen)
         return 0
+    if chosen:
+        print(f"stepper {settings['stepper']}: {chosen['explanation']}")
     print(f"{settings['drive']}; {type(material).__name__}; stepper {settings['stepper']}: "
           f"{settings['steps']} steps ({settings['rejected_steps']} rejected), "
           f"{settings['newton_iterations']} Newton iterations")
@@ -309,9 +322,13 @@ def add_spectrum(parser: argparse.ArgumentParser) -> None:
                         metavar=("LO", "HI", "N"),
                         help="N log-spaced frequencies from LO to HI (N a plain integer >= 1)")
     parser.add_argument("--method", default="linear",
-                        choices=["linear", "time-domain", "svda", "auto"],
+                        choices=["linear", "time-domain", "svda", "svda-ode", "contact", "auto"],
                         help="exact frequency-domain (default), time-domain simulation + "
-                             "lock-in, SVDA closed form, or auto (cheapest adequate)")
+                             "lock-in, SVDA closed form, SVDA ODE + lock-in, Hertz contact, or "
+                             "auto (the cheapest meeting --accuracy)")
+    parser.add_argument("--accuracy", type=real_type(0.0), default=None, metavar="REL",
+                        help="--method auto: relative error of k* required, in [1e-5, 0.1] "
+                             "(default 1e-3)")
     add_outputs(parser, [
         Output("--out", NETCDF, "FILE.nc", "write the spectrum (netCDF)"),
         Output("--plot", FIGURE, "FILE.png", "write a Bode plot"),
@@ -330,17 +347,6 @@ def _omega(args: argparse.Namespace):
     return np.geomspace(lo, hi, n)
 
 
-def _linear_note(problem: ContactProblem, eta: float) -> str:
-    """A warning when ``--method linear`` is used where ``auto`` would not choose it."""
-    from viscoforce.experiments.spectroscopy import choose_spectrum_method
-
-    chosen, reason = choose_spectrum_method(problem, eta)
-    if chosen == "linear":
-        return ""
-    return (f"note: {reason.split(':')[0]}: the small-amplitude spectrum may differ from the "
-            "finite-amplitude response by several percent; use --method time-domain")
-
-
 def _print_spectrum(result: dict) -> None:
     if result.get("explanation"):
         print(f"method {result['method']}: {result['explanation']}")
@@ -357,11 +363,22 @@ def run_spectrum(args: argparse.Namespace) -> int:
 
     omega = _omega(args)
     problem = problem_from_args(args, material_from_args(args), args.h0 - args.eta)
-    note = _linear_note(problem, args.eta) if args.method == "linear" else ""
-    options = {}
+    if args.accuracy is not None and args.method != "auto":
+        raise UsageError("--accuracy needs --method auto")
+    options: dict = {}
+    if args.method == "svda-ode":
+        options = {"progress": args.progress, "periods": args.periods}
     if args.method in ("time-domain", "auto"):  # auto drops them unless it simulates
         options = {"n_jobs": args.jobs, "progress": args.progress, "periods": args.periods}
-    ds = spectrum(problem, args.h0, args.eta, omega, method=args.method, **options)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", ModelValidityWarning)
+        ds = spectrum(problem, args.h0, args.eta, omega, method=args.method,
+                      accuracy=args.accuracy, **options)
+    notes = [str(w.message) for w in caught if issubclass(w.category, ModelValidityWarning)]
+    for w in caught:
+        if not issubclass(w.category, ModelValidityWarning):
+            warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
+    note = "; ".join(notes)
     if args.out:
         ds.to_netcdf(args.out, engine="scipy")
     if args.plot:
@@ -373,9 +390,10 @@ def run_spectrum(args: argparse.Namespace) -> int:
               "mean_force": ds.mean_force.values.tolist(), "method": str(ds.attrs["method"])}
     if ds.attrs.get("explanation"):
         result["explanation"] = str(ds.attrs["explanation"])
+        result["estimated_error"] = float(ds.attrs["estimated_error"])
     if note:
         result["note"] = note
-        print(f"viscoforce spectrum: {note}", file=sys.stderr)
+        print(f"viscoforce spectrum: warning: {note}", file=sys.stderr)
     if args.json:
         print_json(result)
         return 0

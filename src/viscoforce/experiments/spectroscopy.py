@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import math
 import sys
+import warnings
 from concurrent.futures import ProcessPoolExecutor
 
 import numpy as np
@@ -35,7 +36,7 @@ from viscoforce._validation import (
     require_nonnegative,
     require_positive,
 )
-from viscoforce.exceptions import ParameterError
+from viscoforce.exceptions import ModelValidityError, ModelValidityWarning, ParameterError
 from viscoforce.experiments._checks import (
     require_frequencies,
     require_number,
@@ -455,50 +456,100 @@ def svda_sweep(problem: ContactProblem, position: float, eta: float, omega: Arra
     return ds
 
 
-SPECTRUM_METHODS = {"linear": linear_response, "time-domain": sweep, "svda": svda_spectrum}
+def contact_spectrum(problem: ContactProblem, position: float, eta: float,
+                     omega: ArrayLike) -> xr.Dataset:
+    """Hertz-contact spectrum k*(ω) = √(Rδ0)/C*(ω) at the indentation δ0 = −h̄0 (deep contact only).
 
-#: κη at or below which the small-amplitude (linear) spectrum is used by ``method="auto"``.
-LINEAR_KAPPA_ETA = 0.05
-
-
-def choose_spectrum_method(problem: ContactProblem, eta: float) -> tuple[str, str]:
-    """The cheapest adequate spectrum method for drive amplitude ``eta`` [m], with the reason.
-
-    The nonlinear correction to the first-harmonic stiffness is O((κη)²), with κ the inverse decay
-    length of the surface force: for κη ≤ :data:`LINEAR_KAPPA_ETA` the exact small-amplitude
-    solve (``"linear"``) is used, otherwise each frequency is simulated (``"time-domain"``).
+    The surface force enters only as a hard contact: the compliance of the force layer and the
+    force outside the contact are neglected (estimated error
+    :func:`~viscoforce.experiments.choice.contact_error`, ≈ 1.5 (|E*(ω)|/E_inf)/(κδ0) at the
+    highest ω). The mean force is the relaxed Hertz load (2/3)E_inf√R δ0^{3/2} (the paper's E,
+    twice Johnson's E*).
 
     Parameters
     ----------
     problem : ContactProblem
-        System (its surface force sets κ).
+        System: sphere radius and any Prony material (the grid is not used).
+    position : float
+        Mean position h̄0 [m], < 0 (indentation δ0 = −h̄0).
     eta : float
-        Drive amplitude η [m], > 0.
+        Drive amplitude η [m], > 0 (scales ``force_amplitude`` and ``amplitude`` only).
+    omega : array_like
+        Angular frequencies [rad/s], > 0.
 
     Returns
     -------
-    tuple of str
-        The method name (a key of :data:`SPECTRUM_METHODS`) and a one-sentence explanation.
+    xarray.Dataset
+        Spectrum with ``method = "contact"``, ``indentation`` and ``estimated_error`` in attrs.
 
     Raises
     ------
-    ParameterError
-        If ``problem`` is not a ContactProblem or ``eta`` is not a finite number > 0.
+    ModelValidityError
+        If h̄0 ≥ 0 (no indentation).
+
+    Warns
+    -----
+    ModelValidityWarning
+        If the estimated error exceeds 1 %.
     """
+    from viscoforce.choice import WARN_ERROR, contact_error
+
+    problem = require_problem(problem)
+    position = require_number("position", position, require_finite,
+                              "finite [m] (h0 < 0: the indentation is -h0)")
+    eta = require_number("eta", eta, require_positive, "> 0 [m] (finite)")
+    omega = require_frequencies(omega, allow_zero=False)
+    if not position < 0:
+        raise ModelValidityError(
+            f"the Hertz-contact spectrum needs an indentation: position {position!r} m is not "
+            "< 0; use method 'linear' (exact) or 'svda' before contact")
+    depth = -position
+    error, _ = contact_error(problem, position, float(np.max(omega)))
+    if error > WARN_ERROR:
+        warnings.warn(
+            f"Hertz contact is about {100 * error:.2g} % off the exact model at indentation "
+            f"{depth * 1e9:.4g} nm (estimate 1.5 |E*(omega_max)|/E_inf / (kappa delta0); above "
+            f"{100 * WARN_ERROR:g} %): the surface-force layer is not stiff against the contact; "
+            "use method 'linear' (exact)", ModelValidityWarning, stacklevel=2)
+    material, radius = problem.material, problem.sphere.radius
+    k = math.sqrt(radius * depth) / material.complex_compliance(omega)
+    mean = 2.0 / 3.0 * material.relaxed_modulus * math.sqrt(radius) * depth ** 1.5
+    attrs = dict(problem.parameters())
+    attrs.update({"method": "contact", "position": position, "eta": eta, "indentation": depth,
+                  "estimated_error": error})
+    return make_spectrum(omega, k, mean, eta, attrs=attrs)
+
+
+def _checked_linear(problem: ContactProblem, position: float, eta: float,
+                    omega: ArrayLike) -> xr.Dataset:
+    """:func:`linear_response`, warning when the drive is too large for a linear spectrum."""
+    from viscoforce.choice import WARN_ERROR, amplitude_error
+
     problem = require_problem(problem)
     eta = require_number("eta", eta, require_positive, "> 0 [m] (finite)")
-    kappa_eta = eta / problem.surface_force.decay_length
-    if kappa_eta <= LINEAR_KAPPA_ETA:
-        return "linear", (f"kappa*eta = {kappa_eta:.3g} <= {LINEAR_KAPPA_ETA:g}: the nonlinear "
-                          f"correction to the stiffness is O((kappa*eta)^2) ~ {kappa_eta ** 2:.1e}, "
-                          "so the exact small-amplitude frequency-domain solve is used")
-    return "time-domain", (f"kappa*eta = {kappa_eta:.3g} > {LINEAR_KAPPA_ETA:g}: the response is not "
-                           "linear enough, so each frequency is simulated to steady state and "
-                           "demodulated")
+    decay = problem.surface_force.decay_length
+    error = amplitude_error(eta, decay)
+    if error > WARN_ERROR:
+        warnings.warn(
+            f"kappa*eta = {eta / decay:.3g}: the finite-amplitude first harmonic differs from "
+            f"the small-amplitude spectrum by up to ~{100 * error:.2g} % (estimate "
+            "2 I1(x)/x - 1, x = kappa*eta); use method 'time-domain' or a smaller eta",
+            ModelValidityWarning, stacklevel=3)
+    return linear_response(problem, position, eta, omega)
+
+
+#: Spectrum routes: name → function(problem, position, eta, omega, **options).
+SPECTRUM_METHODS = {"linear": _checked_linear, "time-domain": sweep, "svda": svda_spectrum,
+                    "svda-ode": svda_sweep, "contact": contact_spectrum}
+#: The approximations' own error-estimate warnings (not the half-space one), silenced under "auto".
+_ESTIMATE_WARNINGS = r"(the SVDA is about|Hertz contact is about|kappa\*eta = )"
+#: Routes that take options (the time-domain ones).
+_WITH_OPTIONS = ("time-domain", "svda-ode")
 
 
 def spectrum(problem: ContactProblem, position: float, eta: float, omega: ArrayLike, *,
-             method: str = "auto", **options: object) -> xr.Dataset:
+             method: str = "auto", accuracy: float | None = None,
+             **options: object) -> xr.Dataset:
     """Force spectrum by any route; ``method="auto"`` picks the cheapest adequate one.
 
     Parameters
@@ -511,12 +562,15 @@ def spectrum(problem: ContactProblem, position: float, eta: float, omega: ArrayL
         Drive amplitude η [m], > 0.
     omega : array_like
         Angular frequencies [rad/s], > 0.
-    method : {"auto", "linear", "time-domain", "svda"}
+    method : {"auto", "linear", "time-domain", "svda", "svda-ode", "contact"}
         The route (see :data:`SPECTRUM_METHODS`); ``"auto"`` uses
-        :func:`choose_spectrum_method` and stores its reason in ``attrs["explanation"]``.
+        :func:`~viscoforce.experiments.choice.choose_spectrum` and stores its reason in
+        ``attrs["explanation"]`` and its estimate in ``attrs["estimated_error"]``.
+    accuracy : float, optional
+        Required relative error of ``"auto"`` (default 1e-3); only with ``"auto"``.
     **options
-        Passed to the time-domain :func:`sweep` (``periods``, ``n_jobs``, ``progress``, ...);
-        only accepted when that route runs.
+        Passed to the time-domain routes (:func:`sweep`: ``periods``, ``n_jobs``,
+        ``progress``, ...; :func:`svda_sweep`); ``"auto"`` passes on those its route takes.
 
     Returns
     -------
@@ -531,18 +585,37 @@ def spectrum(problem: ContactProblem, position: float, eta: float, omega: ArrayL
         A time-domain request beyond the effort limits (refused before computing).
     TypeError
         Options given to a route that takes none.
+
+    Warns
+    -----
+    ModelValidityWarning
+        An explicit approximate route whose estimated error exceeds 1 % (the SVDA inside
+        ~6 nm with the paper's parameters, Hertz contact, a linear spectrum at κη ≳ 0.3).
     """
+    from viscoforce.experiments.choice import DEFAULT_ACCURACY, choose_spectrum
+
     if not isinstance(method, str) or (method != "auto" and method not in SPECTRUM_METHODS):
         raise ParameterError(
             f"method must be 'auto' or one of {sorted(SPECTRUM_METHODS)}, got {method!r}")
-    explanation = ""
+    if accuracy is not None and method != "auto":
+        raise ParameterError(f"accuracy applies to method 'auto' only, not {method!r}")
+    choice = None
     if method == "auto":
-        method, explanation = choose_spectrum_method(problem, eta)
-        if method != "time-domain":
-            options = {}  # time-domain options do not apply to the route chosen
-    if options and method != "time-domain":
+        choice = choose_spectrum(problem, position, eta, omega,
+                                 accuracy=DEFAULT_ACCURACY if accuracy is None else accuracy)
+        method = choice.method
+        options = {**options, **choice.options} if method in _WITH_OPTIONS else {}
+        if method == "svda-ode":  # sweep's stepper options do not apply to the SVDA ODE
+            options = {k: v for k, v in options.items() if k in ("periods", "progress")}
+    if options and method not in _WITH_OPTIONS:
         raise TypeError(f"method {method!r} takes no options, got {sorted(options)}")
-    ds = SPECTRUM_METHODS[method](problem, position, eta, omega, **options)
-    if explanation:
-        ds.attrs["explanation"] = explanation
+    if choice is None:
+        ds = SPECTRUM_METHODS[method](problem, position, eta, omega, **options)
+    else:
+        with warnings.catch_warnings():  # the choice weighed this estimate already
+            warnings.filterwarnings("ignore", _ESTIMATE_WARNINGS, ModelValidityWarning)
+            ds = SPECTRUM_METHODS[method](problem, position, eta, omega, **options)
+        ds.attrs["explanation"] = choice.explanation
+        ds.attrs["estimated_error"] = choice.estimated_error
+        ds.attrs["accuracy"] = choice.accuracy
     return ds

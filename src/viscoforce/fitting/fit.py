@@ -20,6 +20,15 @@ import lmfit
 import numpy as np
 import xarray as xr
 
+from viscoforce.choice import (
+    DEFAULT_ACCURACY,
+    GRID_ERROR,
+    contact_error,
+    double_layer,
+    finish,
+    require_accuracy,
+    svda_error,
+)
 from viscoforce.exceptions import ConvergenceError, ModelValidityError, ParameterError
 from viscoforce.fitting import _params
 from viscoforce.fitting.models import (
@@ -30,8 +39,12 @@ from viscoforce.fitting.models import (
     FitModel,
     check_fixed,
     make_model,
+    material_from,
+    svda_position,
 )
+from viscoforce.problem import ContactProblem
 from viscoforce.schema import make_fit_result, validate_spectrum
+from viscoforce.svda import svda_stiffness_kernel
 
 #: Information criteria of ``modes="auto"`` (``--criterion``).
 CRITERIA = ("bic", "aic")
@@ -380,7 +393,8 @@ def fit_data(data: FitData, name: str, *, modes: int | str = 1, criterion: str =
 
 
 def fit_spectrum(spectrum: xr.Dataset, model: str, *, modes: int | str = 1,
-                 criterion: str = "bic", **fixed: Any) -> xr.Dataset:
+                 criterion: str = "bic", accuracy: float | None = None,
+                 **fixed: Any) -> xr.Dataset:
     """Fit one spectrum (over ``omega``) with a spectrum model.
 
     Parameters
@@ -388,11 +402,16 @@ def fit_spectrum(spectrum: xr.Dataset, model: str, *, modes: int | str = 1,
     spectrum : xarray.Dataset
         A spectrum (:mod:`viscoforce.schema.spectrum`) over ``omega`` only.
     model : str
-        ``svda``, ``exact``, ``contact`` or ``prony``.
+        ``svda``, ``exact``, ``contact``, ``prony``, or ``auto``: the cheapest of svda, contact
+        and exact whose model error, estimated at the fitted parameters, meets ``accuracy``
+        (needs ``problem`` and ``position`` or ``mean_force``; the reason in
+        ``attrs["explanation"]``).
     modes : int or "auto"
         Relaxation modes; ``"auto"`` tries 1, 2, … and keeps the lowest ``criterion``.
     criterion : {"bic", "aic"}
         Information criterion of ``modes="auto"``.
+    accuracy : float, optional
+        Required relative model error of ``model="auto"`` (default 1e-3); only with "auto".
     **fixed
         The model's fixed inputs (see :func:`viscoforce.fitting.models.make_model`); for
         ``contact`` the ``indentation`` defaults to the data's median ``mean_indentation``.
@@ -403,9 +422,14 @@ def fit_spectrum(spectrum: xr.Dataset, model: str, *, modes: int | str = 1,
         Fit result (:mod:`viscoforce.schema.fit`); with ``"auto"`` also ``selection_modes``,
         ``selection_aic``, ``selection_bic`` over ``candidate``.
     """
+    if model == "auto":
+        return fit_spectrum_auto(spectrum, modes=modes, criterion=criterion,
+                                 accuracy=accuracy, **fixed)
+    if accuracy is not None:
+        raise ParameterError(f"accuracy applies to model 'auto' only, not {model!r}")
     if model not in SPECTRUM_MODELS:
         raise ParameterError(f"model {model!r} fits force curves, not spectra; spectrum models: "
-                             f"{', '.join(SPECTRUM_MODELS)}")
+                             f"{', '.join(SPECTRUM_MODELS)} (or auto)")
     fixed = check_fixed(model, fixed)
     data = spectrum_data(spectrum)
     if model == "contact" and fixed.get("indentation") is None:
@@ -417,6 +441,123 @@ def fit_spectrum(spectrum: xr.Dataset, model: str, *, modes: int | str = 1,
             f"model {model!r} needs the mean position: give h0 (--h0) or the mean force "
             f"(--mean-force; this spectrum's median mean_force is {mean:.4g} N)")
     return fit_data(data, model, modes=modes, criterion=criterion, **fixed)
+
+
+def _sls_of(ds: xr.Dataset):
+    """The standard linear solid of a one-mode fit result."""
+    return material_from({n: float(ds[n]) for n in ("E0", "E_inf", "tau")}, 1)
+
+
+#: Relative step of the moduli sensitivity of the svda candidate of ``model="auto"``.
+SENSITIVITY_STEP = 1e-4
+#: The models ``model="auto"`` chooses from, in order of cost.
+AUTO_MODELS = ("svda", "contact", "exact")
+
+
+def _auto_candidate(spectrum: xr.Dataset, name: str, modes: int | str, criterion: str,
+                    problem: ContactProblem, fixed: Mapping[str, Any]
+                    ) -> tuple[xr.Dataset | None, float, str]:
+    """Fit one candidate of ``model="auto"``: (result or None, estimated model error, reason)."""
+    position, mean_force = fixed.get("position"), fixed.get("mean_force")
+    radius = problem.sphere.radius
+    if name == "svda":
+        if modes != 1:
+            return None, math.inf, "one relaxation time only"
+        # applicability only (one mode, one DoubleLayer, pre-contact); the value is re-estimated
+        # at the fitted moduli below
+        error, reason = svda_error(problem, position) if position is not None else (0.0, "")
+        if math.isinf(error):
+            return None, error, reason
+        layer = double_layer(problem)
+        try:
+            ds = fit_data(spectrum_data(spectrum), "svda", position=position,
+                          mean_force=mean_force, radius=radius, P=layer.P,
+                          debye_length=layer.debye_length)
+        except (ModelValidityError, ConvergenceError) as exc:
+            return None, math.inf, f"fit failed: {str(exc).split(';')[0]}"
+        e_inf = float(ds["E_inf"])
+        h0 = position if position is not None else svda_position(
+            mean_force, e_inf, radius, layer.P, layer.debye_length)
+        error, reason = svda_error(problem.with_material(_sls_of(ds)), h0)
+        # a stiffness error δ biases the moduli by ≈ δ / s, s = |∂ln k*/∂ln E| (E0, E_inf scaled
+        # together), which is small before contact: the SVDA error is O(κ|u0|) and so is s
+        omega = np.asarray(spectrum["omega"].values, dtype=float)
+        values = {n: float(ds[n]) for n in ("E0", "E_inf", "tau")}
+        kernel = (h0, values["E0"], values["E_inf"], values["tau"], radius, layer.P)
+        k = svda_stiffness_kernel(omega, *kernel, 1.0 / layer.debye_length)
+        scaled = (h0, *(v * (1 + SENSITIVITY_STEP) for v in kernel[1:3]), *kernel[3:])
+        k_up = svda_stiffness_kernel(omega, *scaled, 1.0 / layer.debye_length)
+        sensitivity = float(np.max(np.abs(k_up / k - 1.0))) / SENSITIVITY_STEP
+        return ds, error / sensitivity, (
+            f"stiffness error {reason} ~{error:.1e}, over the moduli sensitivity "
+            f"|dln k*/dln E| = {sensitivity:.2g} at the fitted E_inf = {values['E_inf']:.3g} Pa")
+    if name == "contact":
+        depth = -position if position is not None else None
+        if modes != 1:
+            return None, math.inf, "one relaxation time here (use model='contact' for Prony)"
+        if depth is None or not depth > 0:
+            return None, math.inf, "needs an indentation (h0 < 0 given)"
+        ds = fit_data(spectrum_data(spectrum), "contact", radius=radius, indentation=depth,
+                      drag=fixed.get("drag"))
+        error, reason = contact_error(problem.with_material(_sls_of(ds)), position,
+                                      float(np.max(spectrum["omega"])))
+        return ds, error, f"{reason} at the fitted moduli (k* proportional to E: bias = error)"
+    ds = fit_data(spectrum_data(spectrum), "exact", modes=modes, criterion=criterion,
+                  problem=problem, position=position, mean_force=mean_force)
+    return ds, GRID_ERROR, "the exact model on the default grid"
+
+
+def fit_spectrum_auto(spectrum: xr.Dataset, *, modes: int | str = 1, criterion: str = "bic",
+                      accuracy: float | None = None, **fixed: Any) -> xr.Dataset:
+    """``fit_spectrum(..., "auto")``: the cheapest spectrum model adequate at the fitted values.
+
+    Tries svda (pre-contact, one mode), contact (Hertz, h̄0 < 0, one mode) and exact in order
+    of cost; each approximate fit is kept if its model error estimated at the fitted parameters
+    (:func:`viscoforce.choice.svda_error`, :func:`viscoforce.choice.contact_error`), divided by
+    the sensitivity of k* to the moduli (the bias it puts on E0, E_inf), meets ``accuracy``,
+    otherwise the next is fitted. Before contact the SVDA's stiffness error and the
+    sensitivity are both O(κ|u0|), so its moduli are biased by an O(1) fraction of the
+    relative error at any position: ``auto`` keeps svda only at a loose accuracy.
+    ``attrs["explanation"]`` says what was compared; ``attrs["estimated_model_error"]`` holds
+    the estimate of the model kept.
+
+    Raises
+    ------
+    ParameterError
+        No ``problem`` (the exact fallback needs it), or neither ``position`` nor ``mean_force``.
+    TypeError
+        A fixed input none of the candidates takes.
+    """
+    accuracy = require_accuracy(DEFAULT_ACCURACY if accuracy is None else accuracy)
+    allowed = {"problem", "position", "mean_force", "drag"}
+    unknown = sorted(set(fixed) - allowed)
+    if unknown:
+        raise TypeError(f"model 'auto' takes no input {', '.join(unknown)}; its inputs: "
+                        f"{', '.join(sorted(allowed))} (radius and the surface force come "
+                        "from problem)")
+    problem = fixed.get("problem")
+    if not isinstance(problem, ContactProblem):
+        raise ParameterError("model 'auto' needs problem= (a ContactProblem: the sphere, surface "
+                             "force and grid of the exact model it may fall back to)")
+    if fixed.get("position") is None and fixed.get("mean_force") is None:
+        raise ParameterError("model 'auto' needs the mean position: give position (--h0) or "
+                             "mean_force (--mean-force)")
+    fixed = check_fixed("exact", {k: v for k, v in fixed.items() if k != "drag"}) | {
+        "drag": fixed.get("drag")}
+    rows: list[tuple[str, float, str, dict[str, Any]]] = []
+    kept = None
+    for name in AUTO_MODELS:
+        ds, error, reason = _auto_candidate(spectrum, name, modes, criterion, problem, fixed)
+        rows.append((name, error, reason, {}))
+        if ds is not None and error <= accuracy * (1.0 + 1e-9):
+            kept = ds
+            break
+    choice = finish("fit model", rows, accuracy, "")
+    assert kept is not None  # exact always fits (or raises)
+    kept.attrs["explanation"] = choice.explanation
+    kept.attrs["estimated_model_error"] = choice.estimated_error
+    kept.attrs["accuracy"] = accuracy
+    return kept
 
 
 def _data_indentation(spectrum: xr.Dataset) -> float:

@@ -23,6 +23,7 @@ from viscoforce._validation import (
     require_int,
     require_positive,
 )
+from viscoforce.choice import DEFAULT_ACCURACY, choose_simulation
 from viscoforce.exceptions import ConvergenceError, GapClosureError, ParameterError, StabilityError
 from viscoforce.problem import ContactProblem, check_half_space, contact_radius
 from viscoforce.schema import make_trajectory
@@ -71,7 +72,7 @@ def simulate(problem: ContactProblem, drive: SeparationHistory, *, t_end: float 
              dt: float | None = None, tol: float | None = None, max_step: float | None = None,
              profiles: int = 0, initial_state: State | None = None,
              contact_threshold: float | None = None, progress: bool | None = None,
-             output_kinks: bool = True) -> xr.Dataset:
+             output_kinks: bool = True, accuracy: float | None = None) -> xr.Dataset:
     """Time-dependent viscoelastic response along the drive ``drive``.
 
     Parameters
@@ -87,7 +88,9 @@ def simulate(problem: ContactProblem, drive: SeparationHistory, *, t_end: float 
         Output times [s] in [0, t_end], increasing; default 801 equally spaced times.
     stepper : str or TimeStepper subclass
         ``"exponential"`` (default: second-order, unconditionally stable, adaptive),
-        ``"exponential-euler"`` (first order) or ``"euler"`` (the paper's explicit Euler).
+        ``"exponential-euler"`` (first order), ``"euler"`` (the paper's explicit Euler) or
+        ``"auto"``: the stepper and ``tol`` of :func:`viscoforce.choice.choose_simulation` for
+        ``accuracy`` (its reason in ``attrs["explanation"]``; ``dt`` and ``tol`` not accepted).
     dt : float, optional
         Fixed time step [s] (disables adaptivity). Explicit Euler defaults to
         0.1·τ_min·E_inf/E0.
@@ -108,6 +111,8 @@ def simulate(problem: ContactProblem, drive: SeparationHistory, *, t_end: float 
         Add every drive kink in [0, t_end] (a triangle's turning point, the end of a step's rise,
         every sample of a measured trace) to the output times, so that reported extremes are the
         true extremes (default True; a lock-in that needs exactly ``t_eval`` passes False).
+    accuracy : float, optional
+        Required relative force error of ``stepper="auto"`` (default 1e-3); only with "auto".
 
     Returns
     -------
@@ -131,6 +136,16 @@ def simulate(problem: ContactProblem, drive: SeparationHistory, *, t_end: float 
     for name, flag in (("output_kinks", output_kinks), ("progress", progress)):
         if not (isinstance(flag, bool | np.bool_) or (name == "progress" and flag is None)):
             raise ParameterError(f"{name} must be True or False, got {flag!r}")
+    choice = None
+    if isinstance(stepper, str) and stepper == "auto":
+        if dt is not None or tol is not None:
+            raise ParameterError("stepper='auto' chooses the stepper and tol itself; give "
+                                 "stepper='exponential' (or another) to set dt or tol")
+        choice = choose_simulation(problem, drive,
+                                   accuracy=DEFAULT_ACCURACY if accuracy is None else accuracy)
+        stepper, tol = choice.method, choice.options.get("tol")
+    elif accuracy is not None:
+        raise ParameterError(f"accuracy applies to stepper 'auto' only, not {stepper!r}")
     stepper = _resolve_stepper(stepper)(problem)
     law = problem.surface_force
     t_end = default_end_time(problem, drive) if t_end is None else require_positive("t_end", t_end)
@@ -159,6 +174,9 @@ def simulate(problem: ContactProblem, drive: SeparationHistory, *, t_end: float 
                               "t_end": t_end, "max_step": control.max_step})
     check_half_space(problem.sphere.radius, ds.u_center.values, ds.contact_radius.values,
                      where=f"along {_describe(drive)}", stacklevel=2)
+    if choice is not None:
+        ds.attrs.update({"explanation": choice.explanation,
+                         "estimated_error": choice.estimated_error, "accuracy": choice.accuracy})
     return ds
 
 

@@ -1,0 +1,241 @@
+"""The cheapest adequate method for a scene: error estimates of every approximation and the chooser.
+
+This module holds the estimates, :class:`Choice` and the stepper choice of ``simulate``
+(:func:`choose_simulation`); the spectrum choice (which needs static solves) is
+:func:`viscoforce.experiments.choice.choose_spectrum` and the fit-model choice
+``viscoforce.fitting.fit_spectrum(..., "auto")``.
+
+Each approximation in viscoforce has an error estimate that can be evaluated before (or without)
+the exact computation; ``method="auto"`` (spectra), ``stepper="auto"`` (simulations) and
+``model="auto"`` (fits) rank the methods by cost and take the cheapest whose estimate meets the
+required accuracy (a relative error of the force or complex stiffness, default
+:data:`DEFAULT_ACCURACY`). Every choice carries a one-paragraph explanation naming the
+estimates it compared.
+
+The estimates (measured in ``benchmarks/validity_maps.py`` and ``benchmarks/speed_accuracy.py``,
+whose scenes the tests check them on):
+
+* **finite amplitude** — the first harmonic of an exponential force F ∝ e^{−κh} driven by
+  h̄0 + η sin ωt is κF̄·2I₁(κη)/(κη), so a small-amplitude (linear) stiffness is off by
+  2I₁(x)/x − 1 ≈ (κη)²/8 with x = κη (:func:`amplitude_error`); measured 0.44× (Fig. 3) and
+  0.77× (Fig. 4) of it, the deformation softening the force law; where it matters the spectrum
+  choice computes the quasi-static first harmonic of the elastic spring F_E(h) at E_inf and E0
+  instead (a few static solves);
+* **SVDA** — max over ω of |k*_SVDA/k*_exact − 1| = 0.585 κ|u0| (u0 the relaxed SVDA central
+  deformation) to within 1 % for κ|u0| ≤ 0.03, smaller above, over R 1–100 µm, E 0.1–10 GPa,
+  1/κ 0.3–3 nm, E0/E_inf 3–100 (:func:`viscoforce.svda.svda_error_estimate`, coefficient 0.6);
+* **Hertz contact** — k* = √(Rδ0)/C*(ω) ignores the compliance of the surface-force layer,
+  whose stiffness is ≈ F̄κ with the Hertz load F̄ = (2/3)E_inf√R δ0^{3/2}; the relative error is
+  ≈ |E*(ω)|√(Rδ0)/(F̄κ) = 1.5 (|E*(ω_max)|/E_inf)/(κδ0) at the highest frequency
+  (:func:`contact_error`);
+* **exact, default grid** — ≤ 1e-10 on the study's spectra and static loads (grid × 0.5 vs × 4
+  refined); :data:`GRID_ERROR` states 1e-8;
+* **time-domain spectrum** — lock-in + stepper at the defaults (4 periods, 64 samples, tol 1e-5η):
+  7.6e-5 from the finest setting at Fig. 4, error ∝ tol^0.7 (:data:`SWEEP_ERROR`);
+* **time stepping** (exponential trapezoidal, adaptive) — error ≈ 4.1e-5 (tol/default)^0.56 on
+  the Fig. 1 step and the Fig. 5 loop for tol/default in [0.1, 1000] (:data:`STEPPER_ERROR`).
+
+Each estimate is used with a safety factor of :data:`SAFETY` (2) where it was measured, not
+derived.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+from scipy.special import i1e
+
+from viscoforce._validation import require_instance, require_positive
+from viscoforce.exceptions import ParameterError
+from viscoforce.physics.surface_forces import DoubleLayer, SumOfLaws
+from viscoforce.problem import ContactProblem
+from viscoforce.svda import svda_error_estimate, svda_static_deformation
+
+#: Relative error required when none is given.
+DEFAULT_ACCURACY = 1e-3
+#: Accepted range of the required accuracy (below 1e-5 the default grid and steppers' own
+#: errors are not characterised; above 0.1 nothing is an approximation worth the name).
+ACCURACY_RANGE = (1e-5, 0.1)
+#: Estimated error above which an approximation warns (ModelValidityWarning).
+WARN_ERROR = 1e-2
+#: Factor applied to the estimates that are measured rather than derived.
+SAFETY = 2.0
+#: Error of the exact solvers on their default grid (measured ≤ 1e-10; stated with margin).
+GRID_ERROR = 1e-8
+#: Time-domain spectrum at the default settings, and the exponent of its tol dependence.
+SWEEP_ERROR, SWEEP_EXPONENT = 7.6e-5, 0.7
+#: Adaptive exponential stepper at the default tol, the exponent of tol/default, its range.
+STEPPER_ERROR, STEPPER_EXPONENT, STEPPER_TOL_FACTORS = 4.1e-5, 0.56, (0.1, 1000.0)
+
+
+
+@dataclass(frozen=True)
+class Choice:
+    """A method chosen for a scene.
+
+    Attributes
+    ----------
+    method : str
+        The route or stepper chosen.
+    options : dict
+        Keyword arguments for it (e.g. ``tol``).
+    estimated_error : float
+        Its estimated relative error.
+    accuracy : float
+        The accuracy asked for.
+    explanation : str
+        Why: the estimates compared, in words.
+    considered : tuple of (str, float, str)
+        Every candidate: method, estimated error (inf if not applicable), verdict.
+    """
+
+    method: str
+    options: dict[str, Any]
+    estimated_error: float
+    accuracy: float
+    explanation: str
+    considered: tuple[tuple[str, float, str], ...] = field(default=())
+
+
+def require_accuracy(accuracy: Any) -> float:
+    """Return ``accuracy`` as a float in :data:`ACCURACY_RANGE`, or raise ParameterError."""
+    lo, hi = ACCURACY_RANGE
+    try:
+        value = require_positive("accuracy", accuracy)
+    except ParameterError:
+        value = math.nan
+    if not lo <= value <= hi:
+        raise ParameterError(f"accuracy must be a number in [{lo:g}, {hi:g}] (relative error), "
+                             f"got {accuracy!r}")
+    return value
+
+
+def amplitude_error(eta: float, decay_length: float) -> float:
+    """Relative difference of the first-harmonic stiffness at drive ``eta`` from the linear one.
+
+    2I₁(x)/x − 1 with x = η/decay_length: exact for a rigid exponential force, an upper
+    estimate where the deformation softens the force law.
+    """
+    x = float(eta) / float(decay_length)
+    if x < 1e-4:
+        return x * x / 8.0
+    if x > 700.0:
+        return math.inf
+    return float(2.0 * i1e(x) * math.exp(x) / x - 1.0)
+
+
+def double_layer(problem: ContactProblem) -> DoubleLayer | None:
+    """The one DoubleLayer term of the problem's law (None if there is none or several)."""
+    law = problem.surface_force
+    layers = [t for t in (law.terms if isinstance(law, SumOfLaws) else (law,))
+              if isinstance(t, DoubleLayer)]
+    return layers[0] if len(layers) == 1 else None
+
+
+def svda_error(problem: ContactProblem, position: float) -> tuple[float, str]:
+    """Estimated SVDA error at ``position`` and a reason (inf where the SVDA does not apply)."""
+    material = problem.material
+    if material.prony().n_modes != 1:
+        return math.inf, f"needs one relaxation time (the material has {material.prony().n_modes})"
+    dl = double_layer(problem)
+    if dl is None:
+        return math.inf, "needs exactly one DoubleLayer term"
+    e_inf, radius = material.relaxed_modulus, problem.sphere.radius
+    u0 = float(svda_static_deformation(position, e_inf, radius, dl.P, dl.debye_length))
+    if position - u0 < dl.debye_length:
+        return math.inf, (f"in contact (central gap {(position - u0) * 1e9:.3g} nm below 1/kappa "
+                          f"= {dl.debye_length * 1e9:.3g} nm)")
+    return float(svda_error_estimate(position, e_inf, radius, dl.P, dl.debye_length)), (
+        f"0.6 kappa|u0| with u0 = {u0 * 1e9:.3g} nm")
+
+
+def contact_error(problem: ContactProblem, position: float, omega_max: float) -> tuple[float, str]:
+    """Estimated Hertz-contact error at indentation −``position`` up to ``omega_max``."""
+    depth = -float(position)
+    if not depth > 0:
+        return math.inf, "needs an indentation (h0 < 0)"
+    material = problem.material
+    ratio = 1.0 / (abs(complex(material.complex_compliance(np.array([omega_max]))[0]))
+                   * material.relaxed_modulus)
+    kappa_depth = depth / problem.surface_force.decay_length
+    return 1.5 * ratio / kappa_depth, (f"1.5 |E*(omega_max)|/E_inf / (kappa delta0) with "
+                                       f"kappa delta0 = {kappa_depth:.3g}")
+
+
+def finish(kind: str, candidates: list[tuple[str, float, str, dict[str, Any]]],
+            accuracy: float, preamble: str) -> Choice:
+    """The first candidate whose estimate meets ``accuracy`` (or the most accurate one)."""
+    meets = accuracy * (1.0 + 1e-9)  # an estimate set to the accuracy itself meets it
+    chosen = next((c for c in candidates if c[1] <= meets), None)
+    if chosen is None:
+        chosen = min(candidates, key=lambda c: c[1])
+    rows = []
+    for name, error, reason, _ in candidates:
+        verdict = ("chosen" if name == chosen[0] else
+                   "not applicable" if math.isinf(error) else
+                   "too inaccurate" if error > meets else "costlier")
+        rows.append((name, float(error), f"{verdict}: {reason}"))
+    shown = "; ".join(
+        f"{name} {'n/a' if math.isinf(err) else f'~{err:.1e}'} ({note})" for name, err, note in rows)
+    met = chosen[1] <= meets
+    lead = (f"{chosen[0]} is the cheapest {kind} meeting the accuracy {accuracy:g}"
+            if met else
+            f"no {kind} is estimated to meet the accuracy {accuracy:g}; {chosen[0]} is the "
+            "most accurate")
+    explanation = (f"{preamble}{lead} (estimated error {chosen[1]:.1e}); candidates by cost: "
+                   f"{shown}")
+    return Choice(chosen[0], dict(chosen[3]), float(chosen[1]), accuracy, explanation,
+                  tuple(rows))
+
+
+def stepper_tol_factor(accuracy: float) -> tuple[float, float]:
+    """The adaptive tol (× the default) meeting ``accuracy`` and the error estimated there."""
+    lo, hi = STEPPER_TOL_FACTORS
+    budget = accuracy - GRID_ERROR
+    factor = (budget / (SAFETY * STEPPER_ERROR)) ** (1.0 / STEPPER_EXPONENT)
+    factor = min(max(factor, lo), hi)
+    return factor, SAFETY * STEPPER_ERROR * factor ** STEPPER_EXPONENT
+
+
+def choose_simulation(problem: ContactProblem, drive: Any, *,
+                      accuracy: float = DEFAULT_ACCURACY) -> Choice:
+    """The stepper and tolerance of :func:`~viscoforce.solvers.simulate.simulate` for ``accuracy``.
+
+    The adaptive exponential trapezoidal stepper is the cheapest at every accuracy measured
+    (first-order exponential Euler and the paper's explicit Euler need 5–10× the time at 1e-3);
+    its tolerance is loosened or tightened from the measured error–tolerance relation. Where the
+    whole drive stays before contact and the SVDA estimate meets the accuracy, the explanation
+    says that the SVDA ODE (:func:`~viscoforce.solvers.svda_ode.solve_svda`) would do too.
+
+    Returns
+    -------
+    Choice
+        ``method`` a stepper name, ``options`` the ``tol`` [m] for simulate.
+    """
+    require_instance("problem", problem, ContactProblem)
+    accuracy = require_accuracy(accuracy)
+    factor, error = stepper_tol_factor(accuracy)
+    default_tol = 1e-5 * problem.surface_force.decay_length
+    deepest = float(drive.extent()[0])
+    svda, svda_note = svda_error(problem, deepest)
+    candidates = [
+        ("exponential", error + GRID_ERROR,
+         f"second order, adaptive, tol = {factor:.3g} x the default "
+         f"({factor * default_tol:.3g} m)", {"tol": factor * default_tol}),
+        ("exponential-euler", error + GRID_ERROR,
+         "first order: 5-10x the time of exponential at equal error", {}),
+        ("euler", error + GRID_ERROR,
+         "the paper's explicit Euler, step-limited: ~10x the time at equal error", {}),
+    ]
+    preamble = f"drive down to h0 = {deepest * 1e9:.4g} nm: "
+    choice = finish("stepper", candidates, accuracy, preamble)
+    if svda + error <= accuracy * (1.0 + 1e-9):
+        note = (f"; the SVDA ODE (solve_svda) would also meet it here (SVDA error ~{svda:.1e}, "
+                f"{svda_note})")
+    else:
+        note = f"; the SVDA is not adequate ({svda_note}{'' if math.isinf(svda) else f', ~{svda:.1e}'})"
+    return Choice(choice.method, choice.options, choice.estimated_error, accuracy,
+                  choice.explanation + note, choice.considered)
