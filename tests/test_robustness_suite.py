@@ -301,7 +301,8 @@ API_CASES = [
      ParameterError, r"omega must be 1-D, got shape \(1, 1\)"),
     ("spectrum-method-unknown", lambda: vf.spectrum(SLS_PROBLEM, 2 * NM, 1e-11, [100.0],
                                                     method="fast"),
-     ParameterError, r"method must be 'auto' or one of \['linear', 'svda', 'time-domain'\]"),
+     ParameterError, r"method must be 'auto' or one of \['contact', 'linear', 'svda', 'svda-ode', "
+     r"'time-domain'\]"),
     ("spectrum-method-None", lambda: vf.spectrum(SLS_PROBLEM, 2 * NM, 1e-11, [100.0],
                                                  method=None), ParameterError, r"method must be"),
     ("spectrum-effort-frequencies", lambda: vf.spectrum(SLS_PROBLEM, 2 * NM, 1e-11,

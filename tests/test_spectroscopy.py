@@ -296,8 +296,9 @@ def test_spectrum_rejects_bad_arguments_for_every_method(make_problem, no_comput
 
 @pytest.mark.parametrize("method", [None, "fast", ["linear"], 3])
 def test_spectrum_rejects_unknown_methods(make_problem, method):
-    with pytest.raises(vf.ParameterError, match=r"method must be 'auto' or one of \['linear', "
-                                                r"'svda', 'time-domain'\], got"):
+    with pytest.raises(vf.ParameterError, match=r"method must be 'auto' or one of \['contact', "
+                                                r"'linear', 'svda', 'svda-ode', 'time-domain'\], "
+                                                r"got"):
         spectrum(make_problem(SLS, 1.9e-9), 2e-9, 1e-10, [1e3], method=method)
 
 

@@ -10,6 +10,7 @@ Units are SI everywhere; see :mod:`viscoforce.units` for the sign and phase conv
 from __future__ import annotations
 
 from viscoforce.exceptions import (
+    AccuracyWarning,
     ConvergenceError,
     EffortError,
     GapClosureError,
@@ -81,6 +82,7 @@ __all__ = [
     "Elastic",
     "GapClosureError",
     "InstrumentFormatError",
+    "AccuracyWarning",
     "ModelValidityError",
     "ModelValidityWarning",
     "PAPER",

@@ -86,6 +86,14 @@ class ModelValidityWarning(UserWarning):
     """A result approaches the edge of the model's domain of validity (see ModelValidityError)."""
 
 
+class AccuracyWarning(UserWarning):
+    """A result computed without error control (a fixed time step) whose estimated error is large.
+
+    The equations are valid but their numerical solution is not converged; the message gives the
+    estimate and the fix (a smaller step, or an adaptive method).
+    """
+
+
 class InstrumentFormatError(ViscoforceError, ValueError):
     """An instrument file is empty, truncated, corrupt, or lacks what the reader needs.
 

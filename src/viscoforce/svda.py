@@ -412,7 +412,6 @@ def svda_harmonic_response(omega: ArrayLike, position: float, eta: float, E0: fl
     eta_ = require_nonnegative("eta", eta)
     u0, c, ratio, tau_, mean_force = _svda_mean_state(position, E0, E_inf, tau, radius,
                                                       P, debye_length)
-    warn_svda_error(position, E_inf, radius, P, debye_length)
     kappa = 1.0 / float(debye_length)
     with np.errstate(over="ignore", invalid="ignore"):
         x = w * tau_
@@ -432,6 +431,7 @@ def svda_harmonic_response(omega: ArrayLike, position: float, eta: float, E0: fl
     for value in response:
         require_representable(value, "the SVDA harmonic response",
                               "omega, position, eta, E0, E_inf, tau, radius, P, debye_length")
+    warn_svda_error(position, E_inf, radius, P, debye_length)
     return response
 
 
@@ -494,12 +494,13 @@ def svda_complex_stiffness(omega: ArrayLike, position: float, E0: float, E_inf: 
     w = as_nonnegative_array("omega", omega)
     _, c, ratio, tau_, mean_force = _svda_mean_state(position, E0, E_inf, tau, radius, P,
                                                      debye_length)
-    warn_svda_error(position, E_inf, radius, P, debye_length)
     with np.errstate(over="ignore", invalid="ignore"):
         _, k_rel = _svda_transfer(w * tau_, c, ratio)
         k = (mean_force / float(debye_length)) * k_rel
-    return require_representable(k, "the SVDA complex stiffness",
-                                 "omega, position, E0, E_inf, tau, radius, P, debye_length")
+    k = require_representable(k, "the SVDA complex stiffness",
+                              "omega, position, E0, E_inf, tau, radius, P, debye_length")
+    warn_svda_error(position, E_inf, radius, P, debye_length)
+    return k
 
 
 def svda_peak_phase_frequency(position: float, E0: float, E_inf: float, tau: float,

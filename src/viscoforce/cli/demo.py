@@ -96,7 +96,7 @@ def _synthetic(folder: Path, out: Path, report: dict[str, Any]) -> Any:
     chosen = int(fit["modes"])
     print(f"1. {SYNTHETIC} (written by viscoforce from a simulation, {spec.sizes['omega']} "
           f"frequencies): --model auto chose the {fit.attrs['model']} model at h0 = "
-          f"{truth['h0'] * 1e9:g} nm, --modes auto {chosen} mode(s) by BIC ({elapsed:.1f} s)")
+          f"{truth['h0'] * 1e9:g} nm, --modes auto chose {chosen} mode(s) by BIC ({elapsed:.1f} s)")
     print(f"   why: {fit.attrs['explanation']}")
     print("\n".join(_params(fit, truth)))
     _save_figure(bode_plot(spec, fit=fit, title="synthetic JPK archive: data and exact fit"),

@@ -33,6 +33,7 @@ eigenvectors are nearly orthogonal (condition number 1.2), and k* agrees with th
 from __future__ import annotations
 
 import threading
+import warnings
 from collections import OrderedDict
 from dataclasses import dataclass
 from typing import Any
@@ -44,7 +45,8 @@ from numpy.typing import ArrayLike, NDArray
 from viscoforce._limits import MAX_SAMPLES, check_effort
 from viscoforce._typing import FloatArray
 from viscoforce._validation import require_finite, require_instance, require_positive
-from viscoforce.exceptions import ParameterError
+from viscoforce.choice import WARN_ERROR, amplitude_error
+from viscoforce.exceptions import ModelValidityWarning, ParameterError
 from viscoforce.experiments._checks import require_frequencies, require_number, require_problem
 from viscoforce.physics.materials import ViscoelasticMaterial
 from viscoforce.problem import ContactProblem
@@ -446,11 +448,34 @@ def linear_response(problem: ContactProblem, position: float, eta: float,
         If an argument is missing or out of range (the message names it and the range).
     EffortError
         If more than ``MAX_SAMPLES`` frequencies are requested (refused before solving).
+
+    Warns
+    -----
+    ModelValidityWarning
+        If η is too large for the small-amplitude limit: the estimated bias of the finite
+        drive's first harmonic, 2.5 (2I₁(κη)/κη − 1) (see :mod:`viscoforce.choice`), exceeds 1 %.
     """
     problem = require_problem(problem)
     eta = require_number("eta", eta, require_positive, "> 0 [m] (finite)")
     omega = require_frequencies(omega, allow_zero=False)
+    _warn_large_eta(problem, eta)
     k, mean = linear_stiffness(problem, position, omega)
     attrs = dict(problem.parameters())
     attrs.update({"method": "linear", "position": float(position), "eta": eta})
     return make_spectrum(omega, k, mean, eta, attrs=attrs)
+
+
+#: Factor on the rigid finite-amplitude estimate (measured bias up to 2.4× it in contact).
+AMPLITUDE_SAFETY = 2.5
+
+
+def _warn_large_eta(problem: ContactProblem, eta: float) -> None:
+    """Warn when ``eta`` is too large for a small-amplitude spectrum (estimate above 1 %)."""
+    decay = problem.surface_force.decay_length
+    error = AMPLITUDE_SAFETY * amplitude_error(eta, decay)
+    if error > WARN_ERROR:
+        warnings.warn(
+            f"kappa*eta = {eta / decay:.3g}: the finite-amplitude first harmonic differs from "
+            f"the small-amplitude spectrum by up to ~{100 * error:.2g} % (estimate "
+            f"{AMPLITUDE_SAFETY:g} (2 I1(x)/x - 1), x = kappa*eta); use method 'time-domain' or "
+            "a smaller eta", ModelValidityWarning, stacklevel=3)

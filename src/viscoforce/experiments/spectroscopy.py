@@ -462,7 +462,7 @@ def contact_spectrum(problem: ContactProblem, position: float, eta: float,
 
     The surface force enters only as a hard contact: the compliance of the force layer and the
     force outside the contact are neglected (estimated error
-    :func:`~viscoforce.experiments.choice.contact_error`, ≈ 1.5 (|E*(ω)|/E_inf)/(κδ0) at the
+    :func:`~viscoforce.choice.contact_error`, ≈ 2 × 1.5 (|E*(ω)|/E_inf)/(κδ0) at the
     highest ω). The mean force is the relaxed Hertz load (2/3)E_inf√R δ0^{3/2} (the paper's E,
     twice Johnson's E*).
 
@@ -508,8 +508,8 @@ def contact_spectrum(problem: ContactProblem, position: float, eta: float,
     if error > WARN_ERROR:
         warnings.warn(
             f"Hertz contact is about {100 * error:.2g} % off the exact model at indentation "
-            f"{depth * 1e9:.4g} nm (estimate 1.5 |E*(omega_max)|/E_inf / (kappa delta0); above "
-            f"{100 * WARN_ERROR:g} %): the surface-force layer is not stiff against the contact; "
+            f"{depth * 1e9:.4g} nm (estimate 2 x 1.5 |E*(omega_max)|/E_inf / (kappa delta0); "
+            f"above {100 * WARN_ERROR:g} %): the surface-force layer is not stiff against the contact; "
             "use method 'linear' (exact)", ModelValidityWarning, stacklevel=2)
     material, radius = problem.material, problem.sphere.radius
     k = math.sqrt(radius * depth) / material.complex_compliance(omega)
@@ -520,26 +520,8 @@ def contact_spectrum(problem: ContactProblem, position: float, eta: float,
     return make_spectrum(omega, k, mean, eta, attrs=attrs)
 
 
-def _checked_linear(problem: ContactProblem, position: float, eta: float,
-                    omega: ArrayLike) -> xr.Dataset:
-    """:func:`linear_response`, warning when the drive is too large for a linear spectrum."""
-    from viscoforce.choice import WARN_ERROR, amplitude_error
-
-    problem = require_problem(problem)
-    eta = require_number("eta", eta, require_positive, "> 0 [m] (finite)")
-    decay = problem.surface_force.decay_length
-    error = amplitude_error(eta, decay)
-    if error > WARN_ERROR:
-        warnings.warn(
-            f"kappa*eta = {eta / decay:.3g}: the finite-amplitude first harmonic differs from "
-            f"the small-amplitude spectrum by up to ~{100 * error:.2g} % (estimate "
-            "2 I1(x)/x - 1, x = kappa*eta); use method 'time-domain' or a smaller eta",
-            ModelValidityWarning, stacklevel=3)
-    return linear_response(problem, position, eta, omega)
-
-
 #: Spectrum routes: name → function(problem, position, eta, omega, **options).
-SPECTRUM_METHODS = {"linear": _checked_linear, "time-domain": sweep, "svda": svda_spectrum,
+SPECTRUM_METHODS = {"linear": linear_response, "time-domain": sweep, "svda": svda_spectrum,
                     "svda-ode": svda_sweep, "contact": contact_spectrum}
 #: The approximations' own error-estimate warnings (not the half-space one), silenced under "auto".
 _ESTIMATE_WARNINGS = r"(the SVDA is about|Hertz contact is about|kappa\*eta = )"
