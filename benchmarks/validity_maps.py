@@ -2,8 +2,9 @@
 """Stability and validity maps: where each method fails, or errs by more than 1 %, and what it says.
 
 What it maps (see benchmarks/README.md, section ``validity_maps.py``; issue 15 item 2). Every
-point is classified ``ok`` (error ≤ 1 %, silent), ``warns`` (a ModelValidityWarning was issued),
-``raises`` (a ViscoforceError) or ``silent > 1 %`` (error above 1 % and neither: the finding).
+point is classified ``ok`` (error ≤ 1 %, silent), ``warns`` (a ModelValidityWarning or
+AccuracyWarning was issued), ``raises`` (a ViscoforceError) or ``silent > 1 %`` (error above
+1 % and neither: a finding).
 
 1. SVDA spectrum (``vf.spectrum(method="svda")``) against the exact linear response: max
    |Δk*|/|k*| over 13 ω in [0.1/τ, 100/τ], over position h̄0 × relaxed modulus E_inf
@@ -50,7 +51,7 @@ from threadpoolctl import threadpool_limits  # noqa: E402
 
 import viscoforce as vf  # noqa: E402
 from viscoforce.closed_form import sls_complex_compliance  # noqa: E402
-from viscoforce.exceptions import ModelValidityWarning, ViscoforceError  # noqa: E402
+from viscoforce.exceptions import AccuracyWarning, ModelValidityWarning, ViscoforceError  # noqa: E402
 from viscoforce.experiments.linear_response import linear_stiffness  # noqa: E402
 from viscoforce.experiments.spectroscopy import SPECTRUM_METHODS  # noqa: E402
 from viscoforce.physics.surface_forces import DoubleLayer  # noqa: E402
@@ -147,7 +148,7 @@ def max_rel(k, k_ref) -> float:
 
 
 def attempt(fn):
-    """Run ``fn``; return (result or None, exception text, ModelValidityWarning texts, time)."""
+    """Run ``fn``; return (result or None, exception text, warning texts, time)."""
     t0 = time.perf_counter()
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
@@ -155,7 +156,8 @@ def attempt(fn):
             result, exc = fn(), ""
         except ViscoforceError as err:  # a refused point is data, not a crash
             result, exc = None, f"{type(err).__name__}: {err}"
-    texts = [str(w.message) for w in caught if issubclass(w.category, ModelValidityWarning)]
+    texts = [str(w.message) for w in caught
+             if issubclass(w.category, (ModelValidityWarning, AccuracyWarning))]
     return result, exc, texts, time.perf_counter() - t0
 
 
