@@ -177,11 +177,13 @@ def finish(kind: str, candidates: list[tuple[str, float, str, dict[str, Any]]],
     rows = []
     for name, error, reason, _ in candidates:
         verdict = ("chosen" if name == chosen[0] else
+                   "not evaluated" if math.isnan(error) else
                    "not applicable" if math.isinf(error) else
                    "too inaccurate" if error > meets else "costlier")
         rows.append((name, float(error), f"{verdict}: {reason}"))
     shown = "; ".join(
-        f"{name} {'n/a' if math.isinf(err) else f'~{err:.1e}'} ({note})" for name, err, note in rows)
+        f"{name} {'n/a' if math.isinf(err) else '-' if math.isnan(err) else f'~{err:.1e}'} "
+        f"({note})" for name, err, note in rows)
     met = chosen[1] <= meets
     lead = (f"{chosen[0]} is the cheapest {kind} meeting the accuracy {accuracy:g}"
             if met else
