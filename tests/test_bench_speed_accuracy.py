@@ -20,7 +20,7 @@ TOP_KEYS = {"schema", "created", "quick", "machine", "settings", "rows", "summar
 ROW_KEYS = {"scene", "method", "knob", "value", "time_s", "error", "status", "is_default",
             "reference", "detail"}
 SCENES = {"static 2 nm", "static -5 nm", "static -10 nm", "Fig. 3 spectrum", "Fig. 4 spectrum",
-          "Fig. 1 step", "Fig. 5 loop", "30-point fit"}
+          "Fig. 1 step", "Fig. 5 loop", "30-point fit", "deep spectrum"}
 NO_DEFAULT = {"linear vs td"}  # a comparison row, not a method of its own
 
 

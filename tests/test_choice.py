@@ -207,13 +207,24 @@ def test_fit_auto_meets_the_accuracy_on_the_moduli(h0):
 
 def test_fit_auto_rejects_svda_where_its_moduli_are_biased():
     spec = _spectrum(10e-9)
-    svda = fit_spectrum(spec, "svda", position=10e-9, radius=PAPER.R, P=PAPER.P,
-                        debye_length=PAPER.debye_length)
+    with pytest.warns(ModelValidityWarning, match="the fitted moduli are biased"):
+        svda = fit_spectrum(spec, "svda", position=10e-9, radius=PAPER.R, P=PAPER.P,
+                            debye_length=PAPER.debye_length)
     bias = abs(float(svda["E_inf"]) / PAPER.E_inf - 1)
+    assert 0.1 < svda.attrs["estimated_model_error"] and 0.1 < bias  # 0.30 estimated, 0.41 real
     guess = problem(-1e-9)
     fit = fit_spectrum(spec, "auto", problem=guess, position=10e-9)
     assert "svda" in fit.attrs["explanation"] and "too inaccurate" in fit.attrs["explanation"]
     assert bias > ACCURACY  # the rejected model is indeed biased (41 % measured)
+
+
+def test_contact_fit_with_a_debye_length_warns_where_hertz_is_off():
+    spec = _spectrum(-15e-9)
+    with pytest.warns(ModelValidityWarning, match="Hertz contact is about"):
+        fit = fit_spectrum(spec, "contact", radius=PAPER.R, indentation=15e-9,
+                           debye_length=PAPER.debye_length)
+    truth = abs(float(fit["E_inf"]) / PAPER.E_inf - 1)
+    assert truth > 0.01 and fit.attrs["estimated_model_error"] > 0.01  # 26 % measured
 
 
 # ── bad input ────────────────────────────────────────────────────────────────────────────────────

@@ -241,3 +241,41 @@ def test_contact_spectrum_deep_short_debye_warns_or_is_accurate():
     ds, warned = _warned(lambda: vf.spectrum(p, h, 1e-12, omega, method="contact"))
     k_exact, _ = linear_stiffness(p, h, omega)
     assert warned or np.max(np.abs(_kstar(ds) - k_exact) / np.abs(k_exact)) < 0.01
+
+
+# ── SVDA time domain and SVDA fits (silent in the speed-accuracy study, now warned) ─────────────
+
+SVDA_PARAMS = dict(E0=vf.PAPER.E0, E_inf=vf.PAPER.E_inf, tau=vf.PAPER.tau, radius=R,
+                   P=vf.PAPER.P, debye_length=vf.PAPER.debye_length)
+
+
+def test_svda_ode_spectrum_warns_at_2nm():
+    from viscoforce.experiments.spectroscopy import svda_sweep
+
+    with pytest.warns(ModelValidityWarning, match="the SVDA is about"):
+        svda_sweep(problem(sls(), 2e-9), 2e-9, 1e-11, [1e3], periods=1, progress=False)
+
+
+def test_svda_ode_into_contact_warns():
+    from viscoforce.solvers.svda_ode import solve_svda
+
+    drive = vf.Triangle(10e-9, -10e-9, 5e-6)  # the Fig. 5 loop: 56 % off, measured
+    with pytest.warns(ModelValidityWarning, match="the SVDA is used in contact"):
+        solve_svda(drive, **SVDA_PARAMS, t_eval=np.linspace(0.0, drive.duration, 41))
+
+
+def test_svda_ramp_into_contact_warns():
+    from viscoforce.svda import svda_ramp_deformation
+
+    t = np.linspace(0.0, 4e-3, 41)  # 10 nm → −10 nm at 5 µm/s: 100 % off in contact, measured
+    with pytest.warns(ModelValidityWarning, match=r"the SVDA is about .* on this ramp \(Eq. 20\)"):
+        svda_ramp_deformation(t, 10e-9, -5e-6, **SVDA_PARAMS)
+
+
+def test_svda_ode_before_contact_is_quiet():
+    from viscoforce.solvers.svda_ode import solve_svda
+
+    drive = vf.Ramp(20e-9, 12e-9, 1e-3)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        solve_svda(drive, **SVDA_PARAMS, t_eval=np.linspace(0.0, 1e-3, 11))

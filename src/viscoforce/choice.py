@@ -153,18 +153,23 @@ def svda_error(problem: ContactProblem, position: float) -> tuple[float, str]:
         f"0.6 kappa|u0| with u0 = {u0 * 1e9:.3g} nm")
 
 
+def hertz_error(material: Any, depth: float, decay_length: float,
+                omega_max: float) -> tuple[float, str]:
+    """Estimated Hertz-contact error at indentation ``depth`` [m] > 0 up to ``omega_max``."""
+    ratio = 1.0 / (abs(complex(material.complex_compliance(np.array([omega_max]))[0]))
+                   * material.relaxed_modulus)
+    kappa_depth = depth / decay_length
+    return SAFETY * 1.5 * ratio / kappa_depth, (
+        f"{SAFETY:g} x 1.5 |E*(omega_max)|/E_inf / (kappa delta0) with kappa delta0 = "
+        f"{kappa_depth:.3g}")
+
+
 def contact_error(problem: ContactProblem, position: float, omega_max: float) -> tuple[float, str]:
     """Estimated Hertz-contact error at indentation −``position`` up to ``omega_max``."""
     depth = -float(position)
     if not depth > 0:
         return math.inf, "needs an indentation (h0 < 0)"
-    material = problem.material
-    ratio = 1.0 / (abs(complex(material.complex_compliance(np.array([omega_max]))[0]))
-                   * material.relaxed_modulus)
-    kappa_depth = depth / problem.surface_force.decay_length
-    return SAFETY * 1.5 * ratio / kappa_depth, (
-        f"{SAFETY:g} x 1.5 |E*(omega_max)|/E_inf / (kappa delta0) with kappa delta0 = "
-        f"{kappa_depth:.3g}")
+    return hertz_error(problem.material, depth, problem.surface_force.decay_length, omega_max)
 
 
 def finish(kind: str, candidates: list[tuple[str, float, str, dict[str, Any]]],

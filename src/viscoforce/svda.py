@@ -193,6 +193,24 @@ def warn_svda_error(position: float, E_inf: float, radius: float, P: float,  # n
     return error
 
 
+def warn_if_in_contact(gap: ArrayLike, debye_length: float, what: str, *,
+                       stacklevel: int = 3) -> None:
+    """Warn (ModelValidityWarning) when an SVDA trajectory's central gap goes below 1/κ.
+
+    The SVDA holds before contact only; along a drive into contact it is tens of per cent off
+    (56 % on the paper's Fig. 5 loop for the ODE, 100 % for the closed-form ramp;
+    benchmarks/speed_accuracy.py).
+    """
+    g = np.asarray(gap, dtype=float)
+    if g.size and float(np.min(g)) < float(debye_length):
+        warnings.warn(
+            f"the SVDA is used in contact: {what}'s central gap reaches "
+            f"{float(np.min(g)) * 1e9:.3g} nm, below the decay length 1/kappa = "
+            f"{float(debye_length) * 1e9:.3g} nm, where the SVDA does not hold (tens of % off); "
+            "use the exact solver (viscoforce.simulate)", ModelValidityWarning,
+            stacklevel=stacklevel)
+
+
 # ── SVDA ramp (Eqs. 19–21) ──────────────────────────────────────────────────────────────────────
 
 def svda_ramp_deformation(t: ArrayLike, position: float, speed: float, E0: float, E_inf: float,
@@ -267,8 +285,19 @@ def svda_ramp_deformation(t: ArrayLike, position: float, speed: float, E0: float
     with np.errstate(over="ignore", invalid="ignore"):
         u = (lam * tau_ / e0 - 1.0 / e_inf) * (tt / tau_) * np.exp(exponent) * exprel(
             -abs(mu - lam) * tt)
-    return require_representable(u, "the SVDA ramp deformation u(t)",
-                                 "t, position, speed, E0, E_inf, tau, radius, P, debye_length")
+    u = require_representable(u, "the SVDA ramp deformation u(t)",
+                              "t, position, speed, E0, E_inf, tau, radius, P, debye_length")
+    # Eq. 20 linearises the force in u: its error grows like κ|u| (measured at Fig. 2, 2 nm:
+    # u 10 % too deep at κ|u| = 0.17, i.e. ≈ 0.6 κ|u|); into contact it diverges
+    error = SVDA_ERROR_COEFFICIENT * kappa * float(np.max(np.abs(u))) if u.size else 0.0
+    if error > SVDA_WARN_ERROR:
+        warnings.warn(
+            f"the SVDA is about {100 * min(error, 1.0):.2g} % off or worse on this ramp (Eq. 20): "
+            f"the deformation reaches |u| = {float(np.max(np.abs(u))) * 1e9:.3g} nm, not small "
+            f"against 1/kappa = {1e9 / kappa:.3g} nm (estimate 0.6 kappa|u|); use the SVDA ODE "
+            "(solve_svda) before contact or the exact solver", ModelValidityWarning,
+            stacklevel=2)
+    return u
 
 
 # ── SVDA harmonic response (Eqs. 23–26, corrected Eq. 24) ───────────────────────────────────────

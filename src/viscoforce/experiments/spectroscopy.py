@@ -53,7 +53,7 @@ from viscoforce.solvers.base import TimeStepper
 from viscoforce.solvers.simulate import EULER_DEFAULT_FRACTION, simulate
 from viscoforce.solvers.steppers import METHODS
 from viscoforce.solvers.svda_ode import check_ode_settings, solve_svda
-from viscoforce.svda import svda_harmonic_response, svda_static_deformation
+from viscoforce.svda import svda_harmonic_response, svda_static_deformation, warn_svda_error
 
 #: Settling time before demodulation, in units of the longest creep time.
 DEFAULT_SETTLE_TAUS = 10.0
@@ -453,6 +453,8 @@ def svda_sweep(problem: ContactProblem, position: float, eta: float, omega: Arra
                                         "mean central deformation")
     ds["nfev"] = over_omega(np.array([r[4] for r in results]), "1",
                             "right-hand-side evaluations")
+    warn_svda_error(position, params["E_inf"], params["radius"], params["P"],
+                    params["debye_length"])
     return ds
 
 

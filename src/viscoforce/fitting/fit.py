@@ -23,13 +23,20 @@ import xarray as xr
 from viscoforce.choice import (
     DEFAULT_ACCURACY,
     GRID_ERROR,
+    WARN_ERROR,
     contact_error,
     double_layer,
     finish,
+    hertz_error,
     require_accuracy,
     svda_error,
 )
-from viscoforce.exceptions import ConvergenceError, ModelValidityError, ParameterError
+from viscoforce.exceptions import (
+    ConvergenceError,
+    ModelValidityError,
+    ModelValidityWarning,
+    ParameterError,
+)
 from viscoforce.fitting import _params
 from viscoforce.fitting.models import (
     MAX_AUTO_MODES,
@@ -44,7 +51,7 @@ from viscoforce.fitting.models import (
 )
 from viscoforce.problem import ContactProblem
 from viscoforce.schema import make_fit_result, validate_spectrum
-from viscoforce.svda import svda_stiffness_kernel
+from viscoforce.svda import svda_error_estimate, svda_stiffness_kernel
 
 #: Information criteria of ``modes="auto"`` (``--criterion``).
 CRITERIA = ("bic", "aic")
@@ -440,7 +447,52 @@ def fit_spectrum(spectrum: xr.Dataset, model: str, *, modes: int | str = 1,
         raise ParameterError(
             f"model {model!r} needs the mean position: give h0 (--h0) or the mean force "
             f"(--mean-force; this spectrum's median mean_force is {mean:.4g} N)")
-    return fit_data(data, model, modes=modes, criterion=criterion, **fixed)
+    decay = fixed.pop("debye_length", None) if model == "contact" else None
+    ds = fit_data(data, model, modes=modes, criterion=criterion, **fixed)
+    if model == "svda":
+        h0 = fixed.get("position")
+        if h0 is None:
+            h0 = svda_position(fixed["mean_force"], float(ds["E_inf"]), fixed["radius"],
+                               fixed["P"], fixed["debye_length"])
+        _warn_model_bias(ds, model, *svda_bias(ds, spectrum, h0, fixed["radius"], fixed["P"],
+                                               fixed["debye_length"]))
+    if model == "contact" and decay is not None and modes == 1 and (
+            fixed.get("material", "sls") == "sls"):
+        _warn_model_bias(ds, model, *hertz_error(_sls_of(ds), fixed["indentation"], decay,
+                                                 float(np.max(spectrum["omega"]))))
+    return ds
+
+
+def svda_bias(ds: xr.Dataset, spectrum: xr.Dataset, position: float, radius: float,
+              P: float, debye_length: float) -> tuple[float, str]:  # noqa: N803
+    """Estimated relative bias of an svda fit's moduli and the reason.
+
+    A stiffness error δ (0.6 κ|u0| at the fitted E_inf, :func:`viscoforce.svda.svda_error_estimate`)
+    biases the moduli by ≈ δ / s, s = |∂ln k*/∂ln E| (E0, E_inf scaled together), which is small
+    before contact: the SVDA error is O(κ|u0|) and so is s.
+    """
+    values = {n: float(ds[n]) for n in ("E0", "E_inf", "tau")}
+    error = float(svda_error_estimate(position, values["E_inf"], radius, P, debye_length))
+    omega = np.asarray(spectrum["omega"].values, dtype=float)
+    kernel = (position, values["E0"], values["E_inf"], values["tau"], radius, P)
+    k = svda_stiffness_kernel(omega, *kernel, 1.0 / debye_length)
+    scaled = (position, *(v * (1 + SENSITIVITY_STEP) for v in kernel[1:3]), *kernel[3:])
+    k_up = svda_stiffness_kernel(omega, *scaled, 1.0 / debye_length)
+    sensitivity = float(np.max(np.abs(k_up / k - 1.0))) / SENSITIVITY_STEP
+    return error / sensitivity, (
+        f"stiffness error 0.6 kappa|u0| ~{error:.1e} over the moduli sensitivity "
+        f"|dln k*/dln E| = {sensitivity:.2g} at the fitted E_inf = {values['E_inf']:.3g} Pa")
+
+
+def _warn_model_bias(ds: xr.Dataset, model: str, bias: float, reason: str) -> None:
+    """Warn (ModelValidityWarning) when a fit's estimated model bias exceeds 1 %."""
+    ds.attrs["estimated_model_error"] = bias
+    if bias > WARN_ERROR:
+        lead = "the SVDA is about" if model == "svda" else "Hertz contact is about"
+        warnings.warn(
+            f"{lead} {100 * bias:.2g} % off as a model of these data: the fitted moduli are "
+            f"biased by about that much ({reason}); use model 'exact' (or 'auto')",
+            ModelValidityWarning, stacklevel=3)
 
 
 def _sls_of(ds: xr.Dataset):
@@ -448,7 +500,7 @@ def _sls_of(ds: xr.Dataset):
     return material_from({n: float(ds[n]) for n in ("E0", "E_inf", "tau")}, 1)
 
 
-#: Relative step of the moduli sensitivity of the svda candidate of ``model="auto"``.
+#: Relative step of the moduli sensitivity of an svda fit (its bias estimate).
 SENSITIVITY_STEP = 1e-4
 #: The models ``model="auto"`` chooses from, in order of cost.
 AUTO_MODELS = ("svda", "contact", "exact")
@@ -478,19 +530,7 @@ def _auto_candidate(spectrum: xr.Dataset, name: str, modes: int | str, criterion
         e_inf = float(ds["E_inf"])
         h0 = position if position is not None else svda_position(
             mean_force, e_inf, radius, layer.P, layer.debye_length)
-        error, reason = svda_error(problem.with_material(_sls_of(ds)), h0)
-        # a stiffness error δ biases the moduli by ≈ δ / s, s = |∂ln k*/∂ln E| (E0, E_inf scaled
-        # together), which is small before contact: the SVDA error is O(κ|u0|) and so is s
-        omega = np.asarray(spectrum["omega"].values, dtype=float)
-        values = {n: float(ds[n]) for n in ("E0", "E_inf", "tau")}
-        kernel = (h0, values["E0"], values["E_inf"], values["tau"], radius, layer.P)
-        k = svda_stiffness_kernel(omega, *kernel, 1.0 / layer.debye_length)
-        scaled = (h0, *(v * (1 + SENSITIVITY_STEP) for v in kernel[1:3]), *kernel[3:])
-        k_up = svda_stiffness_kernel(omega, *scaled, 1.0 / layer.debye_length)
-        sensitivity = float(np.max(np.abs(k_up / k - 1.0))) / SENSITIVITY_STEP
-        return ds, error / sensitivity, (
-            f"stiffness error {reason} ~{error:.1e}, over the moduli sensitivity "
-            f"|dln k*/dln E| = {sensitivity:.2g} at the fitted E_inf = {values['E_inf']:.3g} Pa")
+        return (ds, *svda_bias(ds, spectrum, h0, radius, layer.P, layer.debye_length))
     if name == "contact":
         depth = -position if position is not None else None
         if modes != 1:

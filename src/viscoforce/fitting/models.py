@@ -539,7 +539,7 @@ MAX_MODES = 12
 _FIXED: dict[str, tuple[str, ...]] = {
     "svda": ("position", "mean_force", "radius", "P", "debye_length"),
     "exact": ("position", "mean_force", "problem"),
-    "contact": ("radius", "indentation", "drag", "material"),
+    "contact": ("radius", "indentation", "drag", "material", "debye_length"),
     "prony": (), "relaxation": (), "step": ("problem", "position_trace")}
 
 

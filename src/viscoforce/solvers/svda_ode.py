@@ -39,7 +39,7 @@ from viscoforce.closed_form import (
     require_exponential_law,
 )
 from viscoforce.exceptions import ConvergenceError, ParameterError
-from viscoforce.svda import svda_static_deformation
+from viscoforce.svda import svda_static_deformation, warn_if_in_contact
 
 __all__ = ["ODE_METHODS", "MAX_RATE", "SVDATrajectory", "solve_svda", "check_ode_settings"]
 
@@ -301,4 +301,5 @@ def solve_svda(drive: SeparationHistory, *, E0: float, E_inf: float, tau: float,
     u = y_out / kappa
     position = np.asarray(drive.position(times), dtype=float)
     force = derjaguin_force(position - u, r, p, lam)
+    warn_if_in_contact(position - u, lam, "the SVDA ODE")
     return SVDATrajectory(time=times, position=position, deformation=u, force=force, nfev=nfev)
