@@ -275,3 +275,16 @@ def test_cli_linear_at_large_eta_warns_in_the_note(capsys):
         out = _json(capsys, ["spectrum", "--h0=-5nm", "--eta", "1nm", "--omega", "2e4",
                              "--json"])
     assert "kappa*eta = 1" in out["note"] and "time-domain" in out["note"]
+
+
+def test_deep_auto_coarsens_the_grid_within_its_budget():
+    law = vf.SumOfLaws((vf.DoubleLayer(P=1e7, debye_length=0.1e-9),
+                        vf.SoftWall(Pw=1e7, z0=0.05e-9)))
+    material = vf.StandardLinearSolid(E0=3e9, E_inf=1e9, tau=PAPER.tau)
+    p = problem(-100e-9 - 0.01e-9, law=law, material=material)
+    choice = choose_spectrum(p, -100e-9, 0.01e-9, OMEGA)
+    assert choice.method == "linear" and choice.options == {"grid_factor": 2.0}
+    auto = vf.spectrum(p, -100e-9, 0.01e-9, OMEGA, method="auto")
+    assert int(auto.attrs["n_panels"]) < p.grid.n_panels
+    exact, _ = linear_stiffness(p, -100e-9, OMEGA)  # the default grid: 9e-10 from converged
+    assert rel(k_of(auto), exact) <= 0.1 * ACCURACY  # the grid's share of the budget

@@ -31,11 +31,18 @@ from viscoforce.exceptions import ConvergenceError, ParameterError
 from viscoforce.experiments._checks import require_frequencies, require_number, require_problem
 from viscoforce.experiments.linear_response import AMPLITUDE_SAFETY, amplitude_bias
 from viscoforce.problem import ContactProblem
+from viscoforce.radial_grid import RadialGrid
 
 #: Factor on the harmonic-balance bias: its leading term is exact for small η; measured
 #: (benchmarks/validity_maps.py, time-domain lock-in) at 0.95–1.0× it for κη ≤ 0.1 (Fig. 3:
 #: 5.5e-4 both; −5 nm: 3.5e-3 vs 3.7e-3), 0.78× at κη = 0.25 and 0.24× at κη = 1 (Fig. 4).
 BIAS_SAFETY = 1.1
+#: Coarser grids of the linear route: (node spacing × the problem's, measured max error over the
+#: study's static loads, Fig. 3, Fig. 4 and deep spectra; benchmarks/speed_accuracy.py). The
+#: estimate used is SAFETY × that; the deep spectrum is 20× faster at × 4 (12 ms vs 0.24 s).
+COARSE_GRIDS = ((4.0, 6.4e-5), (2.0, 2.7e-7))
+#: Grids with fewer nodes are not coarsened (their solve costs less than a new kernel build).
+COARSEN_FROM_NODES = 128
 #: Frequencies at which the bias is solved (a subsample of longer lists).
 MAX_BIAS_FREQUENCIES = 32
 
@@ -58,6 +65,16 @@ def amplitude_error_of(problem: ContactProblem, position: float, eta: float,
     estimate = BIAS_SAFETY * bias * eta * eta
     return estimate, (f"finite amplitude kappa*eta = {eta / decay:.3g} -> {estimate:.1e} "
                       "(third-order harmonic balance)")
+
+
+def coarsened(problem: ContactProblem, factor: float) -> ContactProblem:
+    """``problem`` on a grid ``factor`` × coarser (same outer radius and order)."""
+    if factor == 1.0:
+        return problem
+    grid = problem.grid
+    coarse = RadialGrid.from_spacing(grid.outer_radius, factor * grid.outer_radius / grid.size,
+                                     grid.order)
+    return ContactProblem(problem.sphere, problem.surface_force, problem.material, coarse)
 
 
 def _subsample(omega: np.ndarray) -> np.ndarray:
@@ -104,10 +121,18 @@ def choose_spectrum(problem: ContactProblem, position: float, eta: float, omega:
     rigid = amplitude_error(eta, decay)  # before contact an upper bound (the deformation softens)
     rigid_note = f"finite amplitude kappa*eta = {eta / decay:.3g} -> {rigid:.1e} (rigid)"
     svda, svda_note = svda_error(problem, position)
+    factor, grid_error = 1.0, GRID_ERROR
+    for f, measured in COARSE_GRIDS:  # the coarsest grid whose own error leaves room
+        if problem.grid.size >= COARSEN_FROM_NODES and SAFETY * measured <= 0.1 * accuracy:
+            factor, grid_error = f, SAFETY * measured
+            break
+    grid_note = ("default grid" if factor == 1.0 else
+                 f"grid {factor:g} x coarser (measured <= {grid_error / SAFETY:.1e})")
+    linear_problem = coarsened(problem, factor)
     if svda + rigid <= accuracy:  # the closed form will do: do not build the exact kernel
         amp, amp_note = math.nan, "not needed"
     else:
-        amp, amp_note = amplitude_error_of(problem, position, eta, omega)
+        amp, amp_note = amplitude_error_of(linear_problem, position, eta, omega)
     hertz, hertz_note = contact_error(problem, position, float(np.max(omega)))
     sweep_error = SAFETY * SWEEP_ERROR
     tol_factor = 1.0
@@ -118,7 +143,8 @@ def choose_spectrum(problem: ContactProblem, position: float, eta: float, omega:
     candidates = [
         ("svda", svda + rigid, f"{svda_note}; {rigid_note}", {}),
         ("contact", hertz + amp, f"{hertz_note}; {amp_note}", {}),
-        ("linear", GRID_ERROR + amp, amp_note, {}),
+        ("linear", grid_error + amp, f"{grid_note}; {amp_note}",
+         {} if factor == 1.0 else {"grid_factor": factor}),
         ("svda-ode", svda + SAFETY * SWEEP_ERROR, svda_note, {}),
         ("time-domain", GRID_ERROR + sweep_error,
          "lock-in and stepper" + (f" at tol = {tol_factor:.2g} x the default"

@@ -576,7 +576,7 @@ def spectrum(problem: ContactProblem, position: float, eta: float, omega: ArrayL
         An explicit approximate route whose estimated error exceeds 1 % (the SVDA inside
         ~6 nm with the paper's parameters, Hertz contact, a linear spectrum at κη ≳ 0.3).
     """
-    from viscoforce.experiments.choice import DEFAULT_ACCURACY, choose_spectrum
+    from viscoforce.experiments.choice import DEFAULT_ACCURACY, choose_spectrum, coarsened
 
     if not isinstance(method, str) or (method != "auto" and method not in SPECTRUM_METHODS):
         raise ParameterError(
@@ -589,6 +589,7 @@ def spectrum(problem: ContactProblem, position: float, eta: float, omega: ArrayL
                                  accuracy=DEFAULT_ACCURACY if accuracy is None else accuracy)
         method = choice.method
         options = {**options, **choice.options} if method in _WITH_OPTIONS else {}
+        options.pop("grid_factor", None)
         if method == "svda-ode":  # sweep's stepper options do not apply to the SVDA ODE
             options = {k: v for k, v in options.items() if k in ("periods", "progress")}
     if options and method not in _WITH_OPTIONS:
@@ -596,6 +597,8 @@ def spectrum(problem: ContactProblem, position: float, eta: float, omega: ArrayL
     if choice is None:
         ds = SPECTRUM_METHODS[method](problem, position, eta, omega, **options)
     else:
+        if "grid_factor" in choice.options:  # a coarser grid meets the accuracy
+            problem = coarsened(problem, choice.options["grid_factor"])
         with warnings.catch_warnings():  # the choice weighed this estimate already
             warnings.filterwarnings("ignore", _ESTIMATE_WARNINGS, ModelValidityWarning)
             ds = SPECTRUM_METHODS[method](problem, position, eta, omega, **options)
