@@ -229,15 +229,17 @@ def test_contact_fit_with_a_debye_length_warns_where_hertz_is_off():
 
 # ── bad input ────────────────────────────────────────────────────────────────────────────────────
 
-@pytest.mark.parametrize("bad", [0.0, 1e-6, 0.5, math.nan, "1e-3", True])
+@pytest.mark.parametrize("bad", [0.0, 1e-5, 0.5, math.nan, "1e-3", True])
 def test_accuracy_out_of_range_is_refused(bad):
-    with pytest.raises(ParameterError, match=r"accuracy must be a number in \[1e-05, 0.1\]"):
+    with pytest.raises(ParameterError, match=r"accuracy must be a number in \[0.0001, 0.1\]"):
         require_accuracy(bad)
-    assert ACCURACY_RANGE == (1e-5, 0.1)
+    assert ACCURACY_RANGE == (1e-4, 0.1)
 
 
 def test_auto_options_that_conflict_are_refused():
     p = problem(-7e-9)
+    with pytest.raises(TypeError, match="method 'auto' chooses tol itself"):
+        vf.spectrum(p, -5e-9, 1e-9, OMEGA, method="auto", tol=1e-15)
     with pytest.raises(ParameterError, match="stepper='auto' chooses"):
         vf.simulate(p, Step(-5e-9, -7e-9, 1e-4), stepper="auto", tol=1e-12)
     with pytest.raises(ParameterError, match="accuracy applies to stepper 'auto' only"):

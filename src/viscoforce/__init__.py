@@ -75,6 +75,7 @@ def __dir__() -> list[str]:
 
 
 __all__ = [
+    "AccuracyWarning",
     "ContactProblem",
     "ConvergenceError",
     "EffortError",
@@ -82,7 +83,6 @@ __all__ = [
     "Elastic",
     "GapClosureError",
     "InstrumentFormatError",
-    "AccuracyWarning",
     "ModelValidityError",
     "ModelValidityWarning",
     "PAPER",

@@ -69,6 +69,8 @@ __all__ = [
     "svda_complex_stiffness",
     "svda_peak_phase_frequency",
     "svda_error_estimate",
+    "warn_svda_error",
+    "warn_if_in_contact",
 ]
 
 

@@ -54,8 +54,8 @@ FIT_FLAGS = FlagGroup("model", (
     Flag("--segment", integer_type(0), None, "N",
          "relaxation: the curve's N-th segment (from 0; default the pause after the approach)"),
     Flag("--curve", integer_type(0), None, "I", "fit only curve (pixel) I of a map"),
-    Flag("--accuracy", real_type(0.0), 1e-3, "REL",
-         "--model auto: the relative model error required, in [1e-5, 0.1] (default 1e-3)"),
+    Flag("--accuracy", real_type(0.0), None, "REL",
+         "--model auto: the relative model error required, in [1e-4, 0.1] (default 1e-3)"),
 ))
 
 MAP_FLAGS = FlagGroup("maps (several spectra or curves)", (
@@ -233,6 +233,8 @@ def fit_one(args: argparse.Namespace, ds, kind: str):
     if kind == "spectrum":
         if args.model == "auto":
             fixed["accuracy"] = args.accuracy
+        elif args.accuracy is not None:
+            raise UsageError("--accuracy needs --model auto")
         return fit_spectrum(ds, args.model, modes=args.modes, criterion=args.criterion, **fixed)
     if kind == "curves":
         return fit_hold(ds, segment=args.segment, modes=args.modes, criterion=args.criterion)

@@ -16,20 +16,27 @@ from numpy.typing import ArrayLike
 from viscoforce._validation import require_finite, require_positive
 from viscoforce.choice import (
     DEFAULT_ACCURACY,
+    DEFAULT_SWEEP_TOL,
     GRID_ERROR,
     SAFETY,
     SWEEP_ERROR,
     SWEEP_EXPONENT,
+    SWEEP_TOL_FACTORS,
     Choice,
     amplitude_error,
     contact_error,
     finish,
+    meets,
     require_accuracy,
     svda_error,
 )
 from viscoforce.exceptions import ConvergenceError, ParameterError
 from viscoforce.experiments._checks import require_frequencies, require_number, require_problem
-from viscoforce.experiments.linear_response import AMPLITUDE_SAFETY, amplitude_bias
+from viscoforce.experiments.linear_response import (
+    AMPLITUDE_SAFETY,
+    amplitude_bias,
+    bias_frequencies,
+)
 from viscoforce.problem import ContactProblem
 from viscoforce.radial_grid import RadialGrid
 
@@ -41,10 +48,10 @@ BIAS_SAFETY = 1.1
 #: study's static loads, Fig. 3, Fig. 4 and deep spectra; benchmarks/speed_accuracy.py). The
 #: estimate used is SAFETY × that; the deep spectrum is 20× faster at × 4 (12 ms vs 0.24 s).
 COARSE_GRIDS = ((4.0, 6.4e-5), (2.0, 2.7e-7))
+#: The share of the accuracy a coarser grid's own error may take.
+GRID_SHARE = 0.1
 #: Grids with fewer nodes are not coarsened (their solve costs less than a new kernel build).
 COARSEN_FROM_NODES = 128
-#: Frequencies at which the bias is solved (a subsample of longer lists).
-MAX_BIAS_FREQUENCIES = 32
 
 
 def amplitude_error_of(problem: ContactProblem, position: float, eta: float,
@@ -57,7 +64,7 @@ def amplitude_error_of(problem: ContactProblem, position: float, eta: float,
     """
     decay = problem.surface_force.decay_length
     try:
-        bias = float(np.max(np.abs(amplitude_bias(problem, position, _subsample(omega)))))
+        bias = float(np.max(np.abs(amplitude_bias(problem, position, bias_frequencies(omega)))))
     except (ConvergenceError, ParameterError, np.linalg.LinAlgError):
         rigid = AMPLITUDE_SAFETY * amplitude_error(eta, decay)
         return rigid, (f"finite amplitude kappa*eta = {eta / decay:.3g} -> {rigid:.1e} "
@@ -72,17 +79,8 @@ def coarsened(problem: ContactProblem, factor: float) -> ContactProblem:
     if factor == 1.0:
         return problem
     grid = problem.grid
-    coarse = RadialGrid.from_spacing(grid.outer_radius, factor * grid.outer_radius / grid.size,
-                                     grid.order)
+    coarse = RadialGrid.from_spacing(grid.outer_radius, factor * grid.spacing, grid.order)
     return ContactProblem(problem.sphere, problem.surface_force, problem.material, coarse)
-
-
-def _subsample(omega: np.ndarray) -> np.ndarray:
-    """At most :data:`MAX_BIAS_FREQUENCIES` of ``omega`` (sorted, both ends kept)."""
-    omega = np.sort(np.asarray(omega, dtype=float))
-    if omega.size <= MAX_BIAS_FREQUENCIES:
-        return omega
-    return omega[np.unique(np.linspace(0, omega.size - 1, MAX_BIAS_FREQUENCIES).round().astype(int))]
 
 
 def choose_spectrum(problem: ContactProblem, position: float, eta: float, omega: ArrayLike, *,
@@ -123,23 +121,25 @@ def choose_spectrum(problem: ContactProblem, position: float, eta: float, omega:
     svda, svda_note = svda_error(problem, position)
     factor, grid_error = 1.0, GRID_ERROR
     for f, measured in COARSE_GRIDS:  # the coarsest grid whose own error leaves room
-        if problem.grid.size >= COARSEN_FROM_NODES and SAFETY * measured <= 0.1 * accuracy:
+        if (problem.grid.size >= COARSEN_FROM_NODES
+                and SAFETY * measured <= GRID_SHARE * accuracy):
             factor, grid_error = f, SAFETY * measured
             break
     grid_note = ("default grid" if factor == 1.0 else
                  f"grid {factor:g} x coarser (measured <= {grid_error / SAFETY:.1e})")
     linear_problem = coarsened(problem, factor)
-    if svda + rigid <= accuracy:  # the closed form will do: do not build the exact kernel
+    if svda + rigid <= meets(accuracy):  # the closed form will do: do not build the exact kernel
         amp, amp_note = math.nan, "not needed"
     else:
         amp, amp_note = amplitude_error_of(linear_problem, position, eta, omega)
     hertz, hertz_note = contact_error(problem, position, float(np.max(omega)))
     sweep_error = SAFETY * SWEEP_ERROR
     tol_factor = 1.0
-    if sweep_error > accuracy:
-        tol_factor = (accuracy / sweep_error) ** (1.0 / SWEEP_EXPONENT)
-        sweep_error = accuracy
-    sweep_options = {} if tol_factor == 1.0 else {"tol": tol_factor * 1e-5 * eta}
+    if sweep_error + GRID_ERROR > accuracy:  # tighten tol, within the measured range
+        budget = accuracy - GRID_ERROR
+        tol_factor = max((budget / sweep_error) ** (1.0 / SWEEP_EXPONENT), SWEEP_TOL_FACTORS[0])
+        sweep_error = sweep_error * tol_factor ** SWEEP_EXPONENT
+    sweep_options = {} if tol_factor == 1.0 else {"tol": tol_factor * DEFAULT_SWEEP_TOL * eta}
     candidates = [
         ("svda", svda + rigid, f"{svda_note}; {rigid_note}", {}),
         ("contact", hertz + amp, f"{hertz_note}; {amp_note}", {}),

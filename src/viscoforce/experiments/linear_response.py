@@ -471,6 +471,17 @@ def linear_response(problem: ContactProblem, position: float, eta: float,
 AMPLITUDE_SAFETY = 2.5
 #: Step of the finite differences of p′ (× the shortest decay length of the law).
 FD_STEP = 1e-3
+#: Frequencies at which the bias is solved (a subsample of longer lists).
+MAX_BIAS_FREQUENCIES = 32
+
+
+def bias_frequencies(omega: ArrayLike) -> np.ndarray:
+    """At most :data:`MAX_BIAS_FREQUENCIES` of ``omega`` [rad/s] (sorted, both ends kept)."""
+    omega = np.sort(np.asarray(omega, dtype=float))
+    if omega.size <= MAX_BIAS_FREQUENCIES:
+        return omega
+    pick = np.unique(np.linspace(0, omega.size - 1, MAX_BIAS_FREQUENCIES).round().astype(int))
+    return omega[pick]
 
 
 def _warn_large_eta(problem: ContactProblem, position: float, eta: float,
@@ -483,13 +494,11 @@ def _warn_large_eta(problem: ContactProblem, position: float, eta: float,
     decay = problem.surface_force.decay_length
     if AMPLITUDE_SAFETY * amplitude_error(eta, decay) <= WARN_ERROR:
         return
-    omega = np.sort(omega)
-    if omega.size > 32:
-        omega = omega[np.unique(np.linspace(0, omega.size - 1, 32).round().astype(int))]
     try:
-        error = float(np.max(np.abs(amplitude_bias(problem, position, omega)))) * eta * eta
+        error = float(np.max(np.abs(amplitude_bias(problem, position,
+                                                   bias_frequencies(omega))))) * eta * eta
         how = "third-order harmonic balance"
-    except (ConvergenceError, np.linalg.LinAlgError):
+    except (ConvergenceError, ParameterError, np.linalg.LinAlgError):
         error, how = AMPLITUDE_SAFETY * amplitude_error(eta, decay), "2.5 x rigid exponential"
     if error > WARN_ERROR:
         warnings.warn(

@@ -527,6 +527,8 @@ SPECTRUM_METHODS = {"linear": linear_response, "time-domain": sweep, "svda": svd
                     "svda-ode": svda_sweep, "contact": contact_spectrum}
 #: The approximations' own error-estimate warnings (not the half-space one), silenced under "auto".
 _ESTIMATE_WARNINGS = r"(the SVDA is about|Hertz contact is about|kappa\*eta = )"
+#: Options of the time-domain route that ``method="auto"`` sets itself.
+_AUTO_CHOOSES = {"tol", "stepper", "steps_per_period"}
 #: Routes that take options (the time-domain ones).
 _WITH_OPTIONS = ("time-domain", "svda-ode")
 
@@ -584,6 +586,9 @@ def spectrum(problem: ContactProblem, position: float, eta: float, omega: ArrayL
     if accuracy is not None and method != "auto":
         raise ParameterError(f"accuracy applies to method 'auto' only, not {method!r}")
     choice = None
+    if method == "auto" and set(options) & _AUTO_CHOOSES:
+        raise TypeError(f"method 'auto' chooses {', '.join(sorted(set(options) & _AUTO_CHOOSES))} "
+                        "itself; name the route (e.g. method='time-domain') to set them")
     if method == "auto":
         choice = choose_spectrum(problem, position, eta, omega,
                                  accuracy=DEFAULT_ACCURACY if accuracy is None else accuracy)

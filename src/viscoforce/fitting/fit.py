@@ -28,6 +28,7 @@ from viscoforce.choice import (
     double_layer,
     finish,
     hertz_error,
+    meets,
     require_accuracy,
     svda_error,
 )
@@ -515,12 +516,13 @@ def _auto_candidate(spectrum: xr.Dataset, name: str, modes: int | str, criterion
     if name == "svda":
         if modes != 1:
             return None, math.inf, "one relaxation time only"
-        # applicability only (one mode, one DoubleLayer, pre-contact); the value is re-estimated
-        # at the fitted moduli below
+        layer = double_layer(problem)
+        if layer is None or problem.material.prony().n_modes != 1:
+            return None, math.inf, "needs one relaxation time and exactly one DoubleLayer term"
+        # applicability only (pre-contact); the value is re-estimated at the fitted moduli below
         error, reason = svda_error(problem, position) if position is not None else (0.0, "")
         if math.isinf(error):
             return None, error, reason
-        layer = double_layer(problem)
         try:
             ds = fit_data(spectrum_data(spectrum), "svda", position=position,
                           mean_force=mean_force, radius=radius, P=layer.P,
@@ -536,9 +538,12 @@ def _auto_candidate(spectrum: xr.Dataset, name: str, modes: int | str, criterion
         if modes != 1:
             return None, math.inf, "one relaxation time here (use model='contact' for Prony)"
         if depth is None or not depth > 0:
-            return None, math.inf, "needs an indentation (h0 < 0 given)"
-        ds = fit_data(spectrum_data(spectrum), "contact", radius=radius, indentation=depth,
-                      drag=fixed.get("drag"))
+            return None, math.inf, "needs an indentation (a position h0 < 0)"
+        try:
+            ds = fit_data(spectrum_data(spectrum), "contact", radius=radius, indentation=depth,
+                          drag=fixed.get("drag"))
+        except (ModelValidityError, ConvergenceError) as exc:
+            return None, math.inf, f"fit failed: {str(exc).split(';')[0]}"
         error, reason = contact_error(problem.with_material(_sls_of(ds)), position,
                                       float(np.max(spectrum["omega"])))
         return ds, error, f"{reason} at the fitted moduli (k* proportional to E: bias = error)"
@@ -589,11 +594,12 @@ def fit_spectrum_auto(spectrum: xr.Dataset, *, modes: int | str = 1, criterion: 
     for name in AUTO_MODELS:
         ds, error, reason = _auto_candidate(spectrum, name, modes, criterion, problem, fixed)
         rows.append((name, error, reason, {}))
-        if ds is not None and error <= accuracy * (1.0 + 1e-9):
+        if ds is not None and error <= meets(accuracy):
             kept = ds
             break
     choice = finish("fit model", rows, accuracy, "")
-    assert kept is not None  # exact always fits (or raises)
+    if kept is None:  # exact fits or raises; keep the loop honest anyway
+        raise ConvergenceError(f"model 'auto' kept no fit: {choice.explanation}")
     kept.attrs["explanation"] = choice.explanation
     kept.attrs["estimated_model_error"] = choice.estimated_error
     kept.attrs["accuracy"] = accuracy

@@ -53,7 +53,7 @@ class _Counters:
     steps: int
     rejected: int
     newton: int
-    error_sum: float = 0.0  # max of the decaying sum of local error estimates [m] (fixed steps)
+    error_bound: float = 0.0  # max of the decaying sum of local error estimates [m] (fixed steps)
 
 
 def _resolve_stepper(stepper: str | type[TimeStepper]) -> type[TimeStepper]:
@@ -184,7 +184,7 @@ def simulate(problem: ContactProblem, drive: SeparationHistory, *, t_end: float 
     check_half_space(problem.sphere.radius, ds.u_center.values, ds.contact_radius.values,
                      where=f"along {_describe(drive)}", stacklevel=2)
     if control.fixed:
-        _check_fixed_step_error(ds, STEP_ERROR_SAFETY * counters.error_sum / law.decay_length,
+        _check_fixed_step_error(ds, STEP_ERROR_SAFETY * counters.error_bound / law.decay_length,
                                 control.dt)
     if choice is not None:
         ds.attrs.update({"explanation": choice.explanation,
@@ -299,7 +299,7 @@ def _march(stepper: TimeStepper, drive: SeparationHistory, state: State, t_eval:
     records: list[tuple[float, State]] = [(0.0, state)] if 0.0 in outputs else []
     t, step = 0.0, control.first_step
     steps = rejected = newton = 0
-    error_sum = error_max = 0.0
+    error_bound = error_max = 0.0
     taus = stepper.taus
 
     def decay(h: float) -> float:
@@ -332,8 +332,8 @@ def _march(stepper: TimeStepper, drive: SeparationHistory, state: State, t_eval:
                     continue
                 newton += outcome.iterations
                 if control.fixed:  # errors of the past decay with the creep memory
-                    error_sum = error_sum * decay(h) + outcome.error
-                    error_max = max(error_max, error_sum)
+                    error_bound = error_bound * decay(h) + outcome.error
+                    error_max = max(error_max, error_bound)
                 else:
                     ratio = outcome.error / control.tol
                     factor = 5.0 if ratio == 0 else 0.9 * ratio ** (-1.0 / (stepper.order + 1))

@@ -19,7 +19,6 @@
 
 from __future__ import annotations
 
-import math
 from typing import ClassVar
 
 import numpy as np
@@ -143,7 +142,7 @@ class ExplicitEuler(TimeStepper):
 
     def __init__(self, problem):
         super().__init__(problem)
-        self._previous: tuple[float, float, np.ndarray] | None = None  # (t, velocity, rate)
+        self._previous: tuple[float, np.ndarray] | None = None  # (t, rate) of the last step
 
     def stability_limit(self, state: State) -> float:
         """Largest stable dt [s] at ``state`` (a bound from the row-sum norm of A|p'|)."""
@@ -182,7 +181,7 @@ class ExplicitEuler(TimeStepper):
                                       check_finite=False)
         rate[n] = coupled[n] @ (velocity - rate[:n]) + forcing[n]
         deformation = state.deformation + dt * rate
-        error = self._local_error(state.time, velocity, rate, dt)
+        error = self._local_error(state.time, drive, rate, dt)
         t_new = state.time + dt
         position = float(drive.position(t_new))
         gap = problem.undeformed_gap(position) - deformation[:n]
@@ -208,17 +207,20 @@ class ExplicitEuler(TimeStepper):
                     memory + dt * memory_rate, deformation)
         return StepOutcome(new, error, 1)
 
-    def _local_error(self, time: float, velocity: float, rate: np.ndarray, dt: float) -> float:
+    def _local_error(self, time: float, drive: SeparationHistory, rate: np.ndarray,
+                     dt: float) -> float:
         """Local truncation error (dt²/2)|u''| [m] from the change of the rate since the last step.
 
-        The first step, and a step after a drive kink (the drive velocity jumped; the step
-        lands on the kink, so the jump itself is integrated exactly), have no estimate (0).
+        The first step, and the first step after a drive kink (the velocity jumps there; the
+        step lands on the kink, so the jump itself is integrated exactly), have no estimate (0).
         """
-        previous, self._previous = self._previous, (time, velocity, rate)
-        if previous is None or previous[0] >= time or not math.isclose(
-                previous[1], velocity, rel_tol=1e-6, abs_tol=1e-12):
+        previous, self._previous = self._previous, (time, rate)
+        if previous is None or previous[0] >= time:
             return 0.0
-        curvature = np.max(np.abs(rate - previous[2])) / (time - previous[0])
+        kinks = np.asarray(drive.breakpoints(), dtype=float)
+        if np.any((kinks > previous[0]) & (kinks <= time)):
+            return 0.0
+        curvature = np.max(np.abs(rate - previous[1])) / (time - previous[0])
         return 0.5 * dt * dt * float(curvature)
 
 
