@@ -14,7 +14,7 @@ import numpy as np
 import xarray as xr
 
 from viscoforce.exceptions import ParameterError
-from viscoforce.fitting.fit import FitData, fit_data
+from viscoforce.fitting.fit import FitData, fit_data, warn_unidentified
 from viscoforce.schema import select_curve, validate_curves, validate_trajectory
 
 
@@ -73,8 +73,10 @@ def hold_data(curves: xr.Dataset, *, curve: int = 0, segment: int | None = None)
 def fit_hold(curves: xr.Dataset, *, curve: int = 0, segment: int | None = None,
              modes: int | str = 1, criterion: str = "bic") -> xr.Dataset:
     """Fit F(t) = F_inf + Σ dF_i e^{−t/τ_i} to the hold of one curve (``relaxation`` model)."""
-    return fit_data(hold_data(curves, curve=curve, segment=segment), "relaxation", modes=modes,
-                    criterion=criterion)
+    ds = fit_data(hold_data(curves, curve=curve, segment=segment), "relaxation", modes=modes,
+                  criterion=criterion)
+    warn_unidentified(ds)
+    return ds
 
 
 def trajectory_data(trajectory: xr.Dataset) -> tuple[FitData, tuple[np.ndarray, np.ndarray]]:
@@ -92,4 +94,6 @@ def trajectory_data(trajectory: xr.Dataset) -> tuple[FitData, tuple[np.ndarray, 
 def fit_step(trajectory: xr.Dataset, *, problem: Any) -> xr.Dataset:
     """Fit the exact model's response to the trajectory's drive (``step`` model: tau, E0, E_inf)."""
     data, trace = trajectory_data(trajectory)
-    return fit_data(data, "step", problem=problem, position_trace=trace)
+    ds = fit_data(data, "step", problem=problem, position_trace=trace)
+    warn_unidentified(ds)
+    return ds

@@ -33,6 +33,7 @@ from viscoforce.choice import (
     svda_error,
 )
 from viscoforce.exceptions import (
+    AccuracyWarning,
     ConvergenceError,
     ModelValidityError,
     ModelValidityWarning,
@@ -400,6 +401,27 @@ def fit_data(data: FitData, name: str, *, modes: int | str = 1, criterion: str =
     return ds
 
 
+def warn_unidentified(ds: xr.Dataset, *, stacklevel: int = 3) -> list[str]:
+    """Warn (AccuracyWarning) about fitted parameters the data do not determine; return them.
+
+    A parameter whose stderr exceeds its value, or has none (the covariance is singular), is
+    not identified by the data: its value may be anything (e.g. the moduli of a spectrum far
+    before contact, where the viscoelastic part of k* is below the noise).
+    """
+    names = [str(n) for n in ds["param_i"].values]
+    bad = [n for n in names
+           if not np.isfinite(float(ds[f"{n}_stderr"])) or
+           abs(float(ds[f"{n}_stderr"])) > abs(float(ds[n]))]
+    if bad:
+        shown = ", ".join(f"{n} = {float(ds[n]):.4g} ± {float(ds[f'{n}_stderr']):.3g}"
+                          for n in bad)
+        warnings.warn(
+            f"the data do not determine {', '.join(bad)} (stderr above the value, or none): "
+            f"{shown}; fix it, fit fewer parameters, or measure where the spectrum depends on it",
+            AccuracyWarning, stacklevel=stacklevel)
+    return bad
+
+
 def fit_spectrum(spectrum: xr.Dataset, model: str, *, modes: int | str = 1,
                  criterion: str = "bic", accuracy: float | None = None,
                  **fixed: Any) -> xr.Dataset:
@@ -461,6 +483,7 @@ def fit_spectrum(spectrum: xr.Dataset, model: str, *, modes: int | str = 1,
             fixed.get("material", "sls") == "sls"):
         _warn_model_bias(ds, model, *hertz_error(_sls_of(ds), fixed["indentation"], decay,
                                                  float(np.max(spectrum["omega"]))))
+    warn_unidentified(ds)
     return ds
 
 
@@ -603,6 +626,7 @@ def fit_spectrum_auto(spectrum: xr.Dataset, *, modes: int | str = 1, criterion: 
     kept.attrs["explanation"] = choice.explanation
     kept.attrs["estimated_model_error"] = choice.estimated_error
     kept.attrs["accuracy"] = accuracy
+    warn_unidentified(kept, stacklevel=4)
     return kept
 
 
