@@ -404,6 +404,7 @@ def test_sweep_in_parallel_equals_serial(make_problem):
     np.testing.assert_allclose(parallel.phase, serial.phase, rtol=1e-12)
 
 
+@pytest.mark.filterwarnings("ignore::viscoforce.exceptions.AccuracyWarning")  # coarse on purpose
 def test_fig4_explicit_euler_coarse_steps_overestimate_the_phase(make_problem):
     """Finding (benchmarks/README.md): explicit Euler at dt = period/N overshoots the phase at
     first order (Fig. 4, ω = 2342 rad/s: 52.9° at N = 16, 43.2° at 32, 39.4° at 64, converging to
