@@ -538,7 +538,7 @@ def _auto_candidate(spectrum: xr.Dataset, name: str, modes: int | str, criterion
     radius = problem.sphere.radius
     if name == "svda":
         if modes != 1:
-            return None, math.inf, "one relaxation time only"
+            return None, math.inf, f"one relaxation time only, modes={modes!r} asked"
         layer = double_layer(problem)
         if layer is None or problem.material.prony().n_modes != 1:
             return None, math.inf, "needs one relaxation time and exactly one DoubleLayer term"
@@ -559,7 +559,8 @@ def _auto_candidate(spectrum: xr.Dataset, name: str, modes: int | str, criterion
     if name == "contact":
         depth = -position if position is not None else None
         if modes != 1:
-            return None, math.inf, "one relaxation time here (use model='contact' for Prony)"
+            return None, math.inf, (f"one relaxation time here, modes={modes!r} asked (model "
+                                    "'contact' with material='prony' fits more)")
         if depth is None or not depth > 0:
             return None, math.inf, "needs an indentation (a position h0 < 0)"
         try:
