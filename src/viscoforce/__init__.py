@@ -11,6 +11,7 @@ from __future__ import annotations
 
 from viscoforce.exceptions import (
     AccuracyWarning,
+    ApproximationWarning,
     ConvergenceError,
     EffortError,
     GapClosureError,
@@ -76,6 +77,7 @@ def __dir__() -> list[str]:
 
 __all__ = [
     "AccuracyWarning",
+    "ApproximationWarning",
     "ContactProblem",
     "ConvergenceError",
     "EffortError",

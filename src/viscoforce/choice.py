@@ -55,7 +55,7 @@ from viscoforce._validation import require_instance, require_positive
 from viscoforce.exceptions import ParameterError
 from viscoforce.physics.surface_forces import DoubleLayer, SumOfLaws
 from viscoforce.problem import ContactProblem
-from viscoforce.svda import svda_error_estimate, svda_static_deformation
+from viscoforce.svda import SVDA_ERROR_COEFFICIENT, svda_static_deformation
 
 #: Relative error required when none is given.
 DEFAULT_ACCURACY = 1e-3
@@ -156,7 +156,7 @@ def svda_error(problem: ContactProblem, position: float) -> tuple[float, str]:
     if position - u0 < dl.debye_length:
         return math.inf, (f"in contact (central gap {(position - u0) * 1e9:.3g} nm below 1/kappa "
                           f"= {dl.debye_length * 1e9:.3g} nm)")
-    return float(svda_error_estimate(position, e_inf, radius, dl.P, dl.debye_length)), (
+    return SVDA_ERROR_COEFFICIENT * abs(u0) / dl.debye_length, (  # svda_error_estimate
         f"0.6 kappa|u0| with u0 = {u0 * 1e9:.3g} nm")
 
 

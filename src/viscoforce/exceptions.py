@@ -94,6 +94,14 @@ class AccuracyWarning(UserWarning):
     """
 
 
+class ApproximationWarning(ModelValidityWarning):
+    """An approximation's own error estimate exceeds 1 % here (a ModelValidityWarning).
+
+    Raised by the SVDA, Hertz contact and the small-amplitude spectrum; the message gives the
+    estimate and the exact route to use. ``method="auto"`` silences it for the route it chose.
+    """
+
+
 class InstrumentFormatError(ViscoforceError, ValueError):
     """An instrument file is empty, truncated, corrupt, or lacks what the reader needs.
 

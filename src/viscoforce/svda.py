@@ -59,7 +59,7 @@ from viscoforce.closed_form import (
     require_exponential_law,
     require_representable,
 )
-from viscoforce.exceptions import ModelValidityWarning, ParameterError
+from viscoforce.exceptions import ApproximationWarning, ParameterError
 
 __all__ = [
     "svda_static_deformation",
@@ -191,7 +191,7 @@ def warn_svda_error(position: float, E_inf: float, radius: float, P: float,  # n
             f"{float(position) * 1e9:.4g} nm (estimate 0.6 kappa|u0|; above "
             f"{100 * SVDA_WARN_ERROR:g} %): the deformation is not small against the decay "
             "length 1/kappa; use the exact model (method 'linear', model 'exact')",
-            ModelValidityWarning, stacklevel=stacklevel)
+            ApproximationWarning, stacklevel=stacklevel)
     return error
 
 
@@ -209,7 +209,7 @@ def warn_if_in_contact(gap: ArrayLike, debye_length: float, what: str, *,
             f"the SVDA is used in contact: {what}'s central gap reaches "
             f"{float(np.min(g)) * 1e9:.3g} nm, below the decay length 1/kappa = "
             f"{float(debye_length) * 1e9:.3g} nm, where the SVDA does not hold (tens of % off); "
-            "use the exact solver (viscoforce.simulate)", ModelValidityWarning,
+            "use the exact solver (viscoforce.simulate)", ApproximationWarning,
             stacklevel=stacklevel)
 
 
@@ -297,7 +297,7 @@ def svda_ramp_deformation(t: ArrayLike, position: float, speed: float, E0: float
             f"the SVDA is about {100 * min(error, 1.0):.2g} % off or worse on this ramp (Eq. 20): "
             f"the deformation reaches |u| = {float(np.max(np.abs(u))) * 1e9:.3g} nm, not small "
             f"against 1/kappa = {1e9 / kappa:.3g} nm (estimate 0.6 kappa|u|); use the SVDA ODE "
-            "(solve_svda) before contact or the exact solver", ModelValidityWarning,
+            "(solve_svda) before contact or the exact solver", ApproximationWarning,
             stacklevel=2)
     return u
 

@@ -30,13 +30,8 @@ from viscoforce.choice import (
     require_accuracy,
     svda_error,
 )
-from viscoforce.exceptions import ConvergenceError, ParameterError
 from viscoforce.experiments._checks import require_frequencies, require_number, require_problem
-from viscoforce.experiments.linear_response import (
-    AMPLITUDE_SAFETY,
-    amplitude_bias,
-    bias_frequencies,
-)
+from viscoforce.experiments.linear_response import AMPLITUDE_SAFETY, finite_amplitude_error
 from viscoforce.problem import ContactProblem
 from viscoforce.radial_grid import RadialGrid
 
@@ -63,13 +58,11 @@ def amplitude_error_of(problem: ContactProblem, position: float, eta: float,
     × AMPLITUDE_SAFETY if the harmonic balance cannot be solved.
     """
     decay = problem.surface_force.decay_length
-    try:
-        bias = float(np.max(np.abs(amplitude_bias(problem, position, bias_frequencies(omega)))))
-    except (ConvergenceError, ParameterError, np.linalg.LinAlgError):
-        rigid = AMPLITUDE_SAFETY * amplitude_error(eta, decay)
-        return rigid, (f"finite amplitude kappa*eta = {eta / decay:.3g} -> {rigid:.1e} "
+    error, harmonic = finite_amplitude_error(problem, position, eta, omega)
+    if not harmonic:
+        return error, (f"finite amplitude kappa*eta = {eta / decay:.3g} -> {error:.1e} "
                        f"({AMPLITUDE_SAFETY:g} x the rigid exponential estimate)")
-    estimate = BIAS_SAFETY * bias * eta * eta
+    estimate = BIAS_SAFETY * error
     return estimate, (f"finite amplitude kappa*eta = {eta / decay:.3g} -> {estimate:.1e} "
                       "(third-order harmonic balance)")
 

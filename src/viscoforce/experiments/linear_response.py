@@ -46,7 +46,7 @@ from viscoforce._limits import MAX_SAMPLES, check_effort
 from viscoforce._typing import FloatArray
 from viscoforce._validation import require_finite, require_instance, require_positive
 from viscoforce.choice import WARN_ERROR, amplitude_error
-from viscoforce.exceptions import ConvergenceError, ModelValidityWarning, ParameterError
+from viscoforce.exceptions import ApproximationWarning, ConvergenceError, ParameterError
 from viscoforce.experiments._checks import require_frequencies, require_number, require_problem
 from viscoforce.physics.materials import ViscoelasticMaterial
 from viscoforce.physics.surface_forces import SumOfLaws
@@ -494,18 +494,29 @@ def _warn_large_eta(problem: ContactProblem, position: float, eta: float,
     decay = problem.surface_force.decay_length
     if AMPLITUDE_SAFETY * amplitude_error(eta, decay) <= WARN_ERROR:
         return
-    try:
-        error = float(np.max(np.abs(amplitude_bias(problem, position,
-                                                   bias_frequencies(omega))))) * eta * eta
-        how = "third-order harmonic balance"
-    except (ConvergenceError, ParameterError, np.linalg.LinAlgError):
-        error, how = AMPLITUDE_SAFETY * amplitude_error(eta, decay), "2.5 x rigid exponential"
+    error, harmonic = finite_amplitude_error(problem, position, eta, omega)
+    how = "third-order harmonic balance" if harmonic else "2.5 x rigid exponential"
     if error > WARN_ERROR:
         warnings.warn(
             f"kappa*eta = {eta / decay:.3g}: the finite-amplitude first harmonic differs from "
             f"the small-amplitude spectrum by ~{100 * error:.2g} % (estimate: {how}, the "
             "leading term, an overestimate at kappa*eta ~ 1); use method 'time-domain' or a "
-            "smaller eta", ModelValidityWarning, stacklevel=3)
+            "smaller eta", ApproximationWarning, stacklevel=3)
+
+
+def finite_amplitude_error(problem: ContactProblem, position: float, eta: float,
+                           omega: ArrayLike) -> tuple[float, bool]:
+    """η² max |b(ω)| of :func:`amplitude_bias` (True), or 2.5 × the rigid estimate (False).
+
+    The rigid fallback is taken when the harmonic balance cannot be solved (no static state, a
+    singular system); the flag says which estimate it is.
+    """
+    try:
+        bias = float(np.max(np.abs(amplitude_bias(problem, position, bias_frequencies(omega)))))
+    except (ConvergenceError, ParameterError, np.linalg.LinAlgError):
+        decay = problem.surface_force.decay_length
+        return AMPLITUDE_SAFETY * amplitude_error(eta, decay), False
+    return bias * eta * eta, True
 
 
 def _pressure_derivatives(problem: ContactProblem, gap: np.ndarray

@@ -36,7 +36,8 @@ from viscoforce._validation import (
     require_nonnegative,
     require_positive,
 )
-from viscoforce.exceptions import ModelValidityError, ModelValidityWarning, ParameterError
+from viscoforce.choice import WARN_ERROR, contact_error, double_layer
+from viscoforce.exceptions import ApproximationWarning, ModelValidityError, ParameterError
 from viscoforce.experiments._checks import (
     require_frequencies,
     require_number,
@@ -46,7 +47,6 @@ from viscoforce.experiments._checks import (
 from viscoforce.experiments.drives import STEPS_PER_PERIOD, Sinusoid
 from viscoforce.experiments.linear_response import linear_response
 from viscoforce.lockin import demodulate
-from viscoforce.physics.surface_forces import DoubleLayer, SumOfLaws
 from viscoforce.problem import ContactProblem
 from viscoforce.schema import make_spectrum
 from viscoforce.solvers.base import TimeStepper
@@ -263,12 +263,9 @@ def _svda_parameters(problem: ContactProblem) -> dict[str, float]:
         raise ParameterError(
             f"the SVDA closed form needs a single-relaxation-time material, got {prony.n_modes} "
             "modes; use method 'linear'")
-    law = problem.surface_force
-    layers = [t for t in (law.terms if isinstance(law, SumOfLaws) else (law,))
-              if isinstance(t, DoubleLayer)]
-    if len(layers) != 1:
+    dl = double_layer(problem)
+    if dl is None:
         raise ParameterError("the SVDA closed form needs exactly one DoubleLayer term")
-    dl = layers[0]
     return {"E0": material.instantaneous_modulus, "E_inf": material.relaxed_modulus,
             "tau": prony.taus[0], "radius": problem.sphere.radius, "P": dl.P,
             "debye_length": dl.debye_length}
@@ -494,8 +491,6 @@ def contact_spectrum(problem: ContactProblem, position: float, eta: float,
     ModelValidityWarning
         If the estimated error exceeds 1 %.
     """
-    from viscoforce.choice import WARN_ERROR, contact_error
-
     problem = require_problem(problem)
     position = require_number("position", position, require_finite,
                               "finite [m] (h0 < 0: the indentation is -h0)")
@@ -512,7 +507,7 @@ def contact_spectrum(problem: ContactProblem, position: float, eta: float,
             f"Hertz contact is about {100 * error:.2g} % off the exact model at indentation "
             f"{depth * 1e9:.4g} nm (estimate 2 x 1.5 |E*(omega_max)|/E_inf / (kappa delta0); "
             f"above {100 * WARN_ERROR:g} %): the surface-force layer is not stiff against the contact; "
-            "use method 'linear' (exact)", ModelValidityWarning, stacklevel=2)
+            "use method 'linear' (exact)", ApproximationWarning, stacklevel=2)
     material, radius = problem.material, problem.sphere.radius
     k = math.sqrt(radius * depth) / material.complex_compliance(omega)
     mean = 2.0 / 3.0 * material.relaxed_modulus * math.sqrt(radius) * depth ** 1.5
@@ -525,8 +520,6 @@ def contact_spectrum(problem: ContactProblem, position: float, eta: float,
 #: Spectrum routes: name → function(problem, position, eta, omega, **options).
 SPECTRUM_METHODS = {"linear": linear_response, "time-domain": sweep, "svda": svda_spectrum,
                     "svda-ode": svda_sweep, "contact": contact_spectrum}
-#: The approximations' own error-estimate warnings (not the half-space one), silenced under "auto".
-_ESTIMATE_WARNINGS = r"(the SVDA is about|Hertz contact is about|kappa\*eta = )"
 #: Options of the time-domain route that ``method="auto"`` sets itself.
 _AUTO_CHOOSES = {"tol", "stepper", "steps_per_period"}
 #: Routes that take options (the time-domain ones).
@@ -604,8 +597,8 @@ def spectrum(problem: ContactProblem, position: float, eta: float, omega: ArrayL
     else:
         if "grid_factor" in choice.options:  # a coarser grid meets the accuracy
             problem = coarsened(problem, choice.options["grid_factor"])
-        with warnings.catch_warnings():  # the choice weighed this estimate already
-            warnings.filterwarnings("ignore", _ESTIMATE_WARNINGS, ModelValidityWarning)
+        with warnings.catch_warnings():  # the choice weighed the approximations' estimates
+            warnings.simplefilter("ignore", ApproximationWarning)
             ds = SPECTRUM_METHODS[method](problem, position, eta, omega, **options)
         ds.attrs["explanation"] = choice.explanation
         ds.attrs["estimated_error"] = choice.estimated_error

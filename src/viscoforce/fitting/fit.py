@@ -34,9 +34,9 @@ from viscoforce.choice import (
 )
 from viscoforce.exceptions import (
     AccuracyWarning,
+    ApproximationWarning,
     ConvergenceError,
     ModelValidityError,
-    ModelValidityWarning,
     ParameterError,
 )
 from viscoforce.fitting import _params
@@ -509,14 +509,14 @@ def svda_bias(ds: xr.Dataset, spectrum: xr.Dataset, position: float, radius: flo
 
 
 def _warn_model_bias(ds: xr.Dataset, model: str, bias: float, reason: str) -> None:
-    """Warn (ModelValidityWarning) when a fit's estimated model bias exceeds 1 %."""
+    """Warn (ApproximationWarning) when a fit's estimated model bias exceeds 1 %."""
     ds.attrs["estimated_model_error"] = bias
     if bias > WARN_ERROR:
         lead = "the SVDA is about" if model == "svda" else "Hertz contact is about"
         warnings.warn(
             f"{lead} {100 * bias:.2g} % off as a model of these data: the fitted moduli are "
             f"biased by about that much ({reason}); use model 'exact' (or 'auto')",
-            ModelValidityWarning, stacklevel=3)
+            ApproximationWarning, stacklevel=3)
 
 
 def _sls_of(ds: xr.Dataset):

@@ -300,10 +300,10 @@ def _march(stepper: TimeStepper, drive: SeparationHistory, state: State, t_eval:
     t, step = 0.0, control.first_step
     steps = rejected = newton = 0
     error_bound = error_max = 0.0
-    taus = stepper.taus
+    tau_max = float(np.max(stepper.taus)) if stepper.taus.size else math.inf
 
     def decay(h: float) -> float:
-        return math.exp(-h / float(np.max(taus))) if taus.size else 1.0
+        return math.exp(-h / tau_max)
 
     try:
         for target in stops[stops > 0]:

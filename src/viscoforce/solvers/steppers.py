@@ -140,10 +140,6 @@ class ExplicitEuler(TimeStepper):
     order: ClassVar[int] = 1
     adaptive: ClassVar[bool] = False
 
-    def __init__(self, problem):
-        super().__init__(problem)
-        self._previous: tuple[float, np.ndarray] | None = None  # (t, rate) of the last step
-
     def stability_limit(self, state: State) -> float:
         """Largest stable dt [s] at ``state`` (a bound from the row-sum norm of A|p'|)."""
         if self.taus.size == 0:
@@ -181,7 +177,7 @@ class ExplicitEuler(TimeStepper):
                                       check_finite=False)
         rate[n] = coupled[n] @ (velocity - rate[:n]) + forcing[n]
         deformation = state.deformation + dt * rate
-        error = self._local_error(state.time, drive, rate, dt)
+        error = self._local_error(state, drive, rate, dt)
         t_new = state.time + dt
         position = float(drive.position(t_new))
         gap = problem.undeformed_gap(position) - deformation[:n]
@@ -204,23 +200,26 @@ class ExplicitEuler(TimeStepper):
                 f"{dt * allowed / jump:.2g} s (about) or the default method 'exponential'")
         pressure = problem.surface_force.pressure(gap)
         new = State(t_new, position, gap, pressure, self.response(pressure),
-                    memory + dt * memory_rate, deformation)
+                    memory + dt * memory_rate, deformation,
+                    history=(state.time, state.response, state.gap))
         return StepOutcome(new, error, 1)
 
-    def _local_error(self, time: float, drive: SeparationHistory, rate: np.ndarray,
+    def _local_error(self, state: State, drive: SeparationHistory, rate: np.ndarray,
                      dt: float) -> float:
         """Local truncation error (dt²/2)|u''| [m] from the change of the rate since the last step.
 
-        The first step, and the first step after a drive kink (the velocity jumps there; the
-        step lands on the kink, so the jump itself is integrated exactly), have no estimate (0).
+        The previous rate follows from ``state.history`` (Euler: u_n = u_{n−1} + dt·rate_{n−1});
+        the march clears the history at drive kinks (the velocity jumps there and the step lands
+        on the kink, so the jump itself is integrated exactly), so the first step and the first
+        step after a kink have no estimate (0).
         """
-        previous, self._previous = self._previous, (time, rate)
-        if previous is None or previous[0] >= time:
+        if state.history is None:
             return 0.0
-        kinks = np.asarray(drive.breakpoints(), dtype=float)
-        if np.any((kinks > previous[0]) & (kinks <= time)):
-            return 0.0
-        curvature = np.max(np.abs(rate - previous[1])) / (time - previous[0])
+        t_prev, _, gap_prev = state.history
+        n = self.problem.grid.size
+        u_prev = self.problem.undeformed_gap(float(drive.position(t_prev))) - gap_prev
+        rate_prev = (state.deformation[:n] - u_prev) / (state.time - t_prev)
+        curvature = np.max(np.abs(rate[:n] - rate_prev)) / (state.time - t_prev)
         return 0.5 * dt * dt * float(curvature)
 
 
