@@ -198,7 +198,7 @@ def _spectrum(h0, omega=None):
 def test_fit_auto_meets_the_accuracy_on_the_moduli(h0):
     spec = _spectrum(h0)
     guess = problem(min(h0, -1e-9), material=vf.StandardLinearSolid(E0=3e9, E_inf=5e8, tau=3e-3))
-    fit = fit_spectrum(spec, "auto", problem=guess, position=h0)
+    fit = fit_spectrum(spec, "auto", problem=guess, position=h0, weights="relative")
     truth = {"E0": PAPER.E0, "E_inf": PAPER.E_inf, "tau": PAPER.tau}
     assert max(abs(float(fit[n]) / v - 1) for n, v in truth.items()) <= ACCURACY
     assert fit.attrs["model"] == "exact"
@@ -209,11 +209,11 @@ def test_fit_auto_rejects_svda_where_its_moduli_are_biased():
     spec = _spectrum(10e-9)
     with pytest.warns(ModelValidityWarning, match="the fitted moduli are biased"):
         svda = fit_spectrum(spec, "svda", position=10e-9, radius=PAPER.R, P=PAPER.P,
-                            debye_length=PAPER.debye_length)
+                            debye_length=PAPER.debye_length, weights="relative")
     bias = abs(float(svda["E_inf"]) / PAPER.E_inf - 1)
     assert 0.1 < svda.attrs["estimated_model_error"] and 0.1 < bias  # 0.30 estimated, 0.41 real
     guess = problem(-1e-9)
-    fit = fit_spectrum(spec, "auto", problem=guess, position=10e-9)
+    fit = fit_spectrum(spec, "auto", problem=guess, position=10e-9, weights="relative")
     assert "svda" in fit.attrs["explanation"] and "too inaccurate" in fit.attrs["explanation"]
     assert bias > ACCURACY  # the rejected model is indeed biased (41 % measured)
 
@@ -222,7 +222,7 @@ def test_contact_fit_with_a_debye_length_warns_where_hertz_is_off():
     spec = _spectrum(-15e-9)
     with pytest.warns(ModelValidityWarning, match="Hertz contact is about"):
         fit = fit_spectrum(spec, "contact", radius=PAPER.R, indentation=15e-9,
-                           debye_length=PAPER.debye_length)
+                           debye_length=PAPER.debye_length, weights="relative")
     truth = abs(float(fit["E_inf"]) / PAPER.E_inf - 1)
     assert truth > 0.01 and fit.attrs["estimated_model_error"] > 0.01  # 26 % measured
 

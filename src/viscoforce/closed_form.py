@@ -8,6 +8,10 @@ names, so that lmfit can wrap them as models and use those names as parameter na
 * Material laws: the standard linear solid of the paper's Eq. 3 and the n-mode Prony solid
   (creep compliance C(t) and complex compliance C*(ω)); :mod:`viscoforce.physics.materials`
   evaluates its materials with them.
+* Cell rheology (beyond the paper): the structural-damping (power-law rheology) modulus with a
+  Newtonian term, E*(ω) = E_ref (iω/ω_ref)^α + iωμ (Fabry et al., PRL 87, 148102 (2001);
+  Alcaraz et al., Biophys. J. 84, 2071 (2003)), and the paper's liquid-like power-law creep
+  C(t) = 1/E0 + C1 t^m with an optional Newtonian term in parallel.
 * :func:`derjaguin_force`: F = 2πR κ⁻¹ P e^{−κh} (the paper's Eq. 22). It is the Derjaguin
   approximation of the exponential law for a rigid sphere (h = h0, the far-field oracle of the
   exact solver) as well as the SVDA force (h = h0 − u), so it lives here, below both users.
@@ -54,6 +58,8 @@ __all__ = [
     "sls_complex_compliance",
     "prony_creep_compliance",
     "prony_complex_compliance",
+    "structural_complex_modulus",
+    "power_law_complex_modulus",
     "derjaguin_force",
     # validation helpers shared with viscoforce.svda and viscoforce.solvers.svda_ode
     "MAX_EXPONENT",
@@ -354,6 +360,113 @@ def prony_complex_compliance(omega: ArrayLike, glassy_compliance: float,
 
 
 # ── surface force ───────────────────────────────────────────────────────────────────────────────
+
+def structural_complex_modulus(omega: ArrayLike, E_ref: float, alpha: float, mu: float,  # noqa: N803
+                               reference_frequency: float = 1.0) -> np.ndarray:
+    """E*(ω) = E_ref (iω/ω_ref)^α + iωμ of power-law (structural-damping) rheology [Pa].
+
+    ω_ref = 2π·``reference_frequency``. The power-law part has the frequency-independent loss
+    tangent tan(πα/2) (α → 0 an elastic solid, α → 1 a Newtonian liquid); μ adds a Newtonian
+    viscosity in parallel, which dominates at high frequency. E is the paper's modulus
+    (2/E = Σ(1 − ν²)/E_i), like E0 and E_inf; e^{+iωt} convention (Im E* > 0: loss).
+
+    Parameters
+    ----------
+    omega : float or array_like
+        Angular frequencies [rad/s], > 0 (the power law is singular at ω = 0).
+    E_ref : float
+        Modulus magnitude of the power-law part at ω_ref [Pa], > 0.
+    alpha : float
+        Power-law exponent, in (0, 1).
+    mu : float
+        Newtonian viscosity [Pa·s], >= 0.
+    reference_frequency : float
+        f_ref [Hz] of E_ref, > 0 (default 1 Hz).
+
+    Returns
+    -------
+    numpy.ndarray
+        Complex E*(ω) [Pa], same shape as ``omega``.
+
+    Raises
+    ------
+    ParameterError
+        A frequency <= 0 or not finite, or a parameter out of its range.
+    """
+    w = _positive_omega(omega)
+    e_ref, f_ref = _require_positive("E_ref", E_ref), _require_positive(
+        "reference_frequency", reference_frequency)
+    a = _require_open_unit("alpha", alpha)
+    mu_ = _require_nonnegative("mu", mu)
+    with np.errstate(over="ignore", invalid="ignore"):
+        e = e_ref * (1j * w / (2.0 * math.pi * f_ref)) ** a + 1j * w * mu_
+    return require_representable(e, "E*(omega)", "omega, E_ref, alpha, mu")
+
+
+def power_law_complex_modulus(omega: ArrayLike, E0: float, C1: float, m: float,  # noqa: N803
+                              mu: float = 0.0) -> np.ndarray:
+    """E*(ω) = 1/C*(ω) + iωμ of the power-law creep C(t) = 1/E0 + C1 t^m [Pa].
+
+    C*(ω) = 1/E0 + C1 Γ(1 + m)(iω)^−m (e^{+iωt}); the paper's liquid-like material for m → 1.
+    μ (default 0) is an optional Newtonian viscosity in parallel.
+
+    Parameters
+    ----------
+    omega : float or array_like
+        Angular frequencies [rad/s], > 0.
+    E0 : float
+        Instantaneous modulus 1/C(0) [Pa], > 0.
+    C1 : float
+        Creep coefficient [Pa⁻¹ s⁻ᵐ], > 0.
+    m : float
+        Creep exponent, in (0, 1).
+    mu : float
+        Newtonian viscosity [Pa·s], >= 0.
+
+    Returns
+    -------
+    numpy.ndarray
+        Complex E*(ω) [Pa].
+    """
+    from scipy.special import gamma
+
+    w = _positive_omega(omega)
+    e0, c1 = _require_positive("E0", E0), _require_positive("C1", C1)
+    m_ = _require_open_unit("m", m)
+    mu_ = _require_nonnegative("mu", mu)
+    with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
+        e = 1.0 / (1.0 / e0 + c1 * gamma(1.0 + m_) * (1j * w) ** (-m_)) + 1j * w * mu_
+    return require_representable(e, "E*(omega)", "omega, E0, C1, m, mu")
+
+
+def _positive_omega(omega: ArrayLike) -> FloatArray:
+    w = as_finite_array("omega", omega)
+    if np.any(w <= 0):
+        raise ParameterError(f"omega must be > 0 rad/s for a power-law material, got min "
+                             f"{float(np.min(w))!r}")
+    return w
+
+
+def _require_positive(name: str, value: float) -> float:
+    v = float(value)
+    if not (v > 0 and math.isfinite(v)):
+        raise ParameterError(f"{name} must be > 0 and finite, got {value!r}")
+    return v
+
+
+def _require_nonnegative(name: str, value: float) -> float:
+    v = float(value)
+    if not (v >= 0 and math.isfinite(v)):
+        raise ParameterError(f"{name} must be >= 0 and finite, got {value!r}")
+    return v
+
+
+def _require_open_unit(name: str, value: float) -> float:
+    v = float(value)
+    if not 0.0 < v < 1.0:
+        raise ParameterError(f"{name} must be in (0, 1), got {value!r}")
+    return v
+
 
 def derjaguin_force(gap: ArrayLike, radius: float, P: float,
                     debye_length: float) -> FloatArray:

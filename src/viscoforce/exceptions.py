@@ -102,6 +102,23 @@ class ApproximationWarning(ModelValidityWarning):
     """
 
 
+class GoodnessOfFitWarning(UserWarning):
+    """A fit whose χ² goodness-of-fit p-value is below 1e-3: the model does not describe the data.
+
+    Its stderr and information criteria assume that it does. The message gives χ², the degrees
+    of freedom and the p-value; the usual causes are a wrong model (a material family, a
+    geometry) or stderr that are too small for the data.
+    """
+
+
+class DataWarning(UserWarning):
+    """The data lack something the analysis needs, and a named fallback was used instead.
+
+    E.g. stderr missing or zero at some points (weights from the others), a NaN point left out,
+    strongly autocorrelated residuals (stderr corrected by an effective sample size).
+    """
+
+
 class InstrumentFormatError(ViscoforceError, ValueError):
     """An instrument file is empty, truncated, corrupt, or lacks what the reader needs.
 

@@ -23,7 +23,13 @@ from typing import NamedTuple
 
 from viscoforce import __version__
 from viscoforce.cli._args import check_outputs, normalize_negative_args, value_options
-from viscoforce.exceptions import AccuracyWarning, ModelValidityWarning, ViscoforceError
+from viscoforce.exceptions import (
+    AccuracyWarning,
+    DataWarning,
+    GoodnessOfFitWarning,
+    ModelValidityWarning,
+    ViscoforceError,
+)
 
 __all__ = ["COMMANDS", "Command", "main"]
 
@@ -102,7 +108,8 @@ def _run(args: argparse.Namespace) -> int:
 
     try:
         with warnings.catch_warnings():
-            for shown in (ModelValidityWarning, AccuracyWarning):  # once per result, not raised
+            for shown in (ModelValidityWarning, AccuracyWarning, GoodnessOfFitWarning,
+                          DataWarning):  # once per result, not raised
                 warnings.simplefilter("always", shown)
             warnings.showwarning = show
             check_outputs(args)

@@ -29,7 +29,21 @@ from viscoforce.cli._output import print_json, print_written
 __all__ = ["SUBCOMMANDS", "modes_type", "read_data"]
 
 _MODELS = ("svda", "exact", "contact", "prony", "relaxation", "step", "auto")
-_MATERIALS = ("sls", "prony", "power-law")
+_MATERIALS = ("sls", "prony", "power-law", "structural")
+_WEIGHTS = ("stderr", "relative")
+
+
+def choice_type(*choices: str, what: str):
+    """A text flag that must be one of ``choices`` (the message lists them)."""
+
+    def parse(text: str) -> str:
+        value = text.strip().lower()
+        if value not in choices:
+            raise argparse.ArgumentTypeError(f"{what} must be one of {', '.join(choices)}, got "
+                                             f"{text!r}")
+        return value
+
+    return parse
 
 
 def modes_type(text: str) -> int | str:
@@ -40,16 +54,22 @@ def modes_type(text: str) -> int | str:
 
 
 FIT_FLAGS = FlagGroup("model", (
-    Flag("--modes", modes_type, 1, "N|auto",
-         "relaxation modes (exact, contact --material prony, prony, relaxation); auto: "
-         "1, 2, ... by the criterion"),
+    Flag("--modes", modes_type, None, "N|auto",
+         "relaxation modes (exact, contact --material prony, prony, relaxation; default 1); "
+         "auto: 1, 2, ... by the criterion (the default of --model auto on measured data)"),
     Flag("--criterion", None, "bic", "bic|aic", "information criterion of --modes auto"),
     Flag("--h0", "length", None, "LENGTH", "mean position (svda, exact)"),
     Flag("--mean-force", "force", None, "FORCE",
          "mean force, the static E_inf load of the setpoint (svda, exact; instead of --h0)"),
     Flag("--indentation", "length", None, "LENGTH",
          "operating indentation D0 (contact; default: the data's mean_indentation)"),
-    Flag("--material", None, "sls", "sls|prony|power-law", "material of the contact model"),
+    Flag("--material", None, None, "sls|prony|power-law|structural",
+         "material of the contact model (default sls; --model auto on measured data: compare "
+         "only this family)"),
+    Flag("--reference-frequency", "frequency", None, "FREQ",
+         "contact --material structural: f_ref of E_ref (default 1Hz)"),
+    Flag("--weights", choice_type(*_WEIGHTS, what="--weights"), None, "stderr|relative",
+         "fit weights: the data's stderr (default when present) or relative 1/|k*|"),
     Flag("--drag", "drag", None, "DRAG", "hydrodynamic drag B of the contact model (i*omega*B)"),
     Flag("--segment", integer_type(0), None, "N",
          "relaxation: the curve's N-th segment (from 0; default the pause after the approach)"),
@@ -59,6 +79,9 @@ FIT_FLAGS = FlagGroup("model", (
 ))
 
 MAP_FLAGS = FlagGroup("maps (several spectra or curves)", (
+    Flag("--identifiability", choice_type("local", "profile", what="--identifiability"), None,
+         "local|profile",
+         "per-pixel identifiability test (default local; profile: profile likelihood, slower)"),
     Flag("--scheduler", None, None, "ADDRESS",
          "a running dask scheduler (tcp://host:8786); default: a local cluster"),
     Flag("--workers", integer_type(1), None, "N", "workers of the local cluster (default 2)"),
@@ -74,6 +97,9 @@ def _add_fit_flags(parser: argparse.ArgumentParser, *, required: bool) -> None:
                         help="model of the SPEC table" if required else
                              "fit this model and draw it over the data")
     add_flags(parser, FIT_FLAGS)
+    parser.add_argument("--newtonian", action="store_true",
+                        help="contact --material power-law: fit a Newtonian viscosity mu in "
+                             "parallel")
     add_flags(parser, SYSTEM_FLAGS)
     add_flags(parser, NUMERICS_FLAGS)
 
@@ -133,11 +159,44 @@ def _kind(ds) -> str:
     raise UsageError("DATA is neither a spectrum, curves nor a trajectory dataset")
 
 
+def measured(ds, args: argparse.Namespace) -> bool:
+    """Whether ``--model auto`` fits measured data: no --h0/--mean-force, an indentation known."""
+    if args.h0 is not None or args.mean_force is not None:
+        return False
+    return args.indentation is not None or "mean_indentation" in ds.variables
+
+
+def _given(args: argparse.Namespace, *names: str) -> list[str]:
+    """The flags among ``names`` (dest names) that were given."""
+    return [f"--{n.replace('_', '-')}" for n in names
+            if getattr(args, n, None) not in (None, False)]
+
+
 def _fixed(args: argparse.Namespace, ds, kind: str) -> dict[str, Any]:
-    """The model's fixed inputs from the flags (and the data)."""
+    """The model's fixed inputs from the flags (and the data); flags a model cannot honour fail."""
     model = args.model
     if args.h0 is not None and args.mean_force is not None:
         raise UsageError("give --h0 or --mean-force, not both")
+    if args.material is not None and args.material not in _MATERIALS:
+        raise UsageError(f"--material must be one of {', '.join(_MATERIALS)}, got "
+                         f"{args.material!r}")
+    contact_only = ("material", "newtonian", "reference_frequency", "indentation")
+    if model == "auto" and kind == "spectrum" and measured(ds, args):
+        bad = _given(args, "newtonian", "segment")
+        if bad:
+            raise UsageError(f"--model auto on measured data cannot honour {', '.join(bad)} (it "
+                             "compares power-law with and without mu itself)")
+        return {"radius": args.R, "indentation": args.indentation, "drag": args.drag,
+                "material": args.material, "reference_frequency": args.reference_frequency,
+                "debye_length": args.debye_length}
+    if model != "contact":
+        bad = _given(args, *contact_only)
+        if model == "auto":
+            bad = [b for b in bad if b != "--drag"]
+        if bad:
+            raise UsageError(f"--model {model} cannot honour {', '.join(bad)} (contact-model "
+                             "flags" + ("; --model auto takes them on measured data, without "
+                                        "--h0/--mean-force" if model == "auto" else "") + ")")
     fixed: dict[str, Any] = {}
     if model in ("svda", "exact", "auto"):
         if args.h0 is None and args.mean_force is None:
@@ -147,8 +206,10 @@ def _fixed(args: argparse.Namespace, ds, kind: str) -> dict[str, Any]:
 
                 median = (f" (this spectrum's median mean force is "
                           f"{float(np.nanmedian(ds['mean_force'].values)):.4g} N)")
+            hint = ("; on measured data give --indentation D0 (or load a file with a contact "
+                    "point) to compare contact materials") if model == "auto" else ""
             raise UsageError(f"--model {model} needs the mean position: --h0 H or --mean-force "
-                             f"F{median}")
+                             f"F{median}{hint}")
         fixed["position" if args.h0 is not None else "mean_force"] = (
             args.h0 if args.h0 is not None else args.mean_force)
     if model == "svda":
@@ -158,11 +219,12 @@ def _fixed(args: argparse.Namespace, ds, kind: str) -> dict[str, Any]:
     if model == "auto" and args.drag is not None:
         fixed["drag"] = args.drag
     if model == "contact":
-        if args.material not in _MATERIALS:
-            raise UsageError(f"--material must be one of {', '.join(_MATERIALS)}, got "
-                             f"{args.material!r}")
         fixed.update(radius=args.R, indentation=args.indentation, drag=args.drag,
-                     material=args.material)
+                     material=args.material or "sls", debye_length=args.debye_length)
+        if args.newtonian:
+            fixed["newtonian"] = True
+        if args.reference_frequency is not None:
+            fixed["reference_frequency"] = args.reference_frequency
     return fixed
 
 
@@ -232,21 +294,65 @@ def fit_one(args: argparse.Namespace, ds, kind: str):
     fixed = _fixed(args, ds, kind)
     if kind == "spectrum":
         if args.model == "auto":
-            fixed["accuracy"] = args.accuracy
+            if args.accuracy is not None and measured(ds, args):
+                raise UsageError("--accuracy chooses between the theory's approximations (with "
+                                 "--h0 or --mean-force); on measured data --model auto compares "
+                                 "materials by the criterion: leave --accuracy out")
+            if args.accuracy is not None:
+                fixed["accuracy"] = args.accuracy
+            if args.weights is not None and not measured(ds, args):
+                raise UsageError("--weights applies to named models and to --model auto on "
+                                 "measured data")
         elif args.accuracy is not None:
             raise UsageError("--accuracy needs --model auto")
-        return fit_spectrum(ds, args.model, modes=args.modes, criterion=args.criterion, **fixed)
+        weights = {} if args.weights is None else {"weights": args.weights}
+        return fit_spectrum(ds, args.model, modes=args.modes, criterion=args.criterion,
+                            **weights, **fixed)
+    if args.weights is not None:
+        raise UsageError("--weights applies to spectra (curve fits are unweighted)")
+    modes = 1 if args.modes is None else args.modes
     if kind == "curves":
-        return fit_hold(ds, segment=args.segment, modes=args.modes, criterion=args.criterion)
+        return fit_hold(ds, segment=args.segment, modes=modes, criterion=args.criterion)
     return fit_step(ds, problem=fixed["problem"])
 
 
 # ── fit ─────────────────────────────────────────────────────────────────────────────────────────
 
+_DIMENSIONS = {"Pa": "pressure", "s": "time", "N": "force", "N/m": "stiffness", "m": "length",
+               "N s/m": "drag"}
+
+
+def show_value(value: float | None, unit: str, digits: int = 4) -> str:
+    """A parameter value for humans, with a prefixed unit where the dimension is known."""
+    from viscoforce.units import format_quantity
+
+    if value is None or value != value:
+        return "n/a"
+    if unit in _DIMENSIONS:
+        return format_quantity(value, _DIMENSIONS[unit], digits=digits)
+    return f"{value:.{digits}g} {'' if unit == '1' else unit}".rstrip()
+
+
 def _single_json(result) -> dict[str, Any]:
+    import numpy as np
+
+    from viscoforce.fitting.fit import bound_text
+    from viscoforce.fitting.identify import IDENTIFIABILITY
+
     names = [str(n) for n in result["param_i"].values]
-    params = {n: {"value": float(result[n]), "stderr": float(result[f"{n}_stderr"])}
-              for n in names}
+    codes = (np.asarray(result["identifiability"].values).reshape(-1).tolist()
+             if "identifiability" in result else [0] * len(names))
+    params = {}
+    for n, code in zip(names, codes, strict=True):
+        entry = {"value": float(result[n]), "stderr": float(result[f"{n}_stderr"]),
+                 "identified": IDENTIFIABILITY[int(code)]}
+        for side in ("lower", "upper"):
+            if f"{n}_{side}" in result:
+                entry[side] = float(result[f"{n}_{side}"])
+        text = bound_text(result, n)
+        if text:
+            entry["report_as"] = text
+        params[n] = entry
     corr = result["correlation"].values
     out: dict[str, Any] = {
         "model": result.attrs["model"], "modes": int(result["modes"]), "params": params,
@@ -254,54 +360,110 @@ def _single_json(result) -> dict[str, Any]:
                          for i, a in enumerate(names)},
         "redchi": float(result["redchi"]), "aic": float(result["aic"]),
         "bic": float(result["bic"]), "success": bool(int(result["success"])),
+        "chi2_pvalue": float(result["chi2_pvalue"]) if "chi2_pvalue" in result else None,
+        "weighting": str(result.attrs.get("weighting", "")),
         "at_bound": [s for s in str(result.attrs.get("at_bound", "")).split(", ")
                      if s and s != "none"]}
+    for key in ("material", "candidate", "residual_lag1", "effective_samples"):
+        if key in result.attrs:
+            value = result.attrs[key]
+            out[key] = value if isinstance(value, str) else float(value)
     if "selection_modes" in result:
-        out["selection"] = [{"modes": int(m), "aic": float(a), "bic": float(b)} for m, a, b in zip(
-            result["selection_modes"].values, result["selection_aic"].values,
-            result["selection_bic"].values, strict=True)]
+        rows = []
+        for i in range(result.sizes["candidate"]):
+            row = {"modes": int(result["selection_modes"].values[i]),
+                   "aic": float(result["selection_aic"].values[i]),
+                   "bic": float(result["selection_bic"].values[i])}
+            for key in ("label", "redchi", "pvalue", "parameters"):
+                if f"selection_{key}" in result:
+                    value = result[f"selection_{key}"].values[i]
+                    row[key] = str(value) if key == "label" else float(value)
+            rows.append(row)
+        out["selection"] = rows
         out["criterion"] = result.attrs.get("criterion", "bic")
         if "selection_note" in result.attrs:
             out["selection_note"] = str(result.attrs["selection_note"])
     if "explanation" in result.attrs:  # --model auto
         out["explanation"] = str(result.attrs["explanation"])
-        out["estimated_model_error"] = float(result.attrs["estimated_model_error"])
+        if "estimated_model_error" in result.attrs:
+            out["estimated_model_error"] = float(result.attrs["estimated_model_error"])
     return out
 
 
 def _map_json(result) -> dict[str, Any]:
-    import numpy as np
+    from viscoforce.fitting.maps import map_summary
 
-    names = [str(n) for n in result["param_i"].values]
-    ok = result["success"].values.astype(bool)
-    params = {}
-    for n in names:
-        v = np.asarray(result[n].values)[ok]
-        v = v[np.isfinite(v)]
-        params[n] = ({"median": float(np.median(v)), "q25": float(np.percentile(v, 25)),
-                      "q75": float(np.percentile(v, 75))} if v.size else
-                     {"median": None, "q25": None, "q75": None})
-    return {"model": result.attrs["model"], "n_fits": int(result.attrs["n_fits"]),
-            "n_failed": int(result.attrs["n_failed"]), "params": params}
+    return {"model": result.attrs["model"], **map_summary(result),
+            "n_failed": int(result.attrs["n_failed"])}
 
 
 def _print_single(info: dict[str, Any]) -> None:
     from viscoforce.schema.fit import parameter_units
 
-    print(f"model {info['model']}, {info['modes']} mode(s), "
+    p_value = info.get("chi2_pvalue")
+    fit_text = (f"chi-square p-value {p_value:.2g}" if p_value is not None and p_value == p_value
+                else f"no p-value (weights {info.get('weighting') or 'unknown'})")
+    label = f" ({info['candidate']})" if "candidate" in info else ""
+    print(f"model {info['model']}{label}, {info['modes']} mode(s), "
           f"{'converged' if info['success'] else 'DID NOT CONVERGE'}; redchi "
-          f"{info['redchi']:.4g}, AIC {info['aic']:.4g}, BIC {info['bic']:.4g}")
+          f"{info['redchi']:.4g}, {fit_text}, AIC {info['aic']:.4g}, BIC {info['bic']:.4g}")
     for name, p in info["params"].items():
-        err = "(no stderr)" if p["stderr"] != p["stderr"] else f"± {p['stderr']:.3g}"
-        print(f"  {name:<8} = {p['value']:.5g} {err} {parameter_units(name)}")
+        unit = parameter_units(name)
+        value = show_value(p["value"], unit, 5)
+        err = "(no stderr)" if p["stderr"] != p["stderr"] else f"± {show_value(p['stderr'], unit, 3)}"
+        line = f"  {name:<8} = {value} {err}"
+        if "report_as" in p:
+            line += f"   -> report as {p['report_as']} (2 sigma profile likelihood)"
+        print(line)
     if info["at_bound"]:
         print(f"  at a bound (not identified by these data): {', '.join(info['at_bound'])}")
     for row in info.get("selection", []):
-        print(f"  candidate {row['modes']} mode(s): AIC {row['aic']:.4g}, BIC {row['bic']:.4g}")
+        name = row.get("label", f"{row['modes']} mode(s)")
+        extra = f", redchi {row['redchi']:.3g}" if "redchi" in row else ""
+        print(f"  candidate {name}: AIC {row['aic']:.4g}, BIC {row['bic']:.4g}{extra}")
     if "selection_note" in info:
         print(f"  note: {info['selection_note']}")
     if "explanation" in info:
         print(f"  model choice: {info['explanation']}")
+
+
+def _print_map(info: dict[str, Any]) -> None:
+    from viscoforce.schema.fit import parameter_units
+
+    left = ", ".join(f"{v} {k.replace('_', ' ')}" for k, v in info["left_out"].items() if v)
+    print(f"model {info['model']}: {info['n_fits']} fits, {info['n_good']} good"
+          + (f"; left out of the summary: {left}" if left else ""))
+    for modes, block in info["by_modes"].items():
+        print(f"  {modes} mode(s), {block['n']} good pixel(s):")
+        for name, p in block["params"].items():
+            unit = parameter_units(name)
+            print(f"    {name:<8} median {show_value(p['median'], unit)}, IQR "
+                  f"{show_value(p['q25'], unit, 3)} .. {show_value(p['q75'], unit, 3)}")
+
+
+def _fit_recording(run, *args: Any, **kwargs: Any):
+    """``run(*args, **kwargs)`` with the viscoforce warnings recorded, then shown; (result, texts)."""
+    import warnings
+
+    from viscoforce.exceptions import (
+        AccuracyWarning,
+        DataWarning,
+        GoodnessOfFitWarning,
+        ModelValidityWarning,
+    )
+
+    kinds = (ModelValidityWarning, AccuracyWarning, GoodnessOfFitWarning, DataWarning)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        result = run(*args, **kwargs)
+    texts = []
+    for w in caught:
+        if issubclass(w.category, kinds):
+            text = str(w.message)
+            if text not in texts:
+                texts.append(text)
+        warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
+    return result, texts
 
 
 def run_fit(args: argparse.Namespace) -> int:
@@ -316,18 +478,27 @@ def run_fit(args: argparse.Namespace) -> int:
     if is_map and args.model == "auto":
         raise UsageError("--model auto fits one spectrum: add --curve I, or name the model "
                          "for the whole map")
+    if not is_map and args.identifiability is not None:
+        raise UsageError("--identifiability applies to maps (a single fit always profiles)")
     if is_map:
         from viscoforce.fitting.maps import fit_map
 
+        if args.weights is not None:
+            raise UsageError("--weights applies to single fits; maps weight by the data's "
+                             "stderr when present")
         fixed = _fixed(args, ds, kind)
         progress = sys.stderr.isatty() if args.progress is None else args.progress
-        result = fit_map(ds, args.model, modes=args.modes, criterion=args.criterion,
-                         scheduler=args.scheduler, workers=args.workers, progress=progress,
-                         segment=args.segment, **fixed)
+        options = {} if args.identifiability is None else {
+            "identifiability": args.identifiability}
+        result, texts = _fit_recording(
+            fit_map, ds, args.model, modes=1 if args.modes is None else args.modes,
+            criterion=args.criterion, scheduler=args.scheduler, workers=args.workers,
+            progress=progress, segment=args.segment, **options, **fixed)
         info = _map_json(result)
     else:
-        result = fit_one(args, ds, kind)
+        result, texts = _fit_recording(fit_one, args, ds, kind)
         info = _single_json(result)
+    info["warnings"] = texts
     if args.out:
         result.to_netcdf(args.out, engine="h5netcdf")
     if args.plot:
@@ -336,9 +507,7 @@ def run_fit(args: argparse.Namespace) -> int:
         print_json(info)
         return 0
     if is_map:
-        print(f"model {info['model']}: {info['n_fits']} fits, {info['n_failed']} failed")
-        for name, p in info["params"].items():
-            print(f"  {name:<8} median {p['median']}, IQR {p['q25']} .. {p['q75']}")
+        _print_map(info)
     else:
         _print_single(info)
     print_written(args.out, args.plot)

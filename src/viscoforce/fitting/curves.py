@@ -14,7 +14,7 @@ import numpy as np
 import xarray as xr
 
 from viscoforce.exceptions import ParameterError
-from viscoforce.fitting.fit import FitData, fit_data, warn_unidentified
+from viscoforce.fitting.fit import FitData, fit_data, warn_fit
 from viscoforce.schema import select_curve, validate_curves, validate_trajectory
 
 
@@ -75,7 +75,7 @@ def fit_hold(curves: xr.Dataset, *, curve: int = 0, segment: int | None = None,
     """Fit F(t) = F_inf + Σ dF_i e^{−t/τ_i} to the hold of one curve (``relaxation`` model)."""
     ds = fit_data(hold_data(curves, curve=curve, segment=segment), "relaxation", modes=modes,
                   criterion=criterion)
-    warn_unidentified(ds)
+    warn_fit(ds)
     return ds
 
 
@@ -92,8 +92,11 @@ def trajectory_data(trajectory: xr.Dataset) -> tuple[FitData, tuple[np.ndarray, 
 
 
 def fit_step(trajectory: xr.Dataset, *, problem: Any) -> xr.Dataset:
-    """Fit the exact model's response to the trajectory's drive (``step`` model: tau, E0, E_inf)."""
+    """Fit the exact model's response to the trajectory's drive (``step`` model: tau, E0, E_inf).
+
+    Identifiability by the local test (a profile would cost a simulation per evaluation).
+    """
     data, trace = trajectory_data(trajectory)
-    ds = fit_data(data, "step", problem=problem, position_trace=trace)
-    warn_unidentified(ds)
+    ds = fit_data(data, "step", problem=problem, position_trace=trace, profile=False)
+    warn_fit(ds)
     return ds

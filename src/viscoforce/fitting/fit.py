@@ -2,10 +2,26 @@
 
 The spectrum residual is complex: real and imaginary parts of k*_model − k*_data, each weighted by
 its standard error propagated from the data's ``stiffness_stderr`` and ``phase_stderr`` (radial and
-tangential errors of k* = S e^{iχ}); without them every point is weighted by 1/|k*| (a relative
-fit, so that a spectrum over decades of stiffness is not fitted at its stiffest end only).
-Points whose ``quality`` flag is set are left out. lmfit scales the covariance by the reduced
-chi-square (its default), so the stderr are honest when the data's errors are not.
+tangential errors of k* = S e^{iχ}). Points whose ``quality`` flag is set are left out, and so
+are points with a NaN (with a note).
+
+Statistics follow from what the weights are (``attrs["weighting"]``):
+
+- ``stderr`` — the data's own errors. The covariance is NOT rescaled by the reduced χ² (the
+  errors are known), AIC = χ² + 2k and BIC = χ² + k ln n use χ² itself, and the χ² goodness-of-fit
+  p-value (``chi2_pvalue``) is reported; below :data:`PVALUE_WARN` the fit warns that the model
+  does not describe these data (:class:`~viscoforce.exceptions.GoodnessOfFitWarning`). Points
+  whose stderr is missing or zero get the median relative error of the others (a DataWarning
+  names them).
+- ``relative`` — every point weighted by 1/|k*| (a relative fit, so that a spectrum over decades
+  of stiffness is not fitted at its stiffest end only). The errors are unknown: the covariance is
+  scaled by the reduced χ² (lmfit's ``scale_covar``), AIC/BIC are lmfit's n ln(χ²/n) forms and
+  there is no p-value. It is used when asked (``weights="relative"``) or, with a DataWarning,
+  when the data carry no usable stderr.
+- ``unweighted`` — force curves (relaxation, step): as ``relative`` with unit weights.
+
+Each single fit also profiles its parameters (:mod:`viscoforce.fitting.identify`): a parameter
+whose likelihood is one-sided is reported as a bound, not as a value with an error.
 """
 
 from __future__ import annotations
@@ -36,10 +52,13 @@ from viscoforce.exceptions import (
     AccuracyWarning,
     ApproximationWarning,
     ConvergenceError,
+    DataWarning,
+    GoodnessOfFitWarning,
     ModelValidityError,
     ParameterError,
 )
 from viscoforce.fitting import _params
+from viscoforce.fitting.identify import IDENTIFIABILITY, Profile, profile_parameters
 from viscoforce.fitting.models import (
     MAX_AUTO_MODES,
     MAX_MODES,
@@ -59,16 +78,33 @@ from viscoforce.svda import svda_error_estimate, svda_stiffness_kernel
 CRITERIA = ("bic", "aic")
 #: Points of the best-fit curve written with a spectrum fit.
 FIT_CURVE_POINTS = 200
+#: χ² p-value below which a fit with known stderr warns that the model does not fit the data.
+PVALUE_WARN = 1e-3
+#: Spectrum weightings (``weights=``): the data's stderr or relative 1/|k*| (None: stderr when
+#: the data have them, else relative with a DataWarning).
+WEIGHTINGS = ("stderr", "relative")
 
 
 @dataclass(frozen=True)
 class FitData:
-    """What a fit sees: x (ω [rad/s] or t [s]), y (k* [N/m] or F [N]) and weights."""
+    """What a fit sees: x (ω [rad/s] or t [s]), y (k* [N/m] or F [N]) and weights.
+
+    ``weighting`` is ``"stderr"`` (weights = 1/σ of the data: χ² is absolute), ``"relative"``
+    or ``"unweighted"`` (χ² up to an unknown scale); ``notes`` say what was done to the data
+    (points left out, fallbacks), each a sentence a DataWarning or a map's message can carry.
+    """
 
     x: np.ndarray
     y: np.ndarray
     weights: np.ndarray | None
     source: Mapping[str, Any]
+    weighting: str = "unweighted"
+    notes: tuple[str, ...] = ()
+
+    @property
+    def sigma_known(self) -> bool:
+        """Whether the weights are the data's own 1/σ (χ² absolute)."""
+        return self.weighting == "stderr"
 
     @property
     def n_values(self) -> int:
@@ -78,13 +114,17 @@ class FitData:
 
 # ── data ────────────────────────────────────────────────────────────────────────────────────────
 
-def spectrum_data(ds: xr.Dataset) -> FitData:
-    """ω, k* and weights of one spectrum (1-D over ``omega``), flagged points left out.
+def spectrum_data(ds: xr.Dataset, *, weights: str | None = None) -> FitData:
+    """ω, k* and weights of one spectrum (1-D over ``omega``), flagged and NaN points left out.
+
+    ``weights``: ``"stderr"``, ``"relative"`` or None (see the module docstring); the notes of
+    :func:`pixel_fit_data` (points left out, fallbacks) are issued as DataWarnings.
 
     Raises
     ------
     ParameterError
-        Extra dims, NaN or negative stiffness on a point not flagged, every point flagged.
+        Extra dims, negative stiffness on a point not flagged, no point left, ``weights="stderr"``
+        on data without stderr.
     """
     validate_spectrum(ds, require=("stiffness", "phase"))
     extra = [d for d in ds["stiffness"].dims if d != "omega"]
@@ -95,8 +135,11 @@ def spectrum_data(ds: xr.Dataset) -> FitData:
     source = {"data_kind": "spectrum"}
     if "source" in ds.attrs:
         source["data_source"] = str(ds.attrs["source"])
-    return pixel_fit_data(np.asarray(ds["omega"].values, dtype=float),
-                          {k: v[0] for k, v in arrays.items()}, source)
+    data = pixel_fit_data(np.asarray(ds["omega"].values, dtype=float),
+                          {k: v[0] for k, v in arrays.items()}, source, weights=weights)
+    for note in data.notes:
+        warnings.warn(note, DataWarning, stacklevel=3)
+    return data
 
 
 def spectrum_arrays(ds: xr.Dataset, dims: tuple[str, ...]) -> dict[str, np.ndarray]:
@@ -107,13 +150,16 @@ def spectrum_arrays(ds: xr.Dataset, dims: tuple[str, ...]) -> dict[str, np.ndarr
     """
     order = (*dims, "omega")
     n_omega = ds.sizes["omega"]
+    n_pixels = int(np.prod([ds.sizes[d] for d in dims]))
+    shape = tuple(ds.sizes[d] for d in order)
 
     def grab(name: str, fill: float) -> np.ndarray:
         if name not in ds.variables:
-            return np.full((int(np.prod([ds.sizes[d] for d in dims])), n_omega), fill)
-        da = ds[name]
-        da = da.broadcast_like(ds["stiffness"]).transpose(*order)
-        return np.asarray(da.values, dtype=float).reshape(-1, n_omega)
+            return np.full((n_pixels, n_omega), fill)
+        da = ds[name]  # scalar, per pixel, per frequency or per point: broadcast like xarray
+        values = np.asarray(da.transpose(*(d for d in order if d in da.dims)).values, dtype=float)
+        index = tuple(slice(None) if d in da.dims else None for d in order)
+        return np.broadcast_to(values[index], shape).reshape(n_pixels, n_omega)
 
     out = {"stiffness": grab("stiffness", np.nan), "phase": np.radians(grab("phase", np.nan)),
            "stiffness_stderr": grab("stiffness_stderr", np.nan),
@@ -123,50 +169,101 @@ def spectrum_arrays(ds: xr.Dataset, dims: tuple[str, ...]) -> dict[str, np.ndarr
 
 
 def pixel_fit_data(omega: np.ndarray, a: Mapping[str, np.ndarray],
-                   source: Mapping[str, Any]) -> FitData:
-    """FitData of one pixel's arrays (see :func:`spectrum_arrays`), with the checks of one spectrum."""
+                   source: Mapping[str, Any], *, weights: str | None = None) -> FitData:
+    """FitData of one pixel's arrays (see :func:`spectrum_arrays`), with the checks of one spectrum.
+
+    Points flagged in ``quality`` and points whose stiffness or phase is NaN/inf are left out
+    (the latter with a note). ``weights`` as in :func:`spectrum_data`; what was done is in the
+    result's ``notes`` (no warning here: maps carry the notes per pixel).
+    """
+    if weights is not None and weights not in WEIGHTINGS:
+        raise ParameterError(f"weights must be one of {', '.join(WEIGHTINGS)} or None, got "
+                             f"{weights!r}")
     stiffness, phase = a["stiffness"], a["phase"]
     keep = a["quality"] == 0
     if not keep.any():
         raise ParameterError(f"every one of the {omega.size} spectrum points is flagged in "
                              "'quality' (see its comment): nothing to fit; correct the phase "
                              "lag (load --phase-lag) or inspect the data")
+    notes: list[str] = []
     bad = keep & ~(np.isfinite(stiffness) & np.isfinite(phase))
     if bad.any():
-        i = int(np.flatnonzero(bad)[0])
-        raise ParameterError(f"stiffness or phase is NaN/inf at omega = {omega[i]:.4g} rad/s "
-                             f"(point {i}) and the point is not flagged")
+        shown = ", ".join(f"{w:.4g}" for w in omega[bad])
+        notes.append(f"stiffness or phase is NaN/inf at omega = {shown} rad/s: "
+                     f"{int(bad.sum())} point(s) left out of the fit")
+        keep = keep & ~bad
+        if not keep.any():
+            raise ParameterError("no spectrum point is left to fit: every unflagged point has "
+                                 "a NaN/inf stiffness or phase")
     negative = keep & (stiffness <= 0)
     if negative.any():
         i = int(np.flatnonzero(negative)[0])
         raise ParameterError(f"stiffness must be > 0 N/m, got {stiffness[i]!r} at omega = "
                              f"{omega[i]:.4g} rad/s (point {i})")
     k = stiffness * np.exp(1j * phase)
-    weights = None
-    s_err, p_err = a["stiffness_stderr"], a["phase_stderr"]
-    if np.isfinite(s_err[keep]).any() or np.isfinite(p_err[keep]).any():
-        p_err = np.where(np.isfinite(p_err), p_err, s_err / stiffness)
-        s_err = np.where(np.isfinite(s_err), s_err, p_err * stiffness)
-        c, s = np.cos(phase), np.sin(phase)
-        sig_re = np.sqrt((c * s_err) ** 2 + (stiffness * s * p_err) ** 2)
-        sig_im = np.sqrt((s * s_err) ** 2 + (stiffness * c * p_err) ** 2)
-        usable = np.isfinite(sig_re) & np.isfinite(sig_im) & (sig_re > 0) & (sig_im > 0)
-        if usable[keep].all():
-            weights = 1.0 / sig_re + 1j / sig_im
-    if weights is None:
-        weights = (1.0 + 1j) / np.abs(k)
+    with np.errstate(invalid="ignore", divide="ignore"):  # left-out points may be NaN
+        w, weighting, note = _spectrum_weights(omega, k, stiffness, phase, a, keep, weights)
+    notes.extend(note)
     info = {**source, "data_points": int(keep.sum()), "data_flagged": int((~keep).sum())}
     depth = a["mean_indentation"]
-    if np.isfinite(depth).any():
-        info["mean_indentation"] = float(np.nanmedian(depth))
-    return FitData(omega[keep], k[keep], weights[keep], info)
+    if np.isfinite(depth[keep]).any():
+        info["mean_indentation"] = float(np.nanmedian(depth[keep]))
+    return FitData(omega[keep], k[keep], w[keep], info, weighting, tuple(notes))
+
+
+def _spectrum_weights(omega: np.ndarray, k: np.ndarray, stiffness: np.ndarray,
+                      phase: np.ndarray, a: Mapping[str, np.ndarray], keep: np.ndarray,
+                      weights: str | None) -> tuple[np.ndarray, str, list[str]]:
+    """Complex weights 1/σ_re + i/σ_im, the weighting and the notes (module docstring)."""
+    relative = (1.0 + 1j) / np.abs(k)
+    if weights == "relative":
+        return relative, "relative", []
+    s_err, p_err = a["stiffness_stderr"], a["phase_stderr"]
+    given = np.isfinite(s_err) | np.isfinite(p_err)
+    if not given[keep].any():
+        if weights == "stderr":
+            raise ParameterError("weights='stderr' needs stiffness_stderr or phase_stderr in "
+                                 "the data; these have none (use weights='relative')")
+        return relative, "relative", [
+            "the spectrum has no stiffness_stderr/phase_stderr: the fit weights every point by "
+            "1/|k*| (relative), scales the covariance by the reduced chi-square and gives no "
+            "p-value (pass weights='relative', --weights relative, to choose this)"]
+    p_err = np.where(np.isfinite(p_err), p_err, s_err / stiffness)
+    s_err = np.where(np.isfinite(s_err), s_err, p_err * stiffness)
+    c, s = np.cos(phase), np.sin(phase)
+    with np.errstate(invalid="ignore"):
+        sig_re = np.sqrt((c * s_err) ** 2 + (stiffness * s * p_err) ** 2)
+        sig_im = np.sqrt((s * s_err) ** 2 + (stiffness * c * p_err) ** 2)
+    usable = np.isfinite(sig_re) & np.isfinite(sig_im) & (sig_re > 0) & (sig_im > 0)
+    notes = []
+    missing = keep & ~usable
+    if missing.all() or not (keep & usable).any():
+        if weights == "stderr":
+            raise ParameterError("weights='stderr': every stderr of the points fitted is "
+                                 "missing or zero")
+        return relative, "relative", [
+            "every stderr of the points fitted is missing or zero: the fit weights every point "
+            "by 1/|k*| (relative), scales the covariance by the reduced chi-square and gives "
+            "no p-value"]
+    if missing.any():
+        ok = keep & usable
+        rel_re = float(np.median(sig_re[ok] / np.abs(k[ok])))
+        rel_im = float(np.median(sig_im[ok] / np.abs(k[ok])))
+        sig_re = np.where(missing, rel_re * np.abs(k), sig_re)
+        sig_im = np.where(missing, rel_im * np.abs(k), sig_im)
+        shown = ", ".join(f"{w:.4g}" for w in omega[missing])
+        notes.append(f"stderr missing or zero at omega = {shown} rad/s: those points are "
+                     f"weighted by the median relative error of the others ({rel_re:.3g}, "
+                     f"{rel_im:.3g} of |k*| in the real and imaginary parts)")
+    with np.errstate(divide="ignore"):
+        return 1.0 / sig_re + 1j / sig_im, "stderr", notes
 
 
 # ── one fit ─────────────────────────────────────────────────────────────────────────────────────
 
 @dataclass
 class Outcome:
-    """One fit: the model, its best SPEC values, their covariance and lmfit's result.
+    """One fit: the model, its data, its best SPEC values, their covariance and lmfit's result.
 
     The minimiser varies the internal parameters only (``log_…``, see
     :mod:`viscoforce.fitting._params`); the SPEC values and their covariance follow from them
@@ -178,15 +275,72 @@ class Outcome:
     result: lmfit.minimizer.MinimizerResult
     values: dict[str, float]
     covariance: np.ndarray | None
+    data: FitData
+    profiles: dict[str, Profile] | None = None
+    #: Lag-1 autocorrelation of the residuals (curve fits; NaN for spectra).
+    lag1: float = math.nan
+    #: Effective number of independent values of the criteria (curve fits: shared by the
+    #: candidates of one selection; None: all values).
+    n_effective: float | None = None
+
+    @property
+    def stderr_factor(self) -> float:
+        """Factor on the stderr for AR(1) residuals, √((1 + ρ1)/(1 − ρ1)) (1 when ρ1 ≤ 0)."""
+        rho = self.lag1
+        if not (math.isfinite(rho) and rho > 0):
+            return 1.0
+        return math.sqrt((1.0 + rho) / max(1.0 - rho, 1e-12))
+
+    @property
+    def n_values(self) -> int:
+        """Real numbers fitted."""
+        return self.data.n_values
+
+    @property
+    def n_free(self) -> int:
+        """Free (varied) internal parameters."""
+        return int(self.result.nvarys)
+
+    @property
+    def dof(self) -> int:
+        """Degrees of freedom n − k (at least 1)."""
+        return max(self.n_values - self.n_free, 1)
 
     @property
     def criterion(self) -> dict[str, float]:
-        """AIC and BIC of the fit."""
-        return {"aic": float(self.result.aic), "bic": float(self.result.bic)}
+        """AIC and BIC of the fit: χ² + 2k and χ² + k ln n with known stderr, else lmfit's."""
+        if not self.data.sigma_known:
+            if self.n_effective is None:
+                return {"aic": float(self.result.aic), "bic": float(self.result.bic)}
+            n, m, k = self.n_values, self.n_effective, self.n_free
+            loglik = m * math.log(max(float(self.result.chisqr), 1e-300) / n)
+            return {"aic": loglik + 2.0 * k, "bic": loglik + k * math.log(m)}
+        chi2, k, n = float(self.result.chisqr), self.n_free, self.n_values
+        return {"aic": chi2 + 2.0 * k, "bic": chi2 + k * math.log(n)}
+
+    @property
+    def pvalue(self) -> float:
+        """χ² goodness-of-fit p-value P(χ²_dof ≥ χ²) with known stderr, else NaN."""
+        if not self.data.sigma_known:
+            return math.nan
+        from scipy.stats import chi2
+
+        return float(chi2.sf(float(self.result.chisqr), self.dof))
 
     def evaluate(self, x: np.ndarray) -> np.ndarray:
         """The best-fit model over ``x`` (ω or t)."""
         return self.model.raw(np.asarray(x, dtype=float), self.values)
+
+    def profile(self) -> dict[str, Profile]:
+        """Profile likelihood of every parameter (computed once; :mod:`.identify`)."""
+        if self.profiles is None:
+            stderr = summary_stderr(self)
+            scale = 1.0 if self.data.sigma_known else max(float(self.result.redchi), 1e-300)
+            scale *= self.stderr_factor ** 2
+            self.profiles = profile_parameters(
+                self.model.layout, _residual(self.model, self.data), self.result.params,
+                stderr, float(self.result.chisqr), scale)
+        return self.profiles
 
 
 def _residual(model: FitModel, data: FitData):
@@ -208,13 +362,36 @@ def _residual(model: FitModel, data: FitData):
     return residual
 
 
-def _outcome(model: FitModel, res: lmfit.minimizer.MinimizerResult) -> Outcome:
+def _outcome(model: FitModel, res: lmfit.minimizer.MinimizerResult, data: FitData) -> Outcome:
     values, grads = _params.to_reported(model.layout, res.params.valuesdict())
     cov = None
     if res.errorbars and res.covar is not None and np.all(np.isfinite(res.covar)):
         jac = np.array([[grads[n].get(v, 0.0) for v in res.var_names] for n in model.names])
         cov = jac @ res.covar @ jac.T
-    return Outcome(model, res, {n: values[n] for n in model.names}, cov)
+    lag1 = math.nan
+    if data.weighting == "unweighted" and model.spec.name in AUTOCORRELATED_MODELS:
+        lag1 = residual_lag1(np.asarray(res.residual, dtype=float), data.x)
+        factor = math.sqrt((1.0 + lag1) / max(1.0 - lag1, 1e-12)) if lag1 > 0 else 1.0
+        if cov is not None:
+            cov = cov * factor ** 2
+    return Outcome(model, res, {n: values[n] for n in model.names}, cov, data, lag1=lag1)
+
+
+#: Lag-1 residual autocorrelation above which a curve fit warns (its stderr are corrected).
+LAG1_WARN = 0.5
+#: Curve models of measured series whose stderr are corrected for residual autocorrelation
+#: (the step model fits a simulated trajectory, whose residual is the solver's smooth error).
+AUTOCORRELATED_MODELS = ("relaxation", "creep")
+
+
+def residual_lag1(residual: np.ndarray, t: np.ndarray) -> float:
+    """Lag-1 autocorrelation of residuals ordered in time, Σ r_i r_{i+1} / Σ r_i² (0 if < 3)."""
+    r = residual[np.argsort(t)]
+    if r.size < 3:
+        return 0.0
+    r = r - r.mean()
+    denom = float(r @ r)
+    return float(r[:-1] @ r[1:]) / denom if denom > 0 else 0.0
 
 
 def fit_once(model: FitModel, data: FitData, *, starts: int = 2) -> Outcome:
@@ -241,7 +418,8 @@ def fit_once(model: FitModel, data: FitData, *, starts: int = 2) -> Outcome:
         try:
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore", RuntimeWarning)
-                res = lmfit.minimize(residual, params, method="leastsq")
+                res = lmfit.minimize(residual, params, method="leastsq",
+                                     scale_covar=not data.sigma_known)
         except (ValueError, ArithmeticError, ParameterError, ConvergenceError) as exc:
             errors.append(str(exc).splitlines()[0])
             continue
@@ -249,7 +427,7 @@ def fit_once(model: FitModel, data: FitData, *, starts: int = 2) -> Outcome:
             errors.append("non-finite chi-square")
             continue
         if best is None or res.chisqr < best.result.chisqr:
-            best = _outcome(model, res)
+            best = _outcome(model, res, data)
     if best is None:
         raise ConvergenceError(f"model {model.spec.name!r} could not be fitted from any start: "
                                + "; ".join(errors[:3]))
@@ -273,34 +451,84 @@ def _alternative_starts(model: FitModel, first: lmfit.Parameters,
 
 # ── results ─────────────────────────────────────────────────────────────────────────────────────
 
-def summary(outcome: Outcome) -> dict[str, Any]:
-    """Values, stderr, correlations and statistics of a fit (SPEC names, SI)."""
+def summary_stderr(outcome: Outcome) -> dict[str, float | None]:
+    """Local stderr of each SPEC parameter (None when the covariance is singular)."""
+    names = outcome.model.names
+    if outcome.covariance is None:
+        return {n: None for n in names}
+    var = np.diag(outcome.covariance)
+    if not np.all(var >= 0):
+        return {n: None for n in names}
+    return {n: float(e) for n, e in zip(names, np.sqrt(var), strict=True)}
+
+
+def local_identifiability(values: Mapping[str, float], stderr: Mapping[str, float | None],
+                          at_bound: list[str]) -> dict[str, int]:
+    """The local test: 3 (not determined) where stderr > |value|, none, or at a bound; else 0."""
+    return {n: 3 if (stderr[n] is None or not math.isfinite(stderr[n])
+                     or abs(stderr[n]) > abs(v) or n in at_bound) else 0
+            for n, v in values.items()}
+
+
+def summary(outcome: Outcome, *, profile: bool = False) -> dict[str, Any]:
+    """Values, stderr, correlations, statistics and identifiability of a fit (SPEC names, SI).
+
+    ``profile=True`` adds the profile likelihood (:mod:`viscoforce.fitting.identify`): codes
+    and 2σ limits; otherwise the identifiability is the local test.
+    """
     res, names = outcome.result, outcome.model.names
     values = dict(outcome.values)
     corr = np.where(np.eye(len(names), dtype=bool), 1.0, np.nan)
-    stderr: dict[str, float | None] = {n: None for n in names}
-    if outcome.covariance is not None:
-        var = np.diag(outcome.covariance)
-        if np.all(var >= 0):
-            sd = np.sqrt(var)
-            stderr = {n: float(e) for n, e in zip(names, sd, strict=True)}
-            with np.errstate(invalid="ignore", divide="ignore"):
-                corr = outcome.covariance / np.outer(sd, sd)
-            np.fill_diagonal(corr, 1.0)
+    stderr = summary_stderr(outcome)
+    if outcome.covariance is not None and all(e is not None for e in stderr.values()):
+        sd = np.array([stderr[n] for n in names])
+        with np.errstate(invalid="ignore", divide="ignore"):
+            corr = outcome.covariance / np.outer(sd, sd)
+        np.fill_diagonal(corr, 1.0)
     success = bool(res.success) and all(math.isfinite(v) for v in values.values())
+    bound = _params.at_bound(res.params)
+    at_bound = [n for n in names if n in bound]
+    ident = local_identifiability(values, stderr, at_bound)
+    lower = {n: math.nan for n in names}
+    upper = dict(lower)
+    if profile:
+        for n, prof in outcome.profile().items():
+            ident[n], lower[n], upper[n] = prof.code, prof.lower, prof.upper
     return {"values": values, "stderr": stderr, "correlation": corr, "success": success,
-            "redchi": float(res.redchi), "aic": float(res.aic), "bic": float(res.bic),
-            "nfev": int(res.nfev), "at_bound": _params.at_bound(res.params),
-            "message": str(res.message)}
+            "redchi": float(res.redchi), "chisqr": float(res.chisqr), "dof": outcome.dof,
+            "chi2_pvalue": outcome.pvalue, **outcome.criterion, "nfev": int(res.nfev),
+            "at_bound": bound, "message": str(res.message), "weighting": outcome.data.weighting,
+            "identifiability": ident, "lower": lower, "upper": upper,
+            "notes": list(outcome.data.notes), "profiled": bool(profile)}
 
 
 def result_dataset(outcome: Outcome, data: FitData, *,
-                   selection: list[dict[str, Any]] | None = None) -> xr.Dataset:
-    """The fit-result dataset (schema.fit) of one fit, with its best-fit curve."""
-    info = summary(outcome)
+                   selection: list[dict[str, Any]] | None = None,
+                   profile: bool = True) -> xr.Dataset:
+    """The fit-result dataset (schema.fit) of one fit, with its best-fit curve.
+
+    Besides the schema's variables: ``chi2_pvalue``, ``identifiability`` over ``param_i``
+    (codes of :data:`viscoforce.fitting.identify.IDENTIFIABILITY`) and, with ``profile``,
+    ``<name>_lower`` / ``<name>_upper`` (the 2σ profile limits, NaN on an unbounded side).
+    """
+    info = summary(outcome, profile=profile)
     model = outcome.model
     attrs: dict[str, Any] = {**data.source, "nfev": info["nfev"], "message": info["message"],
-                             "at_bound": ", ".join(info["at_bound"]) or "none"}
+                             "at_bound": ", ".join(info["at_bound"]) or "none",
+                             "weighting": info["weighting"], "chisqr": info["chisqr"],
+                             "dof": info["dof"],
+                             "identifiability_method": "profile likelihood (2 sigma)" if profile
+                             else "local (stderr > value, none, or at a bound)"}
+    if info["notes"]:
+        attrs["data_notes"] = "; ".join(info["notes"])
+    if math.isfinite(outcome.lag1):
+        attrs.update(residual_lag1=outcome.lag1, stderr_correction=outcome.stderr_factor,
+                     effective_samples=float(outcome.n_effective or data.n_values),
+                     stderr_method=(
+                         "least squares scaled by the reduced chi-square, times "
+                         "sqrt((1 + rho1)/(1 - rho1)) for AR(1) residuals of lag-1 "
+                         "autocorrelation rho1; AIC/BIC with the effective sample size "
+                         "n (1 - rho1)/(1 + rho1)"))
     attrs.update(_fixed_attrs(model.spec.fixed))
     curves: dict[str, Any]
     if model.independent == "omega":
@@ -315,6 +543,7 @@ def result_dataset(outcome: Outcome, data: FitData, *,
                          correlation=info["correlation"], success=info["success"],
                          redchi=info["redchi"], aic=info["aic"], bic=info["bic"],
                          modes=model.spec.modes, model=model.spec.name, attrs=attrs, **curves)
+    ds = ds.assign(_statistics_variables(info, model.names, profile))
     if selection:
         ds = ds.assign(
             selection_modes=("candidate", [s["modes"] for s in selection],
@@ -324,6 +553,28 @@ def result_dataset(outcome: Outcome, data: FitData, *,
             selection_bic=("candidate", [s["bic"] for s in selection],
                            {"units": "1", "long_name": "BIC of the candidate"}))
     return ds
+
+
+def _statistics_variables(info: Mapping[str, Any], names: list[str],
+                          limits: bool) -> dict[str, xr.DataArray]:
+    from viscoforce.schema.fit import parameter_units
+
+    out = {"chi2_pvalue": xr.DataArray(info["chi2_pvalue"], attrs={
+        "units": "1", "long_name": "chi-square goodness-of-fit p-value (NaN: stderr unknown)"}),
+        "identifiability": xr.DataArray(
+            np.array([info["identifiability"][n] for n in names], dtype=np.int8),
+            dims=("param_i",), attrs={
+                "long_name": "identifiability of the fitted parameter",
+                "flag_values": np.array(list(IDENTIFIABILITY), dtype=np.int8),
+                "flag_meanings": " ".join(IDENTIFIABILITY.values())})}
+    if limits:
+        for n in names:
+            unit = parameter_units(n)
+            out[f"{n}_lower"] = xr.DataArray(info["lower"][n], attrs={
+                "units": unit, "long_name": f"2-sigma profile-likelihood lower limit of {n}"})
+            out[f"{n}_upper"] = xr.DataArray(info["upper"][n], attrs={
+                "units": unit, "long_name": f"2-sigma profile-likelihood upper limit of {n}"})
+    return out
 
 
 def _fixed_attrs(fixed: Mapping[str, Any]) -> dict[str, Any]:
@@ -365,6 +616,7 @@ def select(data: FitData, name: str, *, modes: int | str = 1, criterion: str = "
         raise ParameterError(f"criterion must be one of {', '.join(CRITERIA)}, got {criterion!r}")
     if modes != "auto":
         outcome = fit_once(make_model(name, modes, **fixed), data)
+        _share_effective_size([outcome])
         return outcome, [{"modes": modes, **outcome.criterion}]
     outcomes: list[Outcome] = []
     worse = 0
@@ -382,16 +634,37 @@ def select(data: FitData, name: str, *, modes: int | str = 1, criterion: str = "
         worse = worse + 1 if len(scores) > 1 and scores[-1] >= min(scores[:-1]) else 0
         if worse >= 2:
             break
+    _share_effective_size(outcomes)
     best = min(outcomes, key=lambda o: o.criterion[criterion])
     return best, [{"modes": o.model.spec.modes, **o.criterion} for o in outcomes]
 
 
+def _share_effective_size(outcomes: list[Outcome]) -> None:
+    """Curve fits: one effective sample size n (1 − ρ1)/(1 + ρ1) for every candidate.
+
+    ρ1 is the residual lag-1 autocorrelation of the candidate with the smallest χ² (the least
+    misfit, so the closest to the noise's own), so that the criteria stay comparable.
+    """
+    curve = [o for o in outcomes if math.isfinite(o.lag1)]
+    if not curve:
+        return
+    rho = min(curve, key=lambda o: float(o.result.chisqr)).lag1
+    n = curve[0].n_values
+    n_eff = n * (1.0 - rho) / (1.0 + rho) if rho > 0 else float(n)
+    for o in curve:
+        o.n_effective = min(max(n_eff, o.n_free + 2.0), float(n))
+
+
 def fit_data(data: FitData, name: str, *, modes: int | str = 1, criterion: str = "bic",
-             max_modes: int = MAX_AUTO_MODES, **fixed: Any) -> xr.Dataset:
-    """Fit prepared data (:class:`FitData`) with model ``name``; ``modes="auto"`` selects."""
+             max_modes: int = MAX_AUTO_MODES, profile: bool = True, **fixed: Any) -> xr.Dataset:
+    """Fit prepared data (:class:`FitData`) with model ``name``; ``modes="auto"`` selects.
+
+    ``profile``: profile-likelihood identifiability of the kept fit (default True).
+    """
     best, selection = select(data, name, modes=modes, criterion=criterion, max_modes=max_modes,
                              **fixed)
-    ds = result_dataset(best, data, selection=selection if modes == "auto" else None)
+    ds = result_dataset(best, data, selection=selection if modes == "auto" else None,
+                        profile=profile)
     if modes == "auto":
         ds.attrs["criterion"] = criterion
         if best.model.spec.modes == max(row["modes"] for row in selection) >= max_modes:
@@ -401,30 +674,85 @@ def fit_data(data: FitData, name: str, *, modes: int | str = 1, criterion: str =
     return ds
 
 
+def bound_text(ds: xr.Dataset, name: str) -> str | None:
+    """How a parameter that is not determined should be reported (None when it is determined).
+
+    ``"E0 > 2.1e+04 Pa"`` (lower bound only), ``"mu < 3.2 Pa s"``, ``"tau not determined"``.
+    """
+    if "identifiability" not in ds.variables:
+        return None
+    codes = dict(zip((str(n) for n in ds["param_i"].values),
+                     np.asarray(ds["identifiability"].values).reshape(-1).tolist(), strict=True))
+    code = int(codes.get(name, 0))
+    unit = str(ds[name].attrs.get("units", ""))
+    if code == 1 and f"{name}_lower" in ds.variables:
+        return f"{name} > {float(ds[f'{name}_lower']):.3g} {unit}".rstrip()
+    if code == 2 and f"{name}_upper" in ds.variables:
+        return f"{name} < {float(ds[f'{name}_upper']):.3g} {unit}".rstrip()
+    if code == 0:
+        return None
+    return f"{name} not determined"
+
+
 def warn_unidentified(ds: xr.Dataset, *, stacklevel: int = 3) -> list[str]:
     """Warn (AccuracyWarning) about fitted parameters the data do not determine; return them.
 
-    A parameter whose stderr exceeds its value, or has none (the covariance is singular), is
-    not identified by the data: its value may be anything (e.g. the moduli of a spectrum far
-    before contact, where the viscoelastic part of k* is below the noise).
+    With the profile likelihood (``identifiability``): a parameter bounded on one side only is
+    reported as that bound (e.g. "E0 > 2e4 Pa": the likelihood is flat towards larger values),
+    one flat on both sides as not determined. Without it, the local test: stderr above the
+    value, or none (the covariance is singular).
     """
     names = [str(n) for n in ds["param_i"].values]
-    bad = [n for n in names
-           if not np.isfinite(float(ds[f"{n}_stderr"])) or
-           abs(float(ds[f"{n}_stderr"])) > abs(float(ds[n]))]
+    if "identifiability" in ds.variables:
+        codes = np.asarray(ds["identifiability"].values).reshape(-1)
+        bad = [n for n, c in zip(names, codes, strict=True) if int(c) != 0]
+    else:
+        bad = [n for n in names
+               if not np.isfinite(float(ds[f"{n}_stderr"])) or
+               abs(float(ds[f"{n}_stderr"])) > abs(float(ds[n]))]
     if bad:
-        shown = ", ".join(f"{n} = {float(ds[n]):.4g} ± {float(ds[f'{n}_stderr']):.3g}"
-                          for n in bad)
+        shown = "; ".join(
+            f"{bound_text(ds, n) or n} (fitted {float(ds[n]):.4g} ± "
+            f"{float(ds[f'{n}_stderr']):.3g})" for n in bad)
         warnings.warn(
-            f"the data do not determine {', '.join(bad)} (stderr above the value, or none): "
-            f"{shown}; fix it, fit fewer parameters, or measure where the spectrum depends on it",
+            f"the data do not determine {', '.join(bad)}: {shown}; report the bound, fix the "
+            "parameter, fit fewer parameters, or measure where the spectrum depends on it",
             AccuracyWarning, stacklevel=stacklevel)
     return bad
 
 
-def fit_spectrum(spectrum: xr.Dataset, model: str, *, modes: int | str = 1,
+def warn_goodness(ds: xr.Dataset, *, stacklevel: int = 3) -> bool:
+    """Warn (GoodnessOfFitWarning) when the χ² p-value is below :data:`PVALUE_WARN`."""
+    p = float(ds["chi2_pvalue"]) if "chi2_pvalue" in ds.variables else math.nan
+    if math.isfinite(p) and p < PVALUE_WARN:
+        warnings.warn(
+            f"the model does not describe these data: chi-square {ds.attrs.get('chisqr', math.nan):.4g}"
+            f" for {ds.attrs.get('dof', '?')} degrees of freedom (redchi "
+            f"{float(ds['redchi']):.3g}), p = {p:.2g} < {PVALUE_WARN:g}; its stderr assume it "
+            "does. Try another model or material (--model auto), or check the data's stderr",
+            GoodnessOfFitWarning, stacklevel=stacklevel)
+        return True
+    return False
+
+
+def warn_fit(ds: xr.Dataset, *, stacklevel: int = 4) -> None:
+    """The warnings of a single fit: autocorrelated residuals, goodness of fit, identifiability."""
+    rho = float(ds.attrs.get("residual_lag1", math.nan))
+    if math.isfinite(rho) and rho > LAG1_WARN:
+        warnings.warn(
+            f"the residuals are strongly autocorrelated (lag-1 {rho:.3g}): the stderr are "
+            f"multiplied by sqrt((1+rho)/(1-rho)) = {float(ds.attrs['stderr_correction']):.3g} "
+            f"(effective sample size {float(ds.attrs['effective_samples']):.4g} of "
+            f"{int(ds.attrs.get('data_points', 0))}); they hold for AR(1) noise only. The model "
+            "may miss structure in the data (drift, more modes): compare windows or replicas",
+            DataWarning, stacklevel=stacklevel)
+    warn_goodness(ds, stacklevel=stacklevel)
+    warn_unidentified(ds, stacklevel=stacklevel)
+
+
+def fit_spectrum(spectrum: xr.Dataset, model: str, *, modes: int | str | None = None,
                  criterion: str = "bic", accuracy: float | None = None,
-                 **fixed: Any) -> xr.Dataset:
+                 weights: str | None = None, **fixed: Any) -> xr.Dataset:
     """Fit one spectrum (over ``omega``) with a spectrum model.
 
     Parameters
@@ -432,16 +760,25 @@ def fit_spectrum(spectrum: xr.Dataset, model: str, *, modes: int | str = 1,
     spectrum : xarray.Dataset
         A spectrum (:mod:`viscoforce.schema.spectrum`) over ``omega`` only.
     model : str
-        ``svda``, ``exact``, ``contact``, ``prony``, or ``auto``: the cheapest of svda, contact
-        and exact whose model error, estimated at the fitted parameters, meets ``accuracy``
-        (needs ``problem`` and ``position`` or ``mean_force``; the reason in
-        ``attrs["explanation"]``).
-    modes : int or "auto"
-        Relaxation modes; ``"auto"`` tries 1, 2, … and keeps the lowest ``criterion``.
+        ``svda``, ``exact``, ``contact``, ``prony``, or ``auto``. With ``position`` or
+        ``mean_force`` (the theory's system), ``auto`` is the cheapest of svda, contact and exact
+        whose model error, estimated at the fitted parameters, meets ``accuracy`` (needs
+        ``problem``). Without them (measured data: an indentation from the data or
+        ``indentation``), ``auto`` compares the contact materials sls, prony n, power-law (with
+        and without a Newtonian term) and structural by the criterion
+        (:func:`viscoforce.fitting.measured.fit_measured_auto`). The reason is in
+        ``attrs["explanation"]``.
+    modes : int or "auto", optional
+        Relaxation modes; ``"auto"`` tries 1, 2, … and keeps the lowest ``criterion``. Default
+        1 (``"auto"`` for the measured-data chooser).
     criterion : {"bic", "aic"}
         Information criterion of ``modes="auto"``.
     accuracy : float, optional
-        Required relative model error of ``model="auto"`` (default 1e-3); only with "auto".
+        Required relative model error of ``model="auto"`` (default 1e-3); only with "auto"
+        and a position or mean force.
+    weights : {"stderr", "relative"}, optional
+        Weights of the residual (module docstring); default: the data's stderr when present,
+        else relative with a DataWarning.
     **fixed
         The model's fixed inputs (see :func:`viscoforce.fitting.models.make_model`); for
         ``contact`` the ``indentation`` defaults to the data's median ``mean_indentation``.
@@ -453,15 +790,27 @@ def fit_spectrum(spectrum: xr.Dataset, model: str, *, modes: int | str = 1,
         ``selection_aic``, ``selection_bic`` over ``candidate``.
     """
     if model == "auto":
-        return fit_spectrum_auto(spectrum, modes=modes, criterion=criterion,
-                                 accuracy=accuracy, **fixed)
+        if fixed.get("position") is None and fixed.get("mean_force") is None:
+            from viscoforce.fitting.measured import fit_measured_auto
+
+            if accuracy is not None:
+                raise ParameterError(
+                    "accuracy chooses between the theory's approximations (with position or "
+                    "mean_force, --h0/--mean-force); on measured data model 'auto' compares "
+                    "materials by the criterion instead: leave accuracy out")
+            return fit_measured_auto(spectrum, modes="auto" if modes is None else modes,
+                                     criterion=criterion, weights=weights, **fixed)
+        return fit_spectrum_auto(spectrum, modes=1 if modes is None else modes,
+                                 criterion=criterion, accuracy=accuracy, weights=weights,
+                                 **fixed)
+    modes = 1 if modes is None else modes
     if accuracy is not None:
         raise ParameterError(f"accuracy applies to model 'auto' only, not {model!r}")
     if model not in SPECTRUM_MODELS:
         raise ParameterError(f"model {model!r} fits force curves, not spectra; spectrum models: "
                              f"{', '.join(SPECTRUM_MODELS)} (or auto)")
     fixed = check_fixed(model, fixed)
-    data = spectrum_data(spectrum)
+    data = spectrum_data(spectrum, weights=weights)
     if model == "contact" and fixed.get("indentation") is None:
         fixed["indentation"] = _data_indentation(spectrum)
     if model in ("svda", "exact") and fixed.get("position") is None and fixed.get(
@@ -479,11 +828,9 @@ def fit_spectrum(spectrum: xr.Dataset, model: str, *, modes: int | str = 1,
                                fixed["P"], fixed["debye_length"])
         _warn_model_bias(ds, model, *svda_bias(ds, spectrum, h0, fixed["radius"], fixed["P"],
                                                fixed["debye_length"]))
-    if model == "contact" and decay is not None and modes == 1 and (
-            fixed.get("material", "sls") == "sls"):
-        _warn_model_bias(ds, model, *hertz_error(_sls_of(ds), fixed["indentation"], decay,
-                                                 float(np.max(spectrum["omega"]))))
-    warn_unidentified(ds)
+    if model == "contact" and decay is not None:
+        _warn_model_bias(ds, model, *contact_bias(ds, fixed, data.x, decay))
+    warn_fit(ds)
     return ds
 
 
@@ -506,6 +853,36 @@ def svda_bias(ds: xr.Dataset, spectrum: xr.Dataset, position: float, radius: flo
     return error / sensitivity, (
         f"stiffness error 0.6 kappa|u0| ~{error:.1e} over the moduli sensitivity "
         f"|dln k*/dln E| = {sensitivity:.2g} at the fitted E_inf = {values['E_inf']:.3g} Pa")
+
+
+def contact_bias(ds: xr.Dataset, fixed: Mapping[str, Any], omega: np.ndarray,
+                 decay_length: float) -> tuple[float, str]:
+    """Estimated relative bias of a contact fit against the exact model, and the reason.
+
+    :func:`viscoforce.choice.hertz_error` at the fitted material: 2 × 1.5 |E*(ω_max)|/E_inf /
+    (κδ0). For the SLS and Prony materials E_inf is the relaxed modulus; the power-law and
+    structural materials have none (E → 0 as ω → 0), so |E*| at the lowest fitted frequency
+    stands for it (the estimate then covers the measured window only).
+    """
+    modes = int(ds["modes"])
+    kind = str(ds.attrs.get("material", fixed.get("material") or "sls"))
+    values = {str(n): float(ds[n]) for n in ds["param_i"].values}
+    depth = float(fixed["indentation"])
+    w_max, w_min = float(np.max(omega)), float(np.min(omega))
+    if kind in ("sls", "prony"):
+        error, reason = hertz_error(material_from(values, modes), depth, decay_length, w_max)
+        return error, reason
+    model = make_model("contact", 1, **{k: v for k, v in fixed.items() if k != "debye_length"})
+    drag = float(fixed.get("drag") or 0.0)
+    e = (model.raw(np.array([w_min, w_max]), values) - 1j * np.array([w_min, w_max]) * drag)
+    ratio = abs(complex(e[1])) / abs(complex(e[0]))
+    kappa_depth = depth / decay_length
+    from viscoforce.choice import SAFETY
+
+    return SAFETY * 1.5 * ratio / kappa_depth, (
+        f"{SAFETY:g} x 1.5 |E*(omega_max)|/|E*(omega_min)| / (kappa delta0) with kappa delta0 = "
+        f"{kappa_depth:.3g}; material {kind} has no relaxed modulus: |E*| at the lowest "
+        "frequency fitted stands for it")
 
 
 def _warn_model_bias(ds: xr.Dataset, model: str, bias: float, reason: str) -> None:
@@ -531,8 +908,8 @@ AUTO_MODELS = ("svda", "contact", "exact")
 
 
 def _auto_candidate(spectrum: xr.Dataset, name: str, modes: int | str, criterion: str,
-                    problem: ContactProblem, fixed: Mapping[str, Any]
-                    ) -> tuple[xr.Dataset | None, float, str]:
+                    problem: ContactProblem, fixed: Mapping[str, Any],
+                    data: FitData) -> tuple[xr.Dataset | None, float, str]:
     """Fit one candidate of ``model="auto"``: (result or None, estimated model error, reason)."""
     position, mean_force = fixed.get("position"), fixed.get("mean_force")
     radius = problem.sphere.radius
@@ -547,7 +924,7 @@ def _auto_candidate(spectrum: xr.Dataset, name: str, modes: int | str, criterion
         if math.isinf(error):
             return None, error, reason
         try:
-            ds = fit_data(spectrum_data(spectrum), "svda", position=position,
+            ds = fit_data(data, "svda", profile=False, position=position,
                           mean_force=mean_force, radius=radius, P=layer.P,
                           debye_length=layer.debye_length)
         except (ModelValidityError, ConvergenceError) as exc:
@@ -564,20 +941,23 @@ def _auto_candidate(spectrum: xr.Dataset, name: str, modes: int | str, criterion
         if depth is None or not depth > 0:
             return None, math.inf, "needs an indentation (a position h0 < 0)"
         try:
-            ds = fit_data(spectrum_data(spectrum), "contact", radius=radius, indentation=depth,
+            ds = fit_data(data, "contact", radius=radius,
+                          profile=False, indentation=depth,
                           drag=fixed.get("drag"))
         except (ModelValidityError, ConvergenceError) as exc:
             return None, math.inf, f"fit failed: {str(exc).split(';')[0]}"
         error, reason = contact_error(problem.with_material(_sls_of(ds)), position,
                                       float(np.max(spectrum["omega"])))
         return ds, error, f"{reason} at the fitted moduli (k* proportional to E: bias = error)"
-    ds = fit_data(spectrum_data(spectrum), "exact", modes=modes, criterion=criterion,
+    ds = fit_data(data, "exact", modes=modes,
+                  criterion=criterion, profile=False,
                   problem=problem, position=position, mean_force=mean_force)
     return ds, GRID_ERROR, "the exact model on the default grid"
 
 
 def fit_spectrum_auto(spectrum: xr.Dataset, *, modes: int | str = 1, criterion: str = "bic",
-                      accuracy: float | None = None, **fixed: Any) -> xr.Dataset:
+                      accuracy: float | None = None, weights: str | None = None,
+                      **fixed: Any) -> xr.Dataset:
     """``fit_spectrum(..., "auto")``: the cheapest spectrum model adequate at the fitted values.
 
     Tries svda (pre-contact, one mode), contact (Hertz, h̄0 < 0, one mode) and exact in order
@@ -613,10 +993,12 @@ def fit_spectrum_auto(spectrum: xr.Dataset, *, modes: int | str = 1, criterion: 
                              "mean_force (--mean-force)")
     fixed = check_fixed("exact", {k: v for k, v in fixed.items() if k != "drag"}) | {
         "drag": fixed.get("drag")}
+    data = spectrum_data(spectrum, weights=weights)  # its notes warn once
     rows: list[tuple[str, float, str, dict[str, Any]]] = []
     kept = None
     for name in AUTO_MODELS:
-        ds, error, reason = _auto_candidate(spectrum, name, modes, criterion, problem, fixed)
+        ds, error, reason = _auto_candidate(spectrum, name, modes, criterion, problem, fixed,
+                                            data)
         rows.append((name, error, reason, {}))
         if ds is not None and error <= meets(accuracy):
             kept = ds
@@ -627,7 +1009,7 @@ def fit_spectrum_auto(spectrum: xr.Dataset, *, modes: int | str = 1, criterion: 
     kept.attrs["explanation"] = choice.explanation
     kept.attrs["estimated_model_error"] = choice.estimated_error
     kept.attrs["accuracy"] = accuracy
-    warn_unidentified(kept, stacklevel=4)
+    warn_fit(kept, stacklevel=5)
     return kept
 
 

@@ -31,7 +31,11 @@ from viscoforce.problem import ContactProblem
 #: Model names of the SPEC table (``--model``).
 MODEL_NAMES = ("svda", "exact", "contact", "prony", "relaxation", "step")
 #: Materials of the ``contact`` model (``--material``).
-CONTACT_MATERIALS = ("sls", "prony", "power-law")
+CONTACT_MATERIALS = ("sls", "prony", "power-law", "structural")
+#: Reference frequency f_ref [Hz] of the structural material's E_ref (default of the fixed input).
+REFERENCE_FREQUENCY = 1.0
+#: Window of the power-law exponents (alpha, m): open (0, 1), kept off the singular ends.
+EXPONENT_BOUNDS = (1e-3, 0.999)
 #: Models whose data are spectra (the others fit force curves over time).
 SPECTRUM_MODELS = ("svda", "exact", "contact", "prony")
 #: Models with a number of relaxation modes (``--modes``).
@@ -396,42 +400,119 @@ def _contact_model(spec: ModelSpec) -> FitModel:
     radius, depth = _need(spec, "radius", "indentation")
     drag = float(spec.fixed.get("drag") or 0.0)
     kind = spec.fixed.get("material", "sls")
+    newtonian = bool(spec.fixed.get("newtonian") or False)
+    f_ref = float(spec.fixed.get("reference_frequency") or REFERENCE_FREQUENCY)
     if kind not in CONTACT_MATERIALS:
         raise ParameterError(f"material must be one of {', '.join(CONTACT_MATERIALS)}, "
                              f"got {kind!r}")
+    if newtonian and kind != "power-law":
+        raise ParameterError(f"newtonian=True adds a viscosity to material 'power-law'; "
+                             f"material {kind!r} has {'one' if kind == 'structural' else 'none'}")
     if not depth > 0:
         raise ModelValidityError(
             f"the contact model needs a positive operating indentation, got {depth!r} m: this "
             "spectrum is pre-contact (use --model svda or exact), or give --indentation D0")
     root = math.sqrt(radius * depth)
     modes = spec.modes if kind == "prony" else 1
+    moduli = _contact_modulus_function(kind, modes, newtonian, f_ref)
 
     def function(omega: np.ndarray, v: Mapping[str, float]) -> np.ndarray:
-        if kind == "power-law":
-            compliance = power_law_compliance(omega, v["E0"], v["C1"], v["m"])
-        else:
-            full = _expand_one_mode(v, modes) if modes > 1 and "tau" in v else v
-            compliance = material_from(full, modes).complex_compliance(omega)
-        return root / compliance + 1j * omega * drag
+        return root * moduli(omega, v) + 1j * omega * drag
 
     def guesser(k: np.ndarray, omega: np.ndarray) -> dict[str, float]:
         modulus = (k - 1j * omega * drag) / root
-        feats = SpectrumFeatures.of(modulus, omega)
-        if kind == "power-law":  # |E| falls like ω^−m … rises like ω^m: slope of log|E|
-            slope = np.polyfit(np.log(omega), np.log(np.abs(modulus)), 1)[0]
-            m = min(max(float(slope), 0.05), 0.95)
-            c1 = 1.0 / (feats.k_low * gamma(m + 1)) * feats.omega_low ** m
-            return {"E0": 2.0 * feats.k_high, "C1": c1, "m": m}
-        e_inf, e0 = feats.k_low, max(feats.k_high, 1.05 * feats.k_low)
-        return _material_guess(e0, e_inf, feats.sls_tau(), modes, _omega_window(omega))
+        return _contact_guess(kind, modes, newtonian, f_ref, modulus, omega)
 
+    window = _omega_window if kind in ("sls", "prony") else None
+    return FitModel(ModelSpec(spec.name, modes, spec.fixed), function,
+                    _contact_layout(kind, modes, newtonian), "omega", guesser, window)
+
+
+def _contact_modulus_function(kind: str, modes: int, newtonian: bool, f_ref: float
+                              ) -> Callable[[np.ndarray, Mapping[str, float]], np.ndarray]:
+    """E*(ω) [Pa] of a contact material from its SPEC values (the paper's E)."""
+    from viscoforce.closed_form import power_law_complex_modulus, structural_complex_modulus
+
+    if kind == "structural":
+        return lambda omega, v: structural_complex_modulus(omega, v["E_ref"], v["alpha"],
+                                                           v["mu"], f_ref)
     if kind == "power-law":
-        layout: list[P.Item] = [P.Chain(("E0",)), P.Chain(("C1",)), P.Bounded("m", 0.0, 1.0)]
-        window = None
-    else:
-        layout, window = _material_layout(modes), _omega_window
-    return FitModel(ModelSpec(spec.name, modes, spec.fixed), function, layout, "omega", guesser,
-                    window)
+        return lambda omega, v: power_law_complex_modulus(
+            omega, v["E0"], v["C1"], v["m"], v["mu"] if newtonian else 0.0)
+
+    def prony(omega: np.ndarray, v: Mapping[str, float]) -> np.ndarray:
+        full = _expand_one_mode(v, modes) if modes > 1 and "tau" in v else v
+        return 1.0 / material_from(full, modes).complex_compliance(omega)
+
+    return prony
+
+
+def _contact_layout(kind: str, modes: int, newtonian: bool) -> list[P.Item]:
+    if kind == "structural":
+        return [P.Chain(("E_ref",), MODULUS_BOUNDS), P.Bounded("alpha", *EXPONENT_BOUNDS),
+                P.Chain(("mu",))]
+    if kind == "power-law":
+        return [P.Chain(("E0",)), P.Chain(("C1",)), P.Bounded("m", *EXPONENT_BOUNDS),
+                *([P.Chain(("mu",))] if newtonian else [])]
+    return _material_layout(modes)
+
+
+def _contact_guess(kind: str, modes: int, newtonian: bool, f_ref: float, modulus: np.ndarray,
+                   omega: np.ndarray) -> dict[str, float]:
+    """A start for a contact material from E*(ω) = (k* − iωB)/√(Rδ0) alone."""
+    feats = SpectrumFeatures.of(modulus, omega)
+    if kind == "structural":
+        return structural_guess(modulus, omega, f_ref)
+    if kind == "power-law":  # |E| falls like ω^−m … rises like ω^m: slope of log|E|
+        slope = np.polyfit(np.log(omega), np.log(np.abs(modulus)), 1)[0]
+        m = min(max(float(slope), 0.05), 0.95)
+        c1 = 1.0 / (feats.k_low * gamma(m + 1)) * feats.omega_low ** m
+        out = {"E0": 2.0 * feats.k_high, "C1": c1, "m": m}
+        if newtonian:
+            out["mu"] = _viscosity_guess(modulus, omega)
+        return out
+    e_inf, e0 = feats.k_low, max(feats.k_high, 1.05 * feats.k_low)
+    return _material_guess(e0, e_inf, feats.sls_tau(), modes, _omega_window(omega))
+
+
+def structural_guess(modulus: np.ndarray, omega: np.ndarray, reference_frequency: float
+                     ) -> dict[str, float]:
+    """E_ref, alpha, mu of E*(ω) = E_ref (iω/ω_ref)^α + iωμ by linear least squares on a grid of α.
+
+    For fixed α the model is linear in (E_ref, μ); each is solved in closed form on the real and
+    imaginary parts, weighted by 1/|E*| (a relative fit), and the α of the smallest residual
+    is kept. Negative solutions are clipped to small positive values.
+    """
+    w = np.asarray(omega, dtype=float)
+    e = np.asarray(modulus, dtype=complex)
+    scale = 1.0 / np.abs(e)
+    target = np.concatenate([e.real * scale, e.imag * scale])
+    best: tuple[float, float, float, float] | None = None
+    for alpha in np.linspace(0.02, 0.95, 94):
+        z = (1j * w / (2.0 * math.pi * reference_frequency)) ** alpha
+        design = np.column_stack([np.concatenate([z.real, z.imag]) * np.tile(scale, 2),
+                                  np.concatenate([np.zeros_like(w), w]) * np.tile(scale, 2)])
+        coef, *_ = np.linalg.lstsq(design, target, rcond=None)
+        e_ref, mu = float(coef[0]), float(coef[1])
+        if not e_ref > 0:
+            continue
+        mu = max(mu, 0.0)
+        misfit = float(np.sum((design @ np.array([e_ref, mu]) - target) ** 2))
+        if best is None or misfit < best[0]:
+            best = (misfit, e_ref, float(alpha), mu)
+    if best is None:  # no positive power law: start from the magnitude and the mean phase
+        alpha = min(max(2.0 * float(np.median(np.angle(e))) / math.pi, 0.05), 0.9)
+        return {"E_ref": float(np.median(np.abs(e))), "alpha": alpha,
+                "mu": _viscosity_guess(e, w)}
+    _, e_ref, alpha, mu = best
+    floor = 1e-4 * float(np.max(np.abs(e)) / np.max(w))  # |iωμ| 1e-4 of |E*| at the top
+    return {"E_ref": e_ref, "alpha": alpha, "mu": max(mu, floor)}
+
+
+def _viscosity_guess(modulus: np.ndarray, omega: np.ndarray) -> float:
+    """μ from the imaginary part at the highest frequency (a tenth of it), > 0."""
+    i = int(np.argmax(omega))
+    return max(0.1 * abs(float(modulus[i].imag)), 1e-6 * abs(modulus[i])) / float(omega[i])
 
 
 def power_law_compliance(omega: np.ndarray, E0: float, C1: float, m: float) -> np.ndarray:  # noqa: N803
@@ -539,7 +620,8 @@ MAX_MODES = 12
 _FIXED: dict[str, tuple[str, ...]] = {
     "svda": ("position", "mean_force", "radius", "P", "debye_length"),
     "exact": ("position", "mean_force", "problem"),
-    "contact": ("radius", "indentation", "drag", "material", "debye_length"),
+    "contact": ("radius", "indentation", "drag", "material", "debye_length", "newtonian",
+                "reference_frequency"),
     "prony": (), "relaxation": (), "step": ("problem", "position_trace")}
 
 
@@ -570,8 +652,15 @@ def check_fixed(name: str, fixed: Mapping[str, Any]) -> dict[str, Any]:
         "drag": require_nonnegative,
         "problem": lambda n, v: require_instance(n, v, ContactProblem),
         "material": lambda n, v: v if v in CONTACT_MATERIALS else _bad_material(v),
+        "newtonian": _require_bool, "reference_frequency": require_positive,
         "position_trace": lambda n, v: v}
     return {k: (None if v is None else checks[k](k, v)) for k, v in fixed.items()}
+
+
+def _require_bool(name: str, value: Any) -> bool:
+    if not isinstance(value, bool | np.bool_):
+        raise ParameterError(f"{name} must be True or False, got {value!r}")
+    return bool(value)
 
 
 def _bad_material(value: Any) -> None:
@@ -596,7 +685,10 @@ def make_model(name: str, modes: int = 1, **fixed: Any) -> FitModel:
     **fixed
         Fixed inputs in SI: ``position`` or ``mean_force`` (svda, exact); ``radius``, ``P``,
         ``debye_length`` (svda); ``problem`` (exact, step); ``radius``, ``indentation``,
-        ``drag``, ``material`` (contact); ``position_trace`` = (t, h0) (step).
+        ``drag``, ``material`` (contact: ``sls``, ``prony``, ``power-law``, ``structural``),
+        ``newtonian`` (contact power-law: fit a viscosity ``mu`` too), ``reference_frequency``
+        [Hz] (contact structural: f_ref of ``E_ref``, default 1 Hz), ``debye_length`` (contact:
+        the validity estimate); ``position_trace`` = (t, h0) (step).
 
     Raises
     ------

@@ -1,0 +1,198 @@
+"""Identifiability beyond the local test: the profile likelihood of each fitted parameter.
+
+The stderr of a least-squares fit come from the curvature of χ² at the minimum. They are
+honest when χ² is close to quadratic over ±2σ; they are not when the likelihood is one-sided
+(e.g. E0 of a contact spectrum whose glassy plateau lies above the measured frequencies: χ²
+barely rises as E0 → ∞, while the curvature at the minimum can still give a small stderr).
+
+:func:`profile_parameters` walks each parameter q away from its best value on both sides and
+re-minimises the others at every step (the profile Δχ²(q)). Positive parameters are walked in
+log10 q, the others in q. A side is bounded when the profile reaches Δχ² = 4 (the 2σ level of
+one parameter; χ² divided by the reduced χ² when the data carry no stderr, the scale of the
+covariance lmfit reports then): the first step is the local 2σ; if Δχ² < 1 there (the quadratic
+says 4) the step grows ×4 up to :data:`MAX_WALK_DECADES` (or the parameter's window; a
+positive parameter's first step is at most :data:`FIRST_STEP_DECADES`). The 2σ
+limit is interpolated in √Δχ² (after :data:`BISECTIONS` bisections when the walk bracketed it). The constraint is a stiff quadratic penalty on the parameter, so
+any parameter (a chain member E0 = E_inf·10^log_E0 too) is profiled the same way.
+
+A step the parameters' window cannot reach ends the walk on that side unbounded (the window
+bounds it, not the data); a step where the model cannot be evaluated bounds it.
+
+Codes (:data:`IDENTIFIABILITY`): 0 determined (bounded on both sides), 1 lower bound only
+(q > lower: the likelihood is flat towards larger q), 2 upper bound only (q < upper), 3 not
+determined (flat on both sides).
+"""
+
+from __future__ import annotations
+
+import math
+import warnings
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass
+
+import lmfit
+import numpy as np
+
+from viscoforce.fitting import _params
+
+#: Identifiability codes of a fitted parameter.
+IDENTIFIABILITY: dict[int, str] = {0: "determined", 1: "lower_bound_only",
+                                   2: "upper_bound_only", 3: "not_determined"}
+#: Profile Δχ² of the reported limits (2σ of one parameter).
+DELTA_CHI2 = 4.0
+#: Below this Δχ² at the local 2σ step a side is flatter than the curvature says: walk on.
+FLAT = 1.0
+#: Factor of each further step of the walk.
+GROWTH = 4.0
+#: Farthest step [decades] of a positive parameter's walk (a linear one: 1000 local σ).
+MAX_WALK_DECADES = 12.0
+#: Largest first step [decades] of a positive parameter (when its local 2σ is wider).
+FIRST_STEP_DECADES = 0.5
+#: Bisections of a 2σ limit bracketed between two steps of the walk.
+BISECTIONS = 8
+#: Penalty scale of the constraint: 1e-6 of the step (decades, or the parameter's units).
+PENALTY = 1e-6
+
+
+@dataclass(frozen=True)
+class Profile:
+    """Profile of one parameter: its code and 2σ limits (NaN on an unbounded side) [SI]."""
+
+    code: int
+    lower: float
+    upper: float
+
+
+Residual = Callable[[lmfit.Parameters], np.ndarray]
+
+
+def profile_parameters(layout: Sequence[_params.Item], residual: Residual,
+                       best: lmfit.Parameters, stderr: Mapping[str, float | None],
+                       chisqr: float, scale: float) -> dict[str, Profile]:
+    """Profile every SPEC parameter of a fit (see the module docstring).
+
+    Parameters
+    ----------
+    layout : sequence
+        The model's parameter layout (:mod:`viscoforce.fitting._params`).
+    residual : callable
+        The fit's weighted residual of the internal parameters.
+    best : lmfit.Parameters
+        The best-fit internal parameters.
+    stderr : mapping
+        Local stderr of each SPEC parameter (None or NaN when there is none).
+    chisqr : float
+        χ² at the best fit.
+    scale : float
+        Divisor of Δχ² (1 with known stderr; the reduced χ² without).
+
+    Returns
+    -------
+    dict
+        SPEC name → :class:`Profile`.
+    """
+    positive = {n for item in layout if isinstance(item, _params.Chain) for n in item.names}
+    values, _ = _params.to_reported(layout, best.valuesdict())
+    out = {}
+    for name in _params.reported_names(layout):
+        log = name in positive
+        value = values[name]
+        err = stderr.get(name)
+        local = (err / (value * math.log(10.0)) if log else err) if (
+            err is not None and math.isfinite(err) and err > 0) else math.nan
+        out[name] = _profile_one(layout, residual, best, name, log, value, local, chisqr,
+                                 max(scale, 1e-300))
+    return out
+
+
+def _profile_one(layout: Sequence[_params.Item], residual: Residual, best: lmfit.Parameters,
+                 name: str, log: bool, value: float, local: float, chisqr: float,
+                 scale: float) -> Profile:
+    g0 = math.log10(value) if log else value
+    if not math.isfinite(local):
+        local = 0.05 if log else 0.05 * max(abs(value), 1e-300)
+    cap = MAX_WALK_DECADES if log else 1000 * local
+    limits = []
+    bounded = []
+    for side in (-1.0, 1.0):
+        step = min(2.0 * local, FIRST_STEP_DECADES) if log else 2.0 * local
+        prev_step, prev_root = 0.0, 0.0
+        limit = math.nan
+        while True:
+            step = min(step, cap)
+            delta = _delta_chi2(layout, residual, best, name, log, g0 + side * step, chisqr)
+            if math.isnan(delta):  # beyond the parameter's window: the data did not bound it
+                break
+            root = math.sqrt(max(delta, 0.0) / scale)
+            first = prev_step == 0.0
+            if (first and root * root >= FLAT) or root * root >= DELTA_CHI2:
+                target = math.sqrt(DELTA_CHI2)
+                if first:  # quadratic through the minimum: √Δχ² linear in the step
+                    limit = step * target / root
+                else:  # bracketed between two steps of the walk: bisect, then interpolate
+                    lo, hi, r_lo, r_hi = prev_step, step, prev_root, root
+                    for _ in range(BISECTIONS):
+                        mid = 0.5 * (lo + hi)
+                        d_mid = _delta_chi2(layout, residual, best, name, log,
+                                            g0 + side * mid, chisqr)
+                        r_mid = math.sqrt(max(d_mid, 0.0) / scale) if d_mid == d_mid else 0.0
+                        if r_mid >= target:
+                            hi, r_hi = mid, r_mid
+                        else:
+                            lo, r_lo = mid, r_mid
+                    frac = (target - r_lo) / max(r_hi - r_lo, 1e-300) if math.isfinite(
+                        r_hi) else 1.0
+                    limit = lo + min(max(frac, 0.0), 1.0) * (hi - lo)
+                break
+            if step >= cap:
+                break
+            prev_step, prev_root = step, root
+            step *= GROWTH
+        bounded.append(math.isfinite(limit))
+        g = g0 + side * limit if math.isfinite(limit) else math.nan
+        limits.append(10.0 ** g if log and math.isfinite(g) else g)
+    lower_ok, upper_ok = bounded
+    code = 0 if lower_ok and upper_ok else 1 if lower_ok else 2 if upper_ok else 3
+    return Profile(code, limits[0], limits[1])
+
+
+def _delta_chi2(layout: Sequence[_params.Item], residual: Residual, best: lmfit.Parameters,
+                name: str, log: bool, target: float, chisqr: float) -> float:
+    """Profile Δχ² with ``name`` held at ``target`` (log10 for positive parameters)."""
+    width = PENALTY * max(abs(target) if not log else 1.0, 1e-300)
+
+    def constrained(params: lmfit.Parameters) -> np.ndarray:
+        values, _ = _params.to_reported(layout, params.valuesdict())
+        q = values[name]
+        g = math.log10(q) if log and q > 0 else q if not log else -math.inf
+        return np.append(residual(params), (g - target) / width)
+
+    start = _shifted(layout, best, name, log, target)
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", RuntimeWarning)
+            res = lmfit.minimize(constrained, start, method="leastsq")
+        r = residual(res.params)
+    except (ValueError, ArithmeticError):  # the model cannot go there: that side is bounded
+        return math.inf
+    values, _ = _params.to_reported(layout, res.params.valuesdict())
+    q = values[name]
+    reached = (math.log10(q) if q > 0 else math.nan) if log else q
+    miss = abs(reached - target) if math.isfinite(reached) else math.inf
+    if miss > 1e-2 * (1.0 if log else max(abs(target), 1e-300)):
+        return math.nan  # held off by the parameters' window, not by the data
+    return max(float(np.sum(r * r)) - chisqr, 0.0)
+
+
+def _shifted(layout: Sequence[_params.Item], best: lmfit.Parameters, name: str, log: bool,
+             target: float) -> lmfit.Parameters:
+    """The best parameters with ``name``'s own internal parameter moved to meet ``target``."""
+    start = best.copy()
+    values, _ = _params.to_reported(layout, best.valuesdict())
+    key = f"log_{name}" if log else name
+    if key not in start or not start[key].vary:
+        return start
+    p = start[key]
+    shift = target - math.log10(values[name]) if log else target - values[name]
+    p.set(value=min(max(p.value + shift, p.min), p.max))
+    return start

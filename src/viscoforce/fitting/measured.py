@@ -1,0 +1,206 @@
+"""``fit_spectrum(..., "auto")`` on measured data: the contact material the data support.
+
+A measured spectrum in contact (a ``mean_indentation`` from the contact point, or an
+``indentation`` given) has no position h̄0 of the theory's system, so the theory chooser
+(svda → contact → exact by model error) does not apply. This chooser fits the contact model
+k* = E*(ω)·√(Rδ0) + iωB with each material family and compares them by the information
+criterion (BIC by default; AIC with ``criterion="aic"``):
+
+- ``sls`` (3 parameters) and ``prony n`` (2n + 1; n = 2, 3, … while the criterion improves, at
+  most :data:`~viscoforce.fitting.models.MAX_AUTO_MODES`, and fewer parameters than data values);
+- ``power-law``: the paper's liquid-like creep C(t) = 1/E0 + C1 t^m (3), and ``power-law+mu``
+  with a Newtonian viscosity in parallel (4);
+- ``structural``: power-law rheology with a Newtonian term, E* = E_ref (iω/ω_ref)^α + iωμ (3).
+
+Rule: the candidate with the lowest criterion is the best; the one kept is the SIMPLEST (fewest
+parameters; then the lowest criterion) whose criterion is within :data:`MARGIN` of the best.
+ΔBIC = 6 is "strong" evidence on the Kass–Raftery scale (a Bayes factor of ≈ 20): a richer
+model must beat a simpler one by that much to be kept. The explanation lists every candidate
+with its criterion, reduced χ² and p-value (when the data carry stderr).
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+import xarray as xr
+
+from viscoforce.exceptions import ConvergenceError, ModelValidityError, ParameterError
+from viscoforce.fitting.fit import (
+    CRITERIA,
+    Outcome,
+    _check_modes,
+    _data_indentation,
+    _warn_model_bias,
+    contact_bias,
+    fit_once,
+    result_dataset,
+    spectrum_data,
+    warn_fit,
+)
+from viscoforce.fitting.models import MAX_AUTO_MODES, check_fixed, make_model
+
+#: Criterion margin of the measured-data chooser: a richer candidate is kept only when its
+#: criterion beats every simpler one by more than this (ΔBIC 6: strong evidence).
+MARGIN = 6.0
+#: Material families compared (``material=`` restricts the comparison to one).
+FAMILIES = ("sls", "prony", "power-law", "structural")
+#: Inputs the measured-data chooser takes.
+INPUTS = ("radius", "indentation", "drag", "material", "reference_frequency", "debye_length")
+
+
+def _candidates(family: str, modes: int | str) -> list[tuple[str, int, dict[str, Any]]]:
+    """(label, modes, model inputs) of one family, in order of size (sls is prony 1)."""
+    if family in ("sls", "prony"):
+        counts = range(1, MAX_AUTO_MODES + 1) if modes == "auto" else [int(modes)]
+        if family == "sls":
+            counts = [n for n in counts if n == 1]
+        return [("sls" if n == 1 else f"prony {n}", n, {"material": "prony" if n > 1 else "sls"})
+                for n in counts]
+    if family == "power-law":
+        return [("power-law", 1, {"material": "power-law"}),
+                ("power-law+mu", 1, {"material": "power-law", "newtonian": True})]
+    return [("structural", 1, {"material": "structural"})]
+
+
+def fit_measured_auto(spectrum: xr.Dataset, *, modes: int | str = "auto", criterion: str = "bic",
+                      weights: str | None = None, **fixed: Any) -> xr.Dataset:
+    """Fit the contact material the data support best (module docstring).
+
+    Parameters
+    ----------
+    spectrum : xarray.Dataset
+        One measured spectrum over ``omega`` in contact.
+    modes : int or "auto"
+        Modes of the Prony family (1: sls only); default "auto" (1, 2, … by the criterion).
+    criterion : {"bic", "aic"}
+        The information criterion.
+    weights : {"stderr", "relative"}, optional
+        Residual weights (:func:`viscoforce.fitting.fit.spectrum_data`).
+    **fixed
+        ``radius`` [m] (required), ``indentation`` [m] (default: the data's median
+        ``mean_indentation``), ``drag`` [N·s/m], ``material`` (one family only: sls, prony,
+        power-law, structural), ``reference_frequency`` [Hz] (structural), ``debye_length`` [m]
+        (the Hertz validity estimate of the kept fit).
+
+    Returns
+    -------
+    xarray.Dataset
+        The kept fit's result; ``attrs["explanation"]`` lists the candidates, ``attrs["material"]``
+        and ``attrs["candidate"]`` name the one kept; ``selection_label``, ``selection_bic``,
+        ``selection_aic``, ``selection_redchi``, ``selection_pvalue`` and ``selection_parameters``
+        over ``candidate``.
+
+    Raises
+    ------
+    TypeError
+        An input this chooser cannot honour (e.g. ``problem``, ``newtonian``): it names them.
+    ParameterError
+        No radius, a bad material, modes or criterion.
+    ModelValidityError
+        No indentation (pre-contact data: give position or mean_force for the theory chooser).
+    """
+    unknown = sorted(set(fixed) - set(INPUTS))
+    if unknown:
+        raise TypeError(
+            f"model 'auto' on measured data (no position or mean_force) takes "
+            f"{', '.join(INPUTS)}; it cannot honour {', '.join(unknown)} (give position or "
+            "mean_force for the theory chooser, or name the model)")
+    if criterion not in CRITERIA:
+        raise ParameterError(f"criterion must be one of {', '.join(CRITERIA)}, got {criterion!r}")
+    if fixed.get("radius") is None:
+        raise ParameterError("model 'auto' on measured data needs the tip radius (radius=, --R)")
+    material = fixed.pop("material", None)
+    if material is not None and material not in FAMILIES:
+        raise ParameterError(f"material must be one of {', '.join(FAMILIES)} (or None: all), "
+                             f"got {material!r}")
+    modes = _check_modes("contact", modes)
+    if modes != "auto" and modes > 1 and material not in (None, "prony"):
+        raise ParameterError(f"modes={modes} applies to the prony family; material "
+                             f"{material!r} has one")
+    decay = fixed.pop("debye_length", None)
+    base = check_fixed("contact", {k: v for k, v in fixed.items() if v is not None})
+    if base.get("indentation") is None:
+        base["indentation"] = _data_indentation(spectrum)
+    data = spectrum_data(spectrum, weights=weights)
+    families = (material,) if material else ("prony", "power-law", "structural")
+    rows: list[dict[str, Any]] = []
+    kept: list[tuple[str, Outcome, dict[str, Any]]] = []
+    for family in families:
+        worse = 0
+        for label, n, inputs in _candidates(family, modes):
+            model = make_model("contact", n, **base, **inputs)
+            if len(model.names) >= data.n_values:
+                rows.append({"label": label, "note": "more parameters than data values"})
+                break
+            try:
+                outcome = fit_once(model, data)
+            except (ConvergenceError, ModelValidityError, ParameterError) as exc:
+                rows.append({"label": label, "note": f"failed: {str(exc).splitlines()[0]}"})
+                continue
+            score = outcome.criterion[criterion]
+            same = [o for lab, o, _ in kept if lab.startswith("prony") or lab == "sls"]
+            if family in ("sls", "prony") and same:
+                best_before = min(o.criterion[criterion] for o in same)
+                worse = worse + 1 if score >= best_before else 0
+            kept.append((label, outcome, inputs))
+            rows.append({"label": label, "outcome": outcome})
+            if worse >= 2:
+                break
+    if not kept:
+        raise ConvergenceError("model 'auto' could fit no contact material: " + "; ".join(
+            f"{r['label']} {r.get('note', '')}" for r in rows))
+    best_score = min(o.criterion[criterion] for _, o, _ in kept)
+    within = [k for k in kept if k[1].criterion[criterion] <= best_score + MARGIN]
+    label, outcome, inputs = min(within, key=lambda k: (k[1].n_free, k[1].criterion[criterion]))
+    ds = result_dataset(outcome, data, profile=True)
+    ds = _with_selection(ds, kept, criterion)
+    ds.attrs.update(material=str(inputs["material"]), candidate=label, criterion=criterion,
+                    selection_margin=MARGIN, explanation=_explain(rows, label, criterion,
+                                                                  best_score))
+    if inputs.get("newtonian"):
+        ds.attrs["newtonian"] = 1
+    if decay is not None:
+        _warn_model_bias(ds, "contact", *contact_bias(ds, {**base, **inputs}, data.x, decay))
+    warn_fit(ds, stacklevel=5)
+    return ds
+
+
+def _with_selection(ds: xr.Dataset, kept: list[tuple[str, Outcome, dict[str, Any]]],
+                    criterion: str) -> xr.Dataset:
+    def column(values: list[Any], unit: str, long_name: str) -> tuple[str, Any, dict[str, str]]:
+        return ("candidate", np.asarray(values), {"units": unit, "long_name": long_name})
+
+    return ds.assign(
+        selection_label=("candidate", np.asarray([k[0] for k in kept], dtype=str),
+                         {"long_name": "candidate material (and modes)"}),
+        selection_modes=column([k[1].model.spec.modes for k in kept], "1",
+                               "modes of the candidate"),
+        selection_parameters=column([k[1].n_free for k in kept], "1",
+                                    "free parameters of the candidate"),
+        selection_aic=column([k[1].criterion["aic"] for k in kept], "1", "AIC of the candidate"),
+        selection_bic=column([k[1].criterion["bic"] for k in kept], "1", "BIC of the candidate"),
+        selection_redchi=column([float(k[1].result.redchi) for k in kept], "1",
+                                "reduced chi-square of the candidate"),
+        selection_pvalue=column([k[1].pvalue for k in kept], "1",
+                                "chi-square p-value of the candidate (NaN: stderr unknown)"))
+
+
+def _explain(rows: list[dict[str, Any]], chosen: str, criterion: str, best: float) -> str:
+    parts = []
+    for row in rows:
+        o = row.get("outcome")
+        if o is None:
+            parts.append(f"{row['label']}: {row['note']}")
+            continue
+        score = o.criterion[criterion]
+        p = o.pvalue
+        verdict = ("kept" if row["label"] == chosen else
+                   f"{'+' if score >= best else ''}{score - best:.3g} from the best")
+        parts.append(f"{row['label']} ({o.n_free} parameters): {criterion.upper()} {score:.4g}, "
+                     f"redchi {float(o.result.redchi):.3g}"
+                     + (f", p {p:.2g}" if math.isfinite(p) else "") + f" [{verdict}]")
+    return (f"measured data: contact materials compared by {criterion.upper()}; kept {chosen}, "
+            f"the simplest within {MARGIN:g} of the best. " + "; ".join(parts))
