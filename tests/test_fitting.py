@@ -198,7 +198,7 @@ def _map_spectrum(ny=2, nx=3):
             k[i, j] = _noisy(svda_complex_stiffness(
                 OMEGA, 2e-9, PAPER.E0, PAPER.E_inf * (1 + 0.2 * i), PAPER.tau * (1 + 0.3 * j),
                 PAPER.R, PAPER.P, PAPER.debye_length), 10 * i + j)
-    k[1, 2, 5] = np.nan  # a bad pixel: a failed lock-in point, not flagged
+    k[1, 2, 5] = np.nan  # a failed lock-in point, not flagged: left out of that pixel's fit
     return _spectrum(k, dims=("y", "x", "omega"), source="synthetic")
 
 
@@ -207,9 +207,17 @@ def test_map_pixels_are_independent_and_failures_flagged():
     result = fit_map(ds, "svda", scheduler="synchronous", **SVDA_FIXED)
     validate_fit_result(result)
     assert result["tau"].dims == ("y", "x")
-    assert result.attrs["n_fits"] == 6 and result.attrs["n_failed"] == 1
-    assert int(result["success"][1, 2]) == 0
+    assert result.attrs["n_fits"] == 6 and result.attrs["n_failed"] == 0
+    assert int(result["success"][1, 2]) == 1  # fitted from its other 29 points
     assert "NaN" in str(result["message"].values[1, 2])
+    assert "1 point(s) left out" in str(result["message"].values[1, 2])
+    stiffness = ds["stiffness"].copy()
+    stiffness[0, 0, :] = np.nan  # every point of pixel (0, 0)
+    broken = ds.assign(stiffness=stiffness)
+    failed = fit_map(broken, "svda", scheduler="synchronous", **SVDA_FIXED)
+    assert failed.attrs["n_failed"] == 1 and int(failed["success"][0, 0]) == 0
+    assert int(failed["quality"][0, 0]) == 1  # optimiser_failed: no point left to fit
+    assert "no spectrum point is left" in str(failed["message"].values[0, 0])
     single = fit_spectrum(ds.isel(y=0, x=1), "svda", **SVDA_FIXED)
     assert float(result["tau"][0, 1]) == float(single["tau"])
     flipped = fit_map(ds.isel(x=slice(None, None, -1)), "svda", scheduler="synchronous",
@@ -246,7 +254,7 @@ def test_svda_refuses_contact_and_contact_refuses_precontact(problem):
 @pytest.mark.parametrize("change, match", [
     (lambda ds: ds.isel(omega=slice(0, 1)), "free parameters"),
     (lambda ds: ds.assign(stiffness=-ds["stiffness"]), "stiffness must be > 0"),
-    (lambda ds: ds.assign(stiffness=ds["stiffness"].where(ds.omega > 20)), "NaN"),
+    (lambda ds: ds.assign(stiffness=ds["stiffness"] * np.nan), "no spectrum point is left"),
     (lambda ds: ds.assign(quality=ds["stiffness"].astype("int8") * 0 + 1), "flagged"),
 ])
 def test_bad_spectra_are_refused(change, match):

@@ -4,8 +4,9 @@
    demodulate its sine segments, fit the exact model with ``--modes auto``, print τ, E0, E_inf
    with their stderr next to the truth, and draw the Bode plot of data and fit.
 2. The exact solver's hysteresis loop for the fitted material (triangle 10 → −10 → 10 nm).
-3. The same on a real measured file (the bundled JPK modulation map, MIT): the contact model on
-   one curve and the median over the map.
+3. The same on a real measured file (the bundled JPK modulation map of a living cell, MIT): the
+   measured-data chooser on one curve (contact materials compared by BIC), its residuals,
+   redchi and χ² p-value, then the chosen material over the map (good pixels only).
 """
 
 from __future__ import annotations
@@ -54,6 +55,7 @@ def _show(name: str, value: float, err: float, unit: str, truth: float | None = 
     from viscoforce.units import format_quantity
 
     dimension = {"s": "time", "Pa": "pressure"}.get(unit)
+    unit = "" if unit == "1" else unit
     text = (format_quantity(value, dimension) if dimension else f"{value:.4g} {unit}")
     spread = (format_quantity(err, dimension) if dimension else f"{err:.2g} {unit}")
     line = f"  {name:<6} = {text} ± {spread}"
@@ -133,40 +135,63 @@ def _loop(fit, problem, out: Path, report: dict[str, Any]) -> None:
 
 
 def _real(folder: Path, out: Path, report: dict[str, Any]) -> None:
-    import numpy as np
+    import warnings
 
     from viscoforce.cli.model import _save_figure
     from viscoforce.experiments.modulation import modulation_spectrum
-    from viscoforce.fitting.fit import fit_spectrum
-    from viscoforce.fitting.maps import fit_map
+    from viscoforce.fitting.fit import bound_text, fit_spectrum
+    from viscoforce.fitting.maps import fit_map, map_summary
     from viscoforce.io.instruments import load_instrument
     from viscoforce.plotting import bode_plot
 
     start = time.perf_counter()
     spec = modulation_spectrum(load_instrument(folder / REAL))
     one = spec.isel(curve=0)
-    fit = fit_spectrum(one, "contact", radius=REAL_TIP_RADIUS)
-    whole = fit_map(spec, "contact", scheduler="synchronous", radius=REAL_TIP_RADIUS)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        fit = fit_spectrum(one, "auto", radius=REAL_TIP_RADIUS)
+        material = {"material": str(fit.attrs["material"])}
+        if fit.attrs.get("newtonian"):
+            material["newtonian"] = True
+        modes = int(fit["modes"])
+        whole = fit_map(spec, "contact", modes=modes, scheduler="synchronous",
+                        radius=REAL_TIP_RADIUS, **material)
     elapsed = time.perf_counter() - start
     flagged = int((spec["quality"].values != 0).sum()) if "quality" in spec else 0
-    print(f"3. {REAL} (real JPK map, {spec.sizes['curve']} curves × {spec.sizes['omega']} "
-          f"frequencies; {flagged} points flagged: phase > 90°, an instrument lag): contact "
-          f"model, tip radius {REAL_TIP_RADIUS * 1e6:g} µm assumed ({elapsed:.1f} s)")
-    print("   curve 0:")
+    print(f"3. {REAL} (real JPK map of a living cell, {spec.sizes['curve']} curves × "
+          f"{spec.sizes['omega']} frequencies; {flagged} points flagged: phase > 90°, an "
+          f"instrument lag): --model auto compared the contact materials, tip radius "
+          f"{REAL_TIP_RADIUS * 1e6:g} µm assumed ({elapsed:.1f} s)")
+    print(f"   curve 0: kept {fit.attrs['candidate']} (the simplest within ΔBIC "
+          f"{float(fit.attrs['selection_margin']):g} of the best); redchi "
+          f"{float(fit['redchi']):.3g}, chi-square p-value {float(fit['chi2_pvalue']):.2g}")
+    for label, bic, redchi in zip(fit["selection_label"].values, fit["selection_bic"].values,
+                                  fit["selection_redchi"].values, strict=True):
+        print(f"     candidate {str(label):<13} BIC {float(bic):9.4g}, redchi {float(redchi):.3g}")
     print("\n".join(_params(fit)))
-    ok = whole["success"].values.astype(bool)
-    for name in ("E_inf", "tau"):
-        values = whole[name].values[ok]
-        print(f"   map median {name} = {np.median(values):.4g} {whole[name].attrs['units']} "
-              f"(IQR {np.percentile(values, 25):.3g} – {np.percentile(values, 75):.3g}; "
-              f"{int(ok.sum())} of {ok.size} curves)")
-    e0_err = float(fit["E0_stderr"])
-    if not e0_err < float(fit["E0"]):
-        print("   E0 is not identified by these data (the glassy plateau lies above the "
-              "measured frequencies): its stderr exceeds its value")
-    _save_figure(bode_plot(one, fit=fit, title="real JPK map, curve 0: data and contact fit"),
+    for name in (str(n) for n in fit["param_i"].values):
+        text = bound_text(fit, name)
+        if text:
+            print(f"   {name}: report as {text} (one-sided profile likelihood)")
+    notes = sorted({str(w.message).split(';')[0] for w in caught})
+    for note in notes:
+        print(f"   note: {note}")
+    summary = map_summary(whole)
+    left = ", ".join(f"{v} {k.replace('_', ' ')}" for k, v in summary["left_out"].items() if v)
+    print(f"   map ({fit.attrs['candidate']} on every curve): {summary['n_good']} of "
+          f"{summary['n_fits']} curves good" + (f" (left out: {left})" if left else ""))
+    for name, p in summary["params"].items():
+        if p["median"] is not None:
+            unit = str(whole[name].attrs["units"])
+            print(f"     median {name} = {p['median']:.4g} {unit} (IQR {p['q25']:.3g} – "
+                  f"{p['q75']:.3g})")
+    _save_figure(bode_plot(one, fit=fit, frequency_unit="Hz", residuals=True,
+                           title=f"real JPK map, curve 0: data and {fit.attrs['candidate']} "
+                                 "contact fit"),
                  str(out / "bode_real.png"))
-    report["real"] = {"seconds": elapsed, **{
+    report["real"] = {"seconds": elapsed, "candidate": str(fit.attrs["candidate"]),
+                      "redchi": float(fit["redchi"]), "chi2_pvalue": float(fit["chi2_pvalue"]),
+                      "explanation": str(fit.attrs["explanation"]), "map": summary, **{
         n: [float(fit[n]), float(fit[f"{n}_stderr"])] for n in fit["param_i"].values}}
 
 

@@ -27,22 +27,68 @@ Per modulation segment of each curve (``segment_name == "modulation"``, frequenc
   frequency [Hz] → λ) is removed, k* ← k*·e^{−iλ}; then a hydrodynamic ``drag`` B [N·s/m],
   k* ← k* − iωB.
 
-Standard errors from the residuals (white, stationary noise assumed). Over the N window samples,
-r_x = x − (x̄ + drift + Re[X̂ e^{iωt}]) for x = F and x = δ (the drift line is fitted to the
-residual when detrending), with p = 5 fitted parameters (3 without detrend):
+Standard errors (``attrs["stderr_method"]``) come from the spectrum of the lock-in residuals
+next to the drive, so that they hold for coloured noise (1/f noise, drift, slow creep) and not
+only for white noise. Over the N window samples (m = ``periods`` whole periods; the two window
+ends are one point of the cycle, merged with the lock-in's trapezoid weights, so n = N − 1 points
+per cycle) the residuals are r_x = x − (x̄ + drift + Re[X̂ e^{iωt}]) for x = F and x = δ (the
+drift line is fitted to the residual when detrending). Their Fourier coefficients, normalised
+like X̂,
 
-.. math:: σ_x^2 = Σ r_x^2/(N − p),\quad c = Σ r_F r_δ/(N − p),\quad σ_{\hat X} = σ_x\sqrt{2/N}
+.. math:: R_x(k) = \frac{2}{n}\sum_j r_x(t_j)\,e^{-2\pi i k j/n},
 
-(σ_X̂ per real component of X̂, hence also of |X̂|, and σ_X̂/|X̂| for its angle). The noise of F
-and δ may be correlated (deflection noise enters both), so the relative error of k* = F̂/δ̂ is,
-per component,
+vanish at the drive bin k = m, where the same sum of the noise *is* the error of X̂; at the bins
+k ≠ m next to it they are draws of the same (detrended) noise at the frequencies k/T. Assuming
+the residual power spectrum is smooth — about linear — over the band B = {m − K, …, m + K},
+K = max(2, ⌊m/4⌋) (within ±25 % of f for m ≥ 8), and the noise Gaussian and circular there,
+the variance per real component is
 
-.. math:: ρ^2 = \frac{2}{N}\Big[\frac{σ_F^2}{|\hat F|^2} + \frac{σ_δ^2}{|\hat δ|^2}
-          − \frac{2c\cos χ_{raw}}{|\hat F||\hat δ|}\Big],
+.. math:: σ_{\hat X}^2 = \frac{g}{2}\,\mathrm{mean}_{k∈B}\frac{|R_x(k)|^2}{a_k},\qquad
+          a_k = 1 − \frac{3}{(πk)^2},\quad g = 1 + \frac{3}{(πm)^2},
+
+a_k the share of white-noise power the fitted drift line leaves in bin k, g the variance the
+lock-in's own drift estimate adds at the drive (a_k = g = 1 without detrend). Multiples of m
+(harmonics of a nonlinear response: deterministic power) and bins from Nyquist on are left
+out. The noise of F and δ may be correlated (deflection noise enters both), with a phase that
+may vary with frequency, so the relative error of k* = F̂/δ̂ is taken bin by bin,
+ε_k = R_F(k)/F̂ − R_δ(k)/δ̂, and per component
+
+.. math:: ρ^2 = \frac{g}{2}\,\mathrm{mean}_{k∈B}\frac{|ε_k|^2}{a_k},
 
 giving ``stiffness_stderr`` = ρ|k*_raw| and ``phase_stderr`` = ρ|k*_raw|/|k*| rad (in degrees;
-the corrections shift k* but not its error), ``drive_amplitude_stderr`` = σ_δ√(2/N) and
-``mean_force_stderr`` = σ_F/√N. Correlated (coloured) noise makes these optimistic.
+the corrections shift k* but not its error), ``drive_amplitude_stderr`` = σ_δ̂ and
+``mean_force_stderr`` = σ_F̄ with σ_F̄² = ¼·mean over the K lowest bins k ≥ 1 (not multiples
+of m) of |R_F(k)|²/a_k. What this assumes and gives:
+
+* the estimate has ν = 2|B| degrees of freedom (4 at m = 2, 8 for m = 3–11, 12 for 12–15, 16
+  for 16–19; 2K for the mean force), so error/stderr is Student-t like (rms √(ν/(ν − 2)) ≈
+  1.15 at ν = 8), not Gaussian;
+* for a spectrum that is convex over the band (a steep 1/f^α at small m) it errs on the large
+  side; a drift of k* itself during the segment (sample creep) enters only through the
+  sidebands it leaves next to the drive and is not fully counted;
+* the mean-force error assumes the noise flat below K/T: where it still rises below 1/T
+  (correlation times longer than the window, random-walk drift) it is a lower bound;
+* where B is empty (m = 1 without detrend) the white formula below is used;
+  ``lockin_stderr_bins`` = |B| says which (0: white).
+
+On the real JPK map of a cell (16 curves, 1–300 Hz, 4–19 periods) the white formula is 2–6×
+too small: the two halves of each window differ by an rms 2.1–6.4 of their stated errors; with
+the residual-spectrum errors by 0.9–1.9 (``tests/test_modulation_stderr.py``,
+``benchmarks/split_half.py``). The 1.9 is at 300 Hz, where the halves differ systematically
+(same sign on every curve: the force response grows by ≈ 10 % through the segment), a drift
+of k* the errors count only through its sidebands.
+
+The white-noise formula (stationary white noise; ``*_stderr_white``, ``attrs
+["stderr_method_white"]``) uses the residual variances instead, with p = 5 fitted parameters
+(3 without detrend):
+
+.. math:: σ_x^2 = Σ r_x^2/(N − p),\quad c = Σ r_F r_δ/(N − p),\quad σ_{\hat X} = σ_x\sqrt{2/N},
+
+.. math:: ρ_w^2 = \frac{2}{N}\Big[\frac{σ_F^2}{|\hat F|^2} + \frac{σ_δ^2}{|\hat δ|^2}
+          − \frac{2c\cos χ_{raw}}{|\hat F||\hat δ|}\Big],
+
+and σ_F/√N for the mean force: the residual-spectrum errors for white noise on average
+(E|ε_k|² is 4/n times the bracket), too small wherever the noise at ω exceeds its average.
 
 Contact point and mean indentation (:func:`find_contact_point`, on each curve's approach
 segment, force F against tip position z = ``tip_position``):
@@ -82,7 +128,7 @@ exclusive.
 
 Quality (kept, never dropped): 1 ``phase_outside_passive_range`` where the corrected phase is
 outside (0°, 90°) (:func:`viscoforce.schema.phase_quality`), else 2 ``low_signal`` where
-|F̂| < 3·σ_F̂, else 0.
+|F̂| < 3·σ_F̂ (the residual-spectrum σ_F̂), else 0.
 """
 
 from __future__ import annotations
@@ -90,6 +136,7 @@ from __future__ import annotations
 import math
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
+from functools import lru_cache
 from pathlib import Path
 from typing import Any
 
@@ -105,9 +152,25 @@ from viscoforce.schema import clean_attrs, make_spectrum, phase_quality, validat
 
 __all__ = ["demodulate_segment", "find_contact_point", "modulation_spectrum"]
 
+#: ``attrs["stderr_method"]`` of every modulation spectrum: how the standard errors are made.
+STDERR_METHOD = (
+    "residual spectrum around the drive (coloured noise and drift): per-component variance of "
+    "Xhat = half the mean power of the window's residual DFT (Xhat-normalised) over the bins "
+    "m-K..m+K, K = max(2, floor(m/4)), m = periods, drive harmonics left out, each bin divided "
+    "by 1 - 3/(pi k)^2 (power the drift line removed), times 1 + 3/(pi m)^2 (the lock-in's "
+    "drift estimate); k*: the same mean of |eF_k/F - ed_k/d|^2 (F-delta correlation at each "
+    "bin kept); mean force: the K lowest bins, a lower bound where noise rises below 1/T; "
+    "white formula where no bin is left (lockin_stderr_bins = 0)")
+#: ``attrs["stderr_method_white"]``: the white-noise formula of the ``*_stderr_white`` variables.
+STDERR_METHOD_WHITE = (
+    "white-noise residuals: sigma_Xhat = sigma*sqrt(2/N); relative error of k* rho^2 = "
+    "(2/N)(sF^2/|F|^2 + sd^2/|d|^2 - 2 c cos(chi)/(|F||d|))")
+
 _CONVEX_T = 8.0  # t-statistic of the baseline's x² term above which the window holds a contact
 _SLACK = 1e-9  # as lockin: fraction of a period the record may fall short of a whole period
 _FIT_CHUNK = 1 << 20  # matrix entries per chunk of the vectorised contact-point grid search
+_BAND_FRACTION = 0.25  # half-width of the residual band around the drive bin m, fraction of m
+_BAND_MIN = 2  # least half-width of that band [bins]
 
 
 def demodulate_segment(time: np.ndarray, force: np.ndarray, indentation: np.ndarray,
@@ -136,7 +199,12 @@ def demodulate_segment(time: np.ndarray, force: np.ndarray, indentation: np.ndar
         ``F`` F̂ [N], ``d`` δ̂ [m] (complex), ``mean_force`` [N], ``sigma_F`` [N], ``sigma_d`` [m]
         (residual std), ``mean_position`` (mean of ``indentation`` over the lock-in window)
         [m], ``cov`` [N·m], ``n`` samples and ``periods`` in the window, and ``rho``,
-        the relative standard error of k* = F̂/δ̂; ``h`` ĥ [m] when ``height`` is given.
+        the relative standard error of k* = F̂/δ̂ per component (residual spectrum, module
+        docstring); ``h`` ĥ [m] when ``height`` is given (else None). Also the standard errors
+        per component ``sigma_F_hat`` [N] of F̂, ``sigma_d_hat`` [m] of δ̂, ``sigma_mean`` [N]
+        of the mean force, ``stderr_bins`` (bins next to the drive they use; 0: the white
+        formula), and their white-noise counterparts ``rho_white``, ``sigma_F_hat_white``,
+        ``sigma_d_hat_white``, ``sigma_mean_white``.
     """
     if not (isinstance(frequency, int | float | np.floating) and frequency > 0
             and math.isfinite(frequency)):
@@ -176,15 +244,146 @@ def _demodulate_stacked(t: np.ndarray, stacked: np.ndarray, frequency: float, *,
     f_hat, d_hat = complex(amp[0]), complex(amp[1])
     af, ad = abs(f_hat), abs(d_hat)
     if af == 0 or ad == 0:
-        rho = math.nan  # k* undefined or zero: no relative error
+        rho_white = math.nan  # k* undefined or zero: no relative error
     else:
         chi = np.angle(f_hat / d_hat)
         rho2 = (2.0 / n) * (var_f / af**2 + var_d / ad**2 - 2.0 * cov * math.cos(chi) / (af * ad))
-        rho = math.sqrt(max(rho2, 0.0))
-    return {"F": f_hat, "d": d_hat, "mean_force": float(mean[0]),
-            "mean_position": float(np.mean(both[1])), "sigma_F": math.sqrt(var_f),
-            "sigma_d": math.sqrt(var_d), "cov": cov, "n": n, "periods": periods, "rho": rho,
-            "h": None if stacked.shape[0] < 3 else complex(coef[2, 1])}
+        rho_white = math.sqrt(max(rho2, 0.0))
+    out = {"F": f_hat, "d": d_hat, "mean_force": float(mean[0]),
+           "mean_position": float(np.mean(both[1])), "sigma_F": math.sqrt(var_f),
+           "sigma_d": math.sqrt(var_d), "cov": cov, "n": n, "periods": periods,
+           "rho_white": rho_white, "sigma_F_hat_white": math.sqrt(2.0 * var_f / n),
+           "sigma_d_hat_white": math.sqrt(2.0 * var_d / n),
+           "sigma_mean_white": math.sqrt(var_f / n),
+           "h": None if stacked.shape[0] < 3 else complex(coef[2, 1])}
+    out.update(_band_errors(resid, periods, f_hat, d_hat, detrended=detrend == "linear"))
+    if out["stderr_bins"] == 0:  # no residual bin between the drive harmonics: white formula
+        out.update(rho=rho_white, sigma_F_hat=out["sigma_F_hat_white"],
+                   sigma_d_hat=out["sigma_d_hat_white"], sigma_mean=out["sigma_mean_white"])
+    return out
+
+
+def _demodulate_halves(t: np.ndarray, stacked: np.ndarray, frequency: float, *, settle: float,
+                       detrend: str | None = "linear", dt: float | None = None
+                       ) -> tuple[dict[str, Any], dict[str, Any]]:
+    """Split-half check: :func:`demodulate_segment` of each half of the lock-in window apart.
+
+    The window of m whole periods (as :func:`demodulate_segment` with these ``settle`` and
+    ``detrend``) gives two halves of ⌊m/2⌋ whole periods: its first and its last ⌊m/2⌋ periods
+    (the middle period is left out when m is odd), each demodulated with its own standard errors.
+    Where those errors hold, (k*_A − k*_B)/√(σ_A² + σ_B²) per real component has rms 1 over
+    many segments (``tests/test_modulation_stderr.py``, ``benchmarks/split_half.py``).
+
+    Parameters
+    ----------
+    t : ndarray
+        Sample times [s], strictly increasing.
+    stacked : ndarray
+        Rows F [N], δ [m] (and optionally the height [m]) over ``t``.
+    frequency : float
+        Drive frequency f [Hz], > 0.
+    settle : float
+        Time skipped at the segment start [s], >= 0.
+    detrend : {"linear", None}
+        As :func:`demodulate_segment`, applied to each half.
+    dt : float, optional
+        Median sampling interval [s] (default: from ``t``).
+
+    Returns
+    -------
+    tuple of dict
+        The :func:`demodulate_segment` results of the first and the second half.
+
+    Raises
+    ------
+    ParameterError
+        If the halves would hold fewer whole periods than the lock-in needs (2 with a
+        detrend, 1 without).
+    """
+    dt = float(np.median(np.diff(t))) if dt is None else dt
+    period = 1.0 / frequency
+    periods = math.floor((t[-1] - t[0] - settle) / period + _SLACK)
+    half = periods // 2
+    need = 2 if detrend == "linear" else 1
+    if half < need:
+        raise ParameterError(f"split-half needs {2 * need} whole periods in the lock-in window, "
+                             f"got {periods} at {frequency:g} Hz")
+    i0 = int(np.searchsorted(t, t[-1] - periods * period - 1e-6 * dt))
+    i1 = int(np.searchsorted(t, t[i0] + half * period - 1e-6 * dt))    # at least half periods
+    i2 = int(np.searchsorted(t, t[-1] - half * period - 1e-6 * dt))
+    first, second = slice(i0, i1 + 1), slice(i2, None)
+    return tuple(_demodulate_stacked(t[s], stacked[:, s], frequency, settle=0.0,
+                                     detrend=detrend, dt=dt) for s in (first, second))
+
+
+@lru_cache(maxsize=256)
+def _band(periods: int, n_cycle: int, detrended: bool
+          ) -> tuple[np.ndarray, int, np.ndarray, np.ndarray]:
+    """Residual-spectrum bins behind the errors, and their weights (module docstring).
+
+    Bin k is the frequency k/T of a window of T = ``periods`` drive periods sampled ``n_cycle``
+    times per cycle (the drive is bin m = ``periods``). The bins are those around the drive,
+    m − K … m + K with K = max(:data:`_BAND_MIN`, ⌊:data:`_BAND_FRACTION`·m⌋) (for X̂ and k*),
+    then the K lowest bins k ≥ 1 (for the mean); harmonics of the drive (multiples of m, where a
+    nonlinear response puts deterministic power) and bins from the Nyquist frequency on are
+    left out. Returns the bins, how many of them are around the drive, and the weights that
+    turn the powers of the raw DFT sums there into variances: g/(2·|B|·a_k)·(2/n)² around the
+    drive and 1/(4·K·a_k)·(2/n)² for the mean, a_k = 1 − 3/(πk)² and g = 1 + 3/(πm)² with a
+    detrend (else 1). Read-only arrays, cached per window shape.
+    """
+    m = periods
+    half = max(_BAND_MIN, int(_BAND_FRACTION * m))
+    near = np.arange(max(m - half, 1), m + half + 1)
+    low = np.arange(1, 2 * half + 1)   # room for the K lowest: at most every other is a harmonic
+    near = near[(near % m != 0) & (2 * near < n_cycle)]
+    low = low[(low % m != 0) & (2 * low < n_cycle)][:half]
+    if detrended:
+        # the share of white-noise power a fitted line leaves in bin k: 3/(πk)² of a line's
+        # normalised power lies there; the lock-in's drift estimate adds 3/(πm)² at the drive
+        a_near = 1.0 - 3.0 / (math.pi * near) ** 2
+        a_low = 1.0 - 3.0 / (math.pi * low) ** 2
+        gain = 1.0 + 3.0 / (math.pi * m) ** 2
+    else:
+        a_near, a_low, gain = np.ones(near.size), np.ones(low.size), 1.0
+    scale2 = (2.0 / n_cycle) ** 2   # X̂-normalised: the sum at bin m, times 2/n, would be X̂
+    w_near = scale2 * gain / (2.0 * max(near.size, 1) * a_near)
+    w_low = scale2 / (4.0 * max(low.size, 1) * a_low)
+    bins = np.concatenate([near, low])
+    for arr in (bins, w_near, w_low):
+        arr.flags.writeable = False
+    return bins, int(near.size) if near.size and low.size else 0, w_near, w_low
+
+
+def _band_errors(resid: np.ndarray, periods: int, f_hat: complex, d_hat: complex, *,
+                 detrended: bool) -> dict[str, Any]:
+    """Standard errors of F̂, δ̂, k* and F̄ from the residual spectrum (module docstring).
+
+    ``resid``: rows F and δ of the residuals over the lock-in window of ``periods`` whole
+    periods, first and last sample one whole window apart (one point of the periodic cycle).
+    Returns ``rho`` (relative error of k* per component), ``sigma_F_hat``, ``sigma_d_hat`` (per
+    component of F̂, δ̂), ``sigma_mean`` (of F̄) and ``stderr_bins`` (bins around the drive; 0
+    and NaN errors when there is none).
+    """
+    bins, nn, w_near, w_low = _band(periods, resid.shape[1] - 1, detrended)
+    if nn == 0:
+        nan = math.nan
+        return {"rho": nan, "sigma_F_hat": nan, "sigma_d_hat": nan, "sigma_mean": nan,
+                "stderr_bins": 0}
+    # the window's two ends are one point of the cycle (the lock-in's trapezoid weights): the
+    # first sample counts as the mean of both, which adds (r_last − r_0)/2 to every bin
+    r = np.fft.rfft(resid[:, :-1], axis=1)[:, bins]
+    r += (0.5 * (resid[:, -1] - resid[:, 0]))[:, None]
+    power = r.real**2 + r.imag**2
+    var_f, var_d = power[:, :nn] @ w_near   # per real component: half the mean band power
+    var_mean = float(power[0, nn:] @ w_low)
+    if f_hat == 0 or d_hat == 0:
+        rho = math.nan
+    else:
+        eps = r[0, :nn] / f_hat - r[1, :nn] / d_hat   # bin by bin: the F–δ correlation is kept
+        rho = math.sqrt(float((eps.real**2 + eps.imag**2) @ w_near))
+    return {"rho": rho, "sigma_F_hat": math.sqrt(var_f), "sigma_d_hat": math.sqrt(var_d),
+            "sigma_mean": math.sqrt(var_mean), "stderr_bins": nn}
+
 
 def find_contact_point(position: np.ndarray, force: np.ndarray, *,
                        baseline_fraction: float = 0.3, k_sigma: float = 5.0,
@@ -533,7 +732,12 @@ def modulation_spectrum(data: Any, *, curves: int | Iterable[int] | None = None,
         from |δ̂| by the cantilever deflection), ``lockin_periods``, ``lockin_settle`` [s] and
         ``lockin_samples``; coords ``curve``, ``x``, ``y``; ``mean_indentation`` [m] (NaN on
         curves without a contact point; absent when no curve has one) with ``contact_position``
-        [m] over ``curve`` (the tip position at contact, NaN where none).
+        [m] over ``curve`` (the tip position at contact, NaN where none). The ``_stderr`` are
+        the residual-spectrum errors (module docstring, ``attrs["stderr_method"]``); the
+        white-noise ones are kept as ``stiffness_stderr_white``, ``phase_stderr_white``,
+        ``drive_amplitude_stderr_white`` and ``mean_force_stderr_white`` (``attrs
+        ["stderr_method_white"]``), and ``lockin_stderr_bins`` counts the residual bins
+        behind the errors (0: white formula used).
 
     Raises
     ------
@@ -603,8 +807,9 @@ def modulation_spectrum(data: Any, *, curves: int | Iterable[int] | None = None,
     shape = (len(inp.rows), fr.size)
     k_raw = np.empty(shape, complex)
     arrays = {k: np.empty(shape) for k in ("eta", "eta_se", "mean", "mean_se", "rho", "snr",
-                                           "nominal", "height", "periods", "n", "settle",
-                                           "indent")}
+                                           "eta_se_white", "mean_se_white", "rho_white",
+                                           "bins", "nominal", "height", "periods", "n",
+                                           "settle", "indent")}
     z_contact = np.asarray([np.nan if c is None else c["z_contact"] for c in contacts])
     for i, found in enumerate(results):
         for j, f in enumerate(sorted(found)):
@@ -613,11 +818,15 @@ def modulation_spectrum(data: Any, *, curves: int | Iterable[int] | None = None,
             k_raw[i, j] = o["F"] / o["d"]
             b = base[row] if subtract_baseline and math.isfinite(base[row]) else 0.0
             arrays["eta"][i, j] = abs(o["d"])
-            arrays["eta_se"][i, j] = o["sigma_d"] * math.sqrt(2.0 / o["n"])
+            arrays["eta_se"][i, j] = o["sigma_d_hat"]
+            arrays["eta_se_white"][i, j] = o["sigma_d_hat_white"]
             arrays["mean"][i, j] = o["mean_force"] - b
-            arrays["mean_se"][i, j] = o["sigma_F"] / math.sqrt(o["n"])
+            arrays["mean_se"][i, j] = o["sigma_mean"]
+            arrays["mean_se_white"][i, j] = o["sigma_mean_white"]
             arrays["rho"][i, j] = o["rho"]
-            arrays["snr"][i, j] = abs(o["F"]) / (o["sigma_F"] * math.sqrt(2.0 / o["n"]))
+            arrays["rho_white"][i, j] = o["rho_white"]
+            arrays["bins"][i, j] = o["stderr_bins"]
+            arrays["snr"][i, j] = abs(o["F"]) / o["sigma_F_hat"]
             arrays["nominal"][i, j] = nominal[row]
             arrays["height"][i, j] = abs(o["h"])
             arrays["periods"][i, j] = o["periods"]
@@ -631,8 +840,10 @@ def modulation_spectrum(data: Any, *, curves: int | Iterable[int] | None = None,
     if drag is not None:
         k = k - 1j * omega * float(drag)
     sigma_c = arrays["rho"] * np.abs(k_raw)
+    sigma_c_white = arrays["rho_white"] * np.abs(k_raw)
     with np.errstate(divide="ignore", invalid="ignore"):
         phase_se = np.degrees(sigma_c / np.abs(k))
+        phase_se_white = np.degrees(sigma_c_white / np.abs(k))
     phase = np.degrees(np.angle(k))
     quality = phase_quality(phase)
     quality = np.where((quality == 0) & (arrays["snr"] < 3.0), 2, quality).astype(np.int8)
@@ -650,8 +861,7 @@ def modulation_spectrum(data: Any, *, curves: int | Iterable[int] | None = None,
                       if isinstance(phase_lag, Mapping) else "scalar"),
         "drag": float(drag) if drag is not None else 0.0,
         "mean_force_baseline_subtracted": int(bool(subtract_baseline)),
-        "stderr_method": "white-noise residuals: sigma_Xhat = sigma*sqrt(2/N); relative error of "
-                         "k* rho^2 = (2/N)(sF^2/|F|^2 + sd^2/|d|^2 - 2 c cos(chi)/(|F||d|))",
+        "stderr_method": STDERR_METHOD, "stderr_method_white": STDERR_METHOD_WHITE,
     })
     if phase_reference is not None:
         attrs["phase_reference"] = ("instrument lag = median phase per frequency of a "
@@ -687,6 +897,23 @@ def modulation_spectrum(data: Any, *, curves: int | Iterable[int] | None = None,
         quality=quality, amplitude=False, source=source,
         mean_indentation=arrays["indent"] if keep_indent else None)
     w = ("curve", "omega")
+    white = "white-noise formula (attrs stderr_method_white): too small for coloured noise"
+    spec = spec.assign(
+        stiffness_stderr_white=(w, sigma_c_white, {
+            "units": "N/m", "long_name": "standard error of dynamic stiffness, white noise",
+            "comment": white}),
+        phase_stderr_white=(w, phase_se_white, {
+            "units": "degree", "long_name": "standard error of phase, white noise",
+            "comment": white}),
+        drive_amplitude_stderr_white=(w, arrays["eta_se_white"], {
+            "units": "m", "long_name": "standard error of drive amplitude, white noise",
+            "comment": white}),
+        mean_force_stderr_white=(w, arrays["mean_se_white"], {
+            "units": "N", "long_name": "standard error of mean force, white noise",
+            "comment": white}),
+        lockin_stderr_bins=(w, arrays["bins"].astype(np.int32), {
+            "units": "1", "long_name": "residual-spectrum bins behind the standard errors",
+            "comment": "bins next to the drive frequency (0: none, white-noise formula used)"}))
     if keep_indent:
         spec = spec.assign(contact_position=("curve", z_contact, {
             "units": "m", "long_name": "tip position at the approach contact point"}))

@@ -533,7 +533,7 @@ def result_dataset(outcome: Outcome, data: FitData, *,
     curves: dict[str, Any]
     if model.independent == "omega":
         lo, hi = float(np.min(data.x)), float(np.max(data.x))
-        omega = np.geomspace(lo / 2, hi * 2, FIT_CURVE_POINTS)
+        omega = np.union1d(np.geomspace(lo / 2, hi * 2, FIT_CURVE_POINTS), data.x)
         k = outcome.evaluate(omega)
         curves = {"omega": omega, "fit_stiffness": np.abs(k), "fit_phase": np.degrees(np.angle(k))}
     else:

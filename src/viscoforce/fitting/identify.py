@@ -11,9 +11,10 @@ log10 q, the others in q. A side is bounded when the profile reaches Δχ² = 4 
 one parameter; χ² divided by the reduced χ² when the data carry no stderr, the scale of the
 covariance lmfit reports then): the first step is the local 2σ; if Δχ² < 1 there (the quadratic
 says 4) the step grows ×4 up to :data:`MAX_WALK_DECADES` (or the parameter's window; a
-positive parameter's first step is at most :data:`FIRST_STEP_DECADES`). The 2σ
-limit is interpolated in √Δχ² (after :data:`BISECTIONS` bisections when the walk bracketed it). The constraint is a stiff quadratic penalty on the parameter, so
-any parameter (a chain member E0 = E_inf·10^log_E0 too) is profiled the same way.
+positive parameter's first step is at most :data:`FIRST_STEP_DECADES`). The 2σ limit is
+interpolated in √Δχ² (after :data:`BISECTIONS` bisections when the walk bracketed it). The
+constraint is a stiff quadratic penalty on the parameter, so any parameter (a chain member
+E0 = E_inf·10^log_E0 too) is profiled the same way.
 
 A step the parameters' window cannot reach ends the walk on that side unbounded (the window
 bounds it, not the data); a step where the model cannot be evaluated bounds it.

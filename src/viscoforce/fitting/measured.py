@@ -7,7 +7,8 @@ k* = E*(ω)·√(Rδ0) + iωB with each material family and compares them by the
 criterion (BIC by default; AIC with ``criterion="aic"``):
 
 - ``sls`` (3 parameters) and ``prony n`` (2n + 1; n = 2, 3, … while the criterion improves, at
-  most :data:`~viscoforce.fitting.models.MAX_AUTO_MODES`, and fewer parameters than data values);
+  most :data:`~viscoforce.fitting.models.MAX_AUTO_MODES`, leaving at least :data:`MIN_DOF`
+  degrees of freedom);
 - ``power-law``: the paper's liquid-like creep C(t) = 1/E0 + C1 t^m (3), and ``power-law+mu``
   with a Newtonian viscosity in parallel (4);
 - ``structural``: power-law rheology with a Newtonian term, E* = E_ref (iω/ω_ref)^α + iωμ (3).
@@ -45,6 +46,8 @@ from viscoforce.fitting.models import MAX_AUTO_MODES, check_fixed, make_model
 #: Criterion margin of the measured-data chooser: a richer candidate is kept only when its
 #: criterion beats every simpler one by more than this (ΔBIC 6: strong evidence).
 MARGIN = 6.0
+#: Fewest degrees of freedom a candidate must leave (a χ² test needs some).
+MIN_DOF = 2
 #: Material families compared (``material=`` restricts the comparison to one).
 FAMILIES = ("sls", "prony", "power-law", "structural")
 #: Inputs the measured-data chooser takes.
@@ -132,8 +135,10 @@ def fit_measured_auto(spectrum: xr.Dataset, *, modes: int | str = "auto", criter
         worse = 0
         for label, n, inputs in _candidates(family, modes):
             model = make_model("contact", n, **base, **inputs)
-            if len(model.names) >= data.n_values:
-                rows.append({"label": label, "note": "more parameters than data values"})
+            if len(model.names) > data.n_values - MIN_DOF:
+                rows.append({"label": label, "note": f"not tried: {len(model.names)} parameters "
+                             f"leave fewer than {MIN_DOF} degrees of freedom in "
+                             f"{data.n_values} values"})
                 break
             try:
                 outcome = fit_once(model, data)

@@ -440,9 +440,18 @@ def _contact_modulus_function(kind: str, modes: int, newtonian: bool, f_ref: flo
         return lambda omega, v: power_law_complex_modulus(
             omega, v["E0"], v["C1"], v["m"], v["mu"] if newtonian else 0.0)
 
+    moduli, taus = moduli_names(modes), tau_names(modes)
+
     def prony(omega: np.ndarray, v: Mapping[str, float]) -> np.ndarray:
+        # the fit loop's values are ordered and positive by the layout: no material object
+        # (its validation costs more than the closed form), C* = 1/E0 + Σ ΔJ_i/(1 + iωτ_i)
         full = _expand_one_mode(v, modes) if modes > 1 and "tau" in v else v
-        return 1.0 / material_from(full, modes).complex_compliance(omega)
+        e = np.array([full[n] for n in moduli])
+        tau = np.array([full[n] for n in taus])
+        dj = 1.0 / e[1:] - 1.0 / e[:-1]
+        w = np.asarray(omega, dtype=float)
+        compliance = 1.0 / e[0] + (1.0 / (1.0 + 1j * w[..., None] * tau)) @ dj
+        return 1.0 / compliance
 
     return prony
 

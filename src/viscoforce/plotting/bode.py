@@ -163,13 +163,14 @@ def _draw_spectrum(axes: tuple[Axes, Axes], ds: xr.Dataset, label: str, magnitud
         y = np.asarray(ds[name].values, dtype=float)
         err = ds.get(f"{name}_stderr")
         if err is not None:
-            art = panel.errorbar(x, y, yerr=np.asarray(err.values, dtype=float), label=label,
+            yerr = np.broadcast_to(np.asarray(err.values, dtype=float), y.shape)
+            art = panel.errorbar(x, y, yerr=yerr, label=label,
                                  capsize=2, linestyle="none" if show_markers else "-", **style)
         else:
             (art,) = panel.plot(x, y, label=label, **style)
         drawn.append(art)
     if "quality" in ds.variables:
-        codes = np.asarray(ds["quality"].values)
+        codes = np.broadcast_to(np.asarray(ds["quality"].values), x.shape)
         flagged = codes != 0
         if flagged.any():
             text = f"{flag_label}flagged: {_flag_meanings(ds['quality'], codes[flagged])}"
@@ -212,12 +213,26 @@ def _quantity(value: float, err: float, unit: str) -> str:
 
 def _parameter_text(fit: xr.Dataset) -> str:
     """The fit's model, each parameter as value ± stderr, redchi (and non-convergence)."""
-    lines = [f"fit: {fit.attrs['model']}"]
+    lines = [f"fit: {' '.join(str(fit.attrs[k]) for k in ('model', 'candidate') if k in fit.attrs)}"]
     for name in (str(n) for n in fit["param_i"].values):
         value = float(fit[name].values)
         err = float(fit[f"{name}_stderr"].values)
         lines.append(f"{name} = {_quantity(value, err, str(fit[name].attrs['units']))}")
     lines.append(f"redchi = {float(fit['redchi'].values):.3g}")
+    if "chi2_pvalue" in fit.variables and np.isfinite(float(fit["chi2_pvalue"].values)):
+        lines.append(f"p(chi2) = {float(fit['chi2_pvalue'].values):.2g}")
+    if "identifiability" in fit.variables:
+        names = [str(n) for n in fit["param_i"].values]
+        codes = np.asarray(fit["identifiability"].values).reshape(-1)
+        for name, code in zip(names, codes, strict=True):
+            limit = {1: ("lower", ">"), 2: ("upper", "<")}.get(int(code))
+            if limit and f"{name}_{limit[0]}" in fit.variables:
+                bound = float(fit[f"{name}_{limit[0]}"].values)
+                lines.append(f"only {name} {limit[1]} "
+                             f"{_quantity(bound, np.nan, str(fit[name].attrs['units']))}"
+                             .replace(" (no stderr)", ""))
+            elif int(code) == 3:
+                lines.append(f"{name} not determined")
     if "success" in fit.variables and int(fit["success"].values) == 0:
         lines.append("(did not converge)")
     return "\n".join(lines)
@@ -226,7 +241,7 @@ def _parameter_text(fit: xr.Dataset) -> str:
 def _draw_fit(axes: tuple[Axes, Axes], fit: xr.Dataset, scale: float) -> list[Artist]:
     """The best-fit stiffness and phase over the fit's omega grid, then the parameter box."""
     x = np.asarray(fit["omega"].values, dtype=float) * scale
-    label = f"fit ({fit.attrs['model']})"
+    label = f"fit ({' '.join(str(fit.attrs[k]) for k in ('model', 'candidate') if k in fit.attrs)})"
     drawn: list[Artist] = []
     for panel, name in ((axes[0], "fit_stiffness"), (axes[1], "fit_phase")):
         (line,) = panel.plot(x, np.asarray(fit[name].values, dtype=float), label=label,
@@ -238,6 +253,43 @@ def _draw_fit(axes: tuple[Axes, Axes], fit: xr.Dataset, scale: float) -> list[Ar
                              "edgecolor": "0.7"})
     drawn.append(box)
     return drawn
+
+
+def _draw_residuals(ax: Axes, ds: xr.Dataset, fit: xr.Dataset, scale: float) -> list[Artist]:
+    """Residuals of Re and Im k* at the unflagged data points (÷ stderr, or ÷ |k*_fit|)."""
+    omega = np.asarray(ds["omega"].values, dtype=float)
+    k = np.asarray(ds["stiffness"].values, dtype=float) * np.exp(
+        1j * np.radians(np.asarray(ds["phase"].values, dtype=float)))
+    w_fit = np.asarray(fit["omega"].values, dtype=float)
+    log_s = np.interp(np.log(omega), np.log(w_fit),
+                      np.log(np.asarray(fit["fit_stiffness"].values, dtype=float)))
+    phase = np.interp(np.log(omega), np.log(w_fit),
+                      np.unwrap(np.radians(np.asarray(fit["fit_phase"].values, dtype=float))))
+    k_fit = np.exp(log_s) * np.exp(1j * phase)
+    keep = np.isfinite(k)
+    if "quality" in ds.variables:
+        keep &= np.broadcast_to(np.asarray(ds["quality"].values), keep.shape) == 0
+    diff = k - k_fit
+    if "stiffness_stderr" in ds.variables and "phase_stderr" in ds.variables:
+        s_err = np.broadcast_to(np.asarray(ds["stiffness_stderr"].values, dtype=float), k.shape)
+        p_err = np.broadcast_to(np.radians(np.asarray(ds["phase_stderr"].values, dtype=float)),
+                                k.shape)
+        stiff, chi = np.abs(k), np.angle(k)
+        sig_re = np.hypot(np.cos(chi) * s_err, stiff * np.sin(chi) * p_err)
+        sig_im = np.hypot(np.sin(chi) * s_err, stiff * np.cos(chi) * p_err)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            r_re, r_im = diff.real / sig_re, diff.imag / sig_im
+        label = "residual / stderr"
+    else:
+        r_re, r_im = diff.real / np.abs(k_fit), diff.imag / np.abs(k_fit)
+        label = "residual / |k*$_{fit}$|"
+    x = omega[keep] * scale
+    (re,) = ax.plot(x, r_re[keep], "o", ms=4, label="Re k*")
+    (im,) = ax.plot(x, r_im[keep], "s", ms=4, mfc="none", label="Im k*")
+    ax.axhline(0.0, color="0.3", lw=0.8)
+    ax.set_ylabel(label)
+    ax.legend(fontsize="small", ncol=2)
+    return [re, im]
 
 
 def _on(artist: Artist, ax: Axes) -> bool:
@@ -252,7 +304,7 @@ def bode_plot(spectra: xr.Dataset | Mapping[str, xr.Dataset] | Sequence[xr.Datas
               fit: xr.Dataset | None = None, ax: Sequence[Axes] | None = None,
               magnitude: Magnitude = "stiffness", frequency_unit: FrequencyUnit = "rad/s",
               markers: bool | None = None, select: Mapping[str, int] | None = None,
-              title: str | None = None) -> PlotHandle:
+              title: str | None = None, residuals: bool = False) -> PlotHandle:
     """Bode plot: magnitude and phase χ against a log frequency axis (data, methods, fits).
 
     Parameters
@@ -283,14 +335,19 @@ def bode_plot(spectra: xr.Dataset | Mapping[str, xr.Dataset] | Sequence[xr.Datas
         besides ``omega`` need it.
     title : str, optional
         Figure title.
+    residuals : bool
+        With ``fit`` and one spectrum: a third panel of the residuals of the real and
+        imaginary parts of k*, in units of their stderr (the χ² terms), or relative to |k*_fit|
+        when the data carry no stderr.
 
     Returns
     -------
     PlotHandle
-        ``axes = (magnitude_axes, phase_axes)``; ``lines``: per spectrum its magnitude and
-        phase artists (an ``ErrorbarContainer`` where stderr is stored, else a line), then its
-        flagged-point rings (magnitude, phase) if any; then, with ``fit``, the best-fit
-        magnitude and phase lines and the parameter text box.
+        ``axes = (magnitude_axes, phase_axes)`` (plus the residual axes with ``residuals``);
+        ``lines``: per spectrum its magnitude and phase artists (an ``ErrorbarContainer`` where
+        stderr is stored, else a line), then its flagged-point rings (magnitude, phase) if
+        any; then, with ``fit``, the best-fit magnitude and phase lines and the parameter text
+        box (and the Re/Im residual markers with ``residuals``).
 
     Raises
     ------
@@ -334,8 +391,14 @@ def bode_plot(spectra: xr.Dataset | Mapping[str, xr.Dataset] | Sequence[xr.Datas
             markers = True
         if len(items) == 1 and items[0][0] == "spectrum":
             items = [("data", items[0][1])]
+    residuals = _require_flag("residuals", residuals)
+    if residuals and (fit_ds is None or len(items) != 1 or ax is not None):
+        raise ParameterError("residuals=True needs a fit, exactly one spectrum and no ax")
     if ax is None:
-        figure, axes = plt.subplots(2, 1, sharex=True, figsize=(6.4, 5.6), layout="constrained")
+        rows = 3 if residuals else 2
+        figure, axes = plt.subplots(rows, 1, sharex=True, figsize=(6.4, 5.6 + 1.8 * residuals),
+                                    layout="constrained",
+                                    gridspec_kw={"height_ratios": [3, 3, 2][:rows]})
     else:
         axes = tuple(ax)
         figure = axes[0].figure
@@ -346,6 +409,8 @@ def bode_plot(spectra: xr.Dataset | Mapping[str, xr.Dataset] | Sequence[xr.Datas
                                 f"{label} " if len(items) > 1 else "")
     if fit_ds is not None:
         drawn += _draw_fit((axes[0], axes[1]), fit_ds, scale)
+    if residuals:
+        drawn += _draw_residuals(axes[2], items[0][1], fit_ds, scale)
     shown = [np.asarray(ds[magnitude].values, dtype=float) for _, ds in items]
     if fit_ds is not None:
         shown.append(np.asarray(fit_ds["fit_stiffness"].values, dtype=float))
@@ -356,7 +421,7 @@ def bode_plot(spectra: xr.Dataset | Mapping[str, xr.Dataset] | Sequence[xr.Datas
     axes[0].set_ylabel(_MAGNITUDE_LABELS[magnitude])
     axes[1].set_ylabel("phase $\\chi$ [deg] (force leads compression)")
     sym = "$\\omega$ [rad/s]" if frequency_unit == "rad/s" else "$f = \\omega/2\\pi$ [Hz]"
-    axes[1].set_xlabel(f"frequency {sym}")
+    axes[-1].set_xlabel(f"frequency {sym}")
     axes[0].legend(handles=[a for a in drawn if _on(a, axes[0])], fontsize="small")
     for a in axes:
         a.grid(True, which="both", alpha=0.3)

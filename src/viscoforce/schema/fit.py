@@ -44,6 +44,11 @@ FIT_VARIABLES: dict[str, VariableSpec] = {
     "aic": VariableSpec("1", "Akaike information criterion", (EXTRA,)),
     "bic": VariableSpec("1", "Bayesian information criterion", (EXTRA,)),
     "modes": VariableSpec("1", "number of relaxation modes", (EXTRA,), "i"),
+    "chi2_pvalue": VariableSpec("1", "chi-square goodness-of-fit p-value (NaN: stderr unknown)",
+                                (EXTRA,), required=False),
+    "identifiability": VariableSpec("", "identifiability of the fitted parameter",
+                                    (EXTRA, "param_i"), "i", required=False),
+    "quality": VariableSpec("", "quality of the pixel's fit", (EXTRA,), "i", required=False),
     "omega": VariableSpec("rad/s", "angular frequency", ("omega",), required=False),
     "fit_stiffness": VariableSpec("N/m", "best-fit dynamic stiffness", (EXTRA, "omega"),
                                   required=False),
@@ -56,7 +61,8 @@ SUCCESS_FLAGS: dict[int, str] = {0: "failed", 1: "succeeded"}
 
 #: Units of the SPEC's parameter names (``E_2``, ``tau_3``, … by pattern); others need ``units=``.
 PARAMETER_UNITS: dict[str, str] = {"tau": "s", "E0": "Pa", "E_inf": "Pa", "k_inf": "N/m",
-                                   "F_inf": "N", "C1": "Pa-1 s-m", "m": "1"}
+                                   "F_inf": "N", "C1": "Pa-1 s-m", "m": "1",
+                                   "E_ref": "Pa", "alpha": "1", "mu": "Pa s"}
 _PATTERNS = ((r"tau_\d+", "s"), (r"E_\d+", "Pa"), (r"dk_\d+", "N/m"), (r"dF_\d+", "N"))
 
 
@@ -175,7 +181,9 @@ def validate_fit_result(ds: xr.Dataset, *, require: Iterable[str] | None = None)
         Variables that must be present (default ``correlation``, ``success``, ``redchi``,
         ``aic``, ``bic``, ``modes``). Also checked: ``attrs["model"]``; every name of
         ``param_i`` has ``<name>`` and ``<name>_stderr`` over the extra dims with the same units;
-        ``success`` is a 0/1 flag; units and dims of everything known.
+        ``success`` is a 0/1 flag, and the optional ``identifiability`` (over the extra dims and
+        ``param_i``) and ``quality`` (a map's per-pixel code) are CF flags; units and dims of
+        everything known.
     """
     require_dataset(ds, "fit result")
     if not isinstance(ds.attrs.get("model"), str):
@@ -198,7 +206,8 @@ def validate_fit_result(ds: xr.Dataset, *, require: Iterable[str] | None = None)
             spec = VariableSpec(unit, "", (EXTRA,))
             check_one(ds, "fit result", name, spec, extra)
             check_one(ds, "fit result", f"{name}_stderr", spec, extra)
-    if "success" in ds.variables:
-        check_flags(ds, "fit result", "success")
+    for name in ("success", "identifiability", "quality"):
+        if name in ds.variables:
+            check_flags(ds, "fit result", name)
     check_attrs(ds, "fit result")
     return ds

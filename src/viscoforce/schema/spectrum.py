@@ -44,7 +44,7 @@ SPECTRUM_VARIABLES: dict[str, VariableSpec] = {
     "omega": VariableSpec("rad/s", "angular frequency", ("omega",)),
     "stiffness": VariableSpec("N/m", "dynamic stiffness |F1|/eta", _W),
     "phase": VariableSpec("degree", "phase lead of the force over the compression", _W),
-    "mean_force": VariableSpec("N", "mean force", _W),
+    "mean_force": VariableSpec("N", "mean force", _W, broadcast=True),
     "force_amplitude": VariableSpec("N", "first-harmonic force amplitude |F1|", _W,
                                     required=False),
     "amplitude": VariableSpec("1", "relative force amplitude |F1|/mean force", _W,
@@ -53,7 +53,7 @@ SPECTRUM_VARIABLES: dict[str, VariableSpec] = {
                                     broadcast=True),
     "mean_indentation": VariableSpec("m", "mean indentation", _W, required=False,
                                      broadcast=True),
-    "quality": VariableSpec("", "quality flag", _W, dtype="i", required=False),
+    "quality": VariableSpec("", "quality flag", _W, dtype="i", required=False, broadcast=True),
     "x": VariableSpec("m", "lateral position x", (EXTRA,), required=False, broadcast=True),
     "y": VariableSpec("m", "lateral position y", (EXTRA,), required=False, broadcast=True),
 }
@@ -250,8 +250,11 @@ def validate_spectrum(ds: xr.Dataset, *, require: Iterable[str] | None = None) -
     require : iterable of str, optional
         Variables that must be present (default ``omega``, ``stiffness``, ``phase``,
         ``mean_force``). Every known variable present is checked for units, dtype and dims
-        (``omega`` last, the same dims for every per-point variable; ``<name>_stderr`` in the
-        units of ``<name>``); ``omega`` must be finite and > 0; ``quality`` must be a CF flag.
+        (``omega`` last, the same dims for ``stiffness``, ``phase``, ``force_amplitude`` and
+        ``amplitude``; ``mean_force``, ``drive_amplitude``, ``mean_indentation``, ``quality``
+        and every ``<name>_stderr`` may span any subset of them, as xarray broadcasts;
+        ``<name>_stderr`` in the units of ``<name>``); ``omega`` must be finite and > 0;
+        ``quality`` must be a CF flag.
     """
     require_dataset(ds, "spectrum")
     if "omega" not in ds.coords:
@@ -261,6 +264,8 @@ def validate_spectrum(ds: xr.Dataset, *, require: Iterable[str] | None = None) -
     for name in ("stiffness", "phase", "amplitude", "mean_force"):
         if name in ds.variables:
             dims = ds[name].dims
+            if name == "mean_force" and (not dims or dims[-1] != "omega"):
+                continue  # broadcast (scalar or per pixel): it does not give the extra dims
             if not dims or dims[-1] != "omega":
                 raise SchemaError(f"spectrum: '{name}' must have 'omega' as its last dim, got {dims}")
             extra = tuple(str(d) for d in dims[:-1])
