@@ -55,6 +55,8 @@ def test_top_level_entry_points_are_lazy_and_complete():
     subprocess.run([sys.executable, "-c", code], check=True)
 
 
+@pytest.mark.filterwarnings("ignore:the model does not describe these data:"
+                            "viscoforce.exceptions.GoodnessOfFitWarning")
 def test_readme_quickstart_runs(tmp_path, monkeypatch):
     """The README's Python block runs as written (top-level names only) and prints τ back."""
     import re

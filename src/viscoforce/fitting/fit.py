@@ -63,6 +63,7 @@ from viscoforce.fitting.models import (
     MAX_AUTO_MODES,
     MAX_MODES,
     MODAL_MODELS,
+    MODEL_NAMES,
     SPECTRUM_MODELS,
     FitModel,
     check_fixed,
@@ -803,7 +804,9 @@ def fit_spectrum(spectrum: xr.Dataset, model: str, *, modes: int | str | None = 
         return fit_spectrum_auto(spectrum, modes=1 if modes is None else modes,
                                  criterion=criterion, accuracy=accuracy, weights=weights,
                                  **fixed)
-    modes = 1 if modes is None else modes
+    modes = _check_modes(model, 1 if modes is None else modes) if model in MODEL_NAMES else 1
+    if criterion not in CRITERIA:
+        raise ParameterError(f"criterion must be one of {', '.join(CRITERIA)}, got {criterion!r}")
     if accuracy is not None:
         raise ParameterError(f"accuracy applies to model 'auto' only, not {model!r}")
     if model not in SPECTRUM_MODELS:
