@@ -364,7 +364,7 @@ def _single_json(result) -> dict[str, Any]:
         "weighting": str(result.attrs.get("weighting", "")),
         "at_bound": [s for s in str(result.attrs.get("at_bound", "")).split(", ")
                      if s and s != "none"]}
-    for key in ("material", "candidate", "residual_lag1", "effective_samples"):
+    for key in ("material", "candidate", "residual_lag1", "effective_samples", "validity"):
         if key in result.attrs:
             value = result.attrs[key]
             out[key] = value if isinstance(value, str) else float(value)
@@ -425,6 +425,8 @@ def _print_single(info: dict[str, Any]) -> None:
         print(f"  note: {info['selection_note']}")
     if "explanation" in info:
         print(f"  model choice: {info['explanation']}")
+    if "validity" in info:
+        print(f"  validity: {info['validity']}")
 
 
 def _print_map(info: dict[str, Any]) -> None:

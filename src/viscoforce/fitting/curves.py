@@ -14,7 +14,7 @@ import numpy as np
 import xarray as xr
 
 from viscoforce.exceptions import ParameterError
-from viscoforce.fitting.fit import FitData, fit_data, warn_fit
+from viscoforce.fitting.fit import FitData, fit_data, validity_note, warn_fit
 from viscoforce.schema import select_curve, validate_curves, validate_trajectory
 
 
@@ -75,6 +75,7 @@ def fit_hold(curves: xr.Dataset, *, curve: int = 0, segment: int | None = None,
     """Fit F(t) = F_inf + Σ dF_i e^{−t/τ_i} to the hold of one curve (``relaxation`` model)."""
     ds = fit_data(hold_data(curves, curve=curve, segment=segment), "relaxation", modes=modes,
                   criterion=criterion)
+    ds.attrs["validity"] = validity_note("relaxation", ds)
     warn_fit(ds)
     return ds
 
@@ -98,5 +99,6 @@ def fit_step(trajectory: xr.Dataset, *, problem: Any) -> xr.Dataset:
     """
     data, trace = trajectory_data(trajectory)
     ds = fit_data(data, "step", problem=problem, position_trace=trace, profile=False)
+    ds.attrs["validity"] = validity_note("step", ds)
     warn_fit(ds)
     return ds

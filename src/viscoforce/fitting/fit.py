@@ -833,8 +833,32 @@ def fit_spectrum(spectrum: xr.Dataset, model: str, *, modes: int | str | None = 
                                                fixed["debye_length"]))
     if model == "contact" and decay is not None:
         _warn_model_bias(ds, model, *contact_bias(ds, fixed, data.x, decay))
+    ds.attrs["validity"] = validity_note(model, ds)
     warn_fit(ds)
     return ds
+
+
+#: What the validity of each model rests on when no estimate is made (``attrs["validity"]``).
+VALIDITY = {
+    "exact": "the exact small-amplitude model: its error is the grid's (~1e-9 on the default "
+             "grid) and the finite-amplitude bias of the measurement",
+    "prony": "phenomenological (no geometry, no surface force): no model error to estimate",
+    "relaxation": "phenomenological sum of exponentials: no model error to estimate",
+    "step": "the exact model along the measured drive: its error is the stepper's",
+    "contact": "not estimated: Hertz contact's bias needs the surface force's decay length "
+               "(debye_length, --debye-length)",
+    "svda": "not estimated",
+}
+
+
+def validity_note(model: str, ds: xr.Dataset) -> str:
+    """One sentence on the model error of a fit: the estimate made, or why there is none."""
+    if "validity" in ds.attrs:
+        return str(ds.attrs["validity"])
+    if "estimated_model_error" in ds.attrs:
+        return (f"estimated model error {float(ds.attrs['estimated_model_error']):.2g} "
+                f"(relative, on the moduli)")
+    return VALIDITY.get(model, "not estimated")
 
 
 def svda_bias(ds: xr.Dataset, spectrum: xr.Dataset, position: float, radius: float,
@@ -863,40 +887,37 @@ def contact_bias(ds: xr.Dataset, fixed: Mapping[str, Any], omega: np.ndarray,
     """Estimated relative bias of a contact fit against the exact model, and the reason.
 
     :func:`viscoforce.choice.hertz_error` at the fitted material: 2 × 1.5 |E*(ω_max)|/E_inf /
-    (κδ0). For the SLS and Prony materials E_inf is the relaxed modulus; the power-law and
-    structural materials have none (E → 0 as ω → 0), so |E*| at the lowest fitted frequency
-    stands for it (the estimate then covers the measured window only).
+    (κδ0), measured for materials with a relaxed modulus (SLS, Prony). The power-law and
+    structural materials have none (E → 0 as ω → 0): their bias is not estimated (NaN, with the
+    reason), rather than extrapolated.
     """
     modes = int(ds["modes"])
     kind = str(ds.attrs.get("material", fixed.get("material") or "sls"))
+    if kind not in ("sls", "prony"):
+        return math.nan, (f"not estimated: the Hertz-contact estimate needs a relaxed modulus, "
+                          f"which material {kind} does not have")
     values = {str(n): float(ds[n]) for n in ds["param_i"].values}
-    depth = float(fixed["indentation"])
-    w_max, w_min = float(np.max(omega)), float(np.min(omega))
-    if kind in ("sls", "prony"):
-        error, reason = hertz_error(material_from(values, modes), depth, decay_length, w_max)
-        return error, reason
-    model = make_model("contact", 1, **{k: v for k, v in fixed.items() if k != "debye_length"})
-    drag = float(fixed.get("drag") or 0.0)
-    e = (model.raw(np.array([w_min, w_max]), values) - 1j * np.array([w_min, w_max]) * drag)
-    ratio = abs(complex(e[1])) / abs(complex(e[0]))
-    kappa_depth = depth / decay_length
-    from viscoforce.choice import SAFETY
-
-    return SAFETY * 1.5 * ratio / kappa_depth, (
-        f"{SAFETY:g} x 1.5 |E*(omega_max)|/|E*(omega_min)| / (kappa delta0) with kappa delta0 = "
-        f"{kappa_depth:.3g}; material {kind} has no relaxed modulus: |E*| at the lowest "
-        "frequency fitted stands for it")
+    return hertz_error(material_from(values, modes), float(fixed["indentation"]), decay_length,
+                       float(np.max(omega)))
 
 
 def _warn_model_bias(ds: xr.Dataset, model: str, bias: float, reason: str) -> None:
-    """Warn (ApproximationWarning) when a fit's estimated model bias exceeds 1 %."""
+    """Warn (ApproximationWarning) when a fit's estimated model bias exceeds 1 %.
+
+    A NaN bias (no estimate possible) is recorded in ``attrs["validity"]`` with its reason.
+    """
+    if math.isnan(bias):
+        ds.attrs["validity"] = reason
+        return
     ds.attrs["estimated_model_error"] = bias
     if bias > WARN_ERROR:
         lead = "the SVDA is about" if model == "svda" else "Hertz contact is about"
+        fix = ("use model 'exact' (or 'auto')" if model == "svda" else
+               "if the surface force is the double layer of that decay length, use model "
+               "'exact' with --h0 or --mean-force (or 'auto' with them)")
         warnings.warn(
             f"{lead} {100 * bias:.2g} % off as a model of these data: the fitted moduli are "
-            f"biased by about that much ({reason}); use model 'exact' (or 'auto')",
-            ApproximationWarning, stacklevel=3)
+            f"biased by about that much ({reason}); {fix}", ApproximationWarning, stacklevel=3)
 
 
 def _sls_of(ds: xr.Dataset):
@@ -1012,6 +1033,7 @@ def fit_spectrum_auto(spectrum: xr.Dataset, *, modes: int | str = 1, criterion: 
     kept.attrs["explanation"] = choice.explanation
     kept.attrs["estimated_model_error"] = choice.estimated_error
     kept.attrs["accuracy"] = accuracy
+    kept.attrs["validity"] = validity_note(str(kept.attrs["model"]), kept)
     warn_fit(kept, stacklevel=5)
     return kept
 

@@ -52,7 +52,10 @@ MAX_WALK_DECADES = 12.0
 #: Largest first step [decades] of a positive parameter (when its local 2σ is wider).
 FIRST_STEP_DECADES = 0.5
 #: Bisections of a 2σ limit bracketed between two steps of the walk.
-BISECTIONS = 8
+BISECTIONS = 6
+#: Model evaluations per free parameter of one constrained fit (lmfit's default is 2000: a
+#: profile step that has not converged by then overestimates Δχ², towards "bounded").
+PROFILE_NFEV = 100
 #: Penalty scale of the constraint: a miss of 1e-6 (decades, or relative) costs Δχ²/scale = 1.
 PENALTY = 1e-6
 
@@ -196,7 +199,9 @@ def _delta_chi2(layout: Sequence[_params.Item], residual: Residual, best: lmfit.
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", RuntimeWarning)
-            res = lmfit.minimize(constrained, start, method="leastsq")
+            n_var = sum(1 for p in start.values() if p.vary)
+            res = lmfit.minimize(constrained, start, method="leastsq",
+                                 max_nfev=PROFILE_NFEV * (n_var + 1))
         r = residual(res.params)
     except (ValueError, ArithmeticError):  # the model cannot go there: that side is bounded
         return math.inf

@@ -39,6 +39,7 @@ from viscoforce.fitting.fit import (
     fit_once,
     result_dataset,
     spectrum_data,
+    validity_note,
     warn_fit,
 )
 from viscoforce.fitting.models import MAX_AUTO_MODES, check_fixed, make_model
@@ -169,6 +170,7 @@ def fit_measured_auto(spectrum: xr.Dataset, *, modes: int | str = "auto", criter
         ds.attrs["newtonian"] = 1
     if decay is not None:
         _warn_model_bias(ds, "contact", *contact_bias(ds, {**base, **inputs}, data.x, decay))
+    ds.attrs["validity"] = validity_note("contact", ds)
     warn_fit(ds, stacklevel=5)
     return ds
 

@@ -1,0 +1,109 @@
+"""``viscoforce fit`` on measured data (issue 20): the chooser, warnings in --json, refusals."""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from viscoforce.cli import main
+from viscoforce.closed_form import structural_complex_modulus
+from viscoforce.schema import make_spectrum
+
+MAP = Path(__file__).resolve().parents[1] / "data_examples" / "real" / "modulation-map.jpk-force-map"
+needs_map = pytest.mark.skipif(not MAP.is_file(), reason="bundled real map missing")
+
+
+def _run(capsys, *argv):
+    code = main([str(a) for a in argv])
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+@pytest.fixture
+def structural_file(tmp_path):
+    """A structural contact spectrum (R 5 µm, δ0 0.5 µm), 1 % stderr, noiseless, as netCDF."""
+    omega = 2 * np.pi * np.geomspace(0.3, 1000, 10)
+    k = math.sqrt(5e-6 * 500e-9) * structural_complex_modulus(omega, 1e3, 0.15, 0.5)
+    path = tmp_path / "cell.nc"
+    make_spectrum(omega, k, np.full(10, 1e-9), 1e-8,
+                  stderr={"stiffness": 0.01 * np.abs(k), "phase": np.full(10, np.degrees(0.01))},
+                  mean_indentation=np.full(10, 500e-9)).to_netcdf(path, engine="h5netcdf")
+    return path
+
+
+def test_auto_on_measured_data_needs_no_h0_and_reports_its_candidates(capsys, structural_file):
+    code, out, err = _run(capsys, "fit", structural_file, "--model", "auto", "--R", "5um",
+                          "--json")
+    assert code == 0, err
+    info = json.loads(out)
+    assert info["candidate"] == "structural" and info["material"] == "structural"
+    assert {row["label"] for row in info["selection"]} >= {"sls", "structural", "power-law+mu"}
+    assert all("bic" in row and "redchi" in row for row in info["selection"])
+    assert info["chi2_pvalue"] == pytest.approx(1.0, abs=1e-6)  # noiseless, stderr given
+    assert info["params"]["alpha"]["value"] == pytest.approx(0.15, rel=1e-5)
+    assert info["params"]["alpha"]["identified"] == "determined"
+    assert info["warnings"] == [] and info["weighting"] == "stderr"
+
+
+def test_fit_json_lists_the_warnings_it_printed(capsys, structural_file):
+    code, out, err = _run(capsys, "fit", structural_file, "--model", "contact", "--R", "5um",
+                          "--material", "sls", "--json")
+    assert code == 0, err
+    info = json.loads(out)
+    assert any("does not describe these data" in w for w in info["warnings"])
+    for text in info["warnings"]:
+        assert text in err  # the same text as stderr
+
+
+def test_contact_flags_are_refused_where_they_cannot_be_honoured(capsys, structural_file):
+    code, _, err = _run(capsys, "fit", structural_file, "--model", "prony", "--material",
+                        "structural")
+    assert code == 2 and "--model prony cannot honour --material" in err
+    code, _, err = _run(capsys, "fit", structural_file, "--model", "auto", "--h0", "-5nm",
+                        "--indentation", "5nm")
+    assert code == 2 and "cannot honour --indentation" in err
+    code, _, err = _run(capsys, "fit", structural_file, "--model", "auto", "--newtonian")
+    assert code == 2 and "cannot honour --newtonian" in err
+    code, _, err = _run(capsys, "fit", structural_file, "--model", "auto", "--accuracy", "1e-3")
+    assert code == 2 and "--accuracy chooses between the theory's approximations" in err
+    code, _, err = _run(capsys, "fit", structural_file, "--model", "contact", "--weights", "x")
+    assert code == 2 and "--weights must be one of stderr, relative" in err
+
+
+def test_newtonian_power_law_and_reference_frequency_flags(capsys, structural_file):
+    code, out, err = _run(capsys, "fit", structural_file, "--model", "contact", "--R", "5um",
+                          "--material", "power-law", "--newtonian", "--json")
+    assert code == 0, err
+    assert set(json.loads(out)["params"]) == {"E0", "C1", "m", "mu"}
+    code, out, err = _run(capsys, "fit", structural_file, "--model", "contact", "--R", "5um",
+                          "--material", "structural", "--reference-frequency", "10Hz", "--json")
+    assert code == 0, err
+    e_ref = json.loads(out)["params"]["E_ref"]["value"]
+    assert e_ref == pytest.approx(1e3 * 10 ** 0.15, rel=1e-5)  # |E*| of the power law at 10 Hz
+
+
+@needs_map
+def test_real_map_curve_with_the_chooser(capsys):
+    code, out, err = _run(capsys, "fit", MAP, "--model", "auto", "--curve", "0", "--json")
+    assert code == 0, err
+    info = json.loads(out)
+    assert info["candidate"] in {row["label"] for row in info["selection"]}
+    assert 0.0 <= info["chi2_pvalue"] <= 1.0
+    assert isinstance(info["warnings"], list) and info["validity"]
+
+
+@needs_map
+def test_real_map_summary_counts_good_pixels_only(capsys):
+    code, out, err = _run(capsys, "fit", MAP, "--model", "contact", "--material", "structural",
+                          "--scheduler", "synchronous", "--json")
+    assert code == 0, err
+    info = json.loads(out)
+    assert info["n_fits"] == 16
+    assert info["n_good"] + sum(info["left_out"].values()) == 16
+    code, out, _ = _run(capsys, "fit", MAP, "--model", "contact", "--material", "structural",
+                        "--scheduler", "synchronous")
+    assert "good" in out and "left out of the summary" in out and "Pa" in out
