@@ -56,8 +56,8 @@ def _show(name: str, value: float, err: float, unit: str, truth: float | None = 
 
     dimension = {"s": "time", "Pa": "pressure"}.get(unit)
     unit = "" if unit == "1" else unit
-    text = (format_quantity(value, dimension) if dimension else f"{value:.4g} {unit}")
-    spread = (format_quantity(err, dimension) if dimension else f"{err:.2g} {unit}")
+    text = (format_quantity(value, dimension) if dimension else f"{value:.4g} {unit}".rstrip())
+    spread = (format_quantity(err, dimension) if dimension else f"{err:.2g} {unit}".rstrip())
     line = f"  {name:<6} = {text} ± {spread}"
     if truth is not None:
         line += f"   (truth {format_quantity(truth, dimension) if dimension else truth})"
@@ -183,8 +183,9 @@ def _real(folder: Path, out: Path, report: dict[str, Any]) -> None:
     for name, p in summary["params"].items():
         if p["median"] is not None:
             unit = str(whole[name].attrs["units"])
-            print(f"     median {name} = {p['median']:.4g} {unit} (IQR {p['q25']:.3g} – "
-                  f"{p['q75']:.3g})")
+            unit = "" if unit == "1" else f" {unit}"
+            print(f"     median {name} = {p['median']:.4g}{unit} (IQR {p['q25']:.3g} – "
+                  f"{p['q75']:.3g}{unit}; good pixels)")
     _save_figure(bode_plot(one, fit=fit, frequency_unit="Hz", residuals=True,
                            title=f"real JPK map, curve 0: data and {fit.attrs['candidate']} "
                                  "contact fit"),

@@ -101,6 +101,9 @@ class FitData:
     source: Mapping[str, Any]
     weighting: str = "unweighted"
     notes: tuple[str, ...] = ()
+    #: Degrees of freedom of each point's stderr where they were estimated from few values
+    #: (lock-in: 2 × the residual-spectrum bins); None: taken as exact.
+    sigma_dof: np.ndarray | None = None
 
     @property
     def sigma_known(self) -> bool:
@@ -147,7 +150,8 @@ def spectrum_arrays(ds: xr.Dataset, dims: tuple[str, ...]) -> dict[str, np.ndarr
     """The spectrum's variables as (pixel, omega) arrays (pixels in C order over ``dims``).
 
     Keys: ``stiffness``, ``phase`` [rad], ``stiffness_stderr``, ``phase_stderr`` [rad] (NaN when
-    absent), ``quality`` (0 when absent), ``mean_indentation`` (NaN when absent).
+    absent), ``quality`` (0 when absent), ``mean_indentation`` (NaN when absent),
+    ``stderr_bins`` (the lock-in's ``lockin_stderr_bins``; 0 when absent: exact stderr).
     """
     order = (*dims, "omega")
     n_omega = ds.sizes["omega"]
@@ -165,7 +169,8 @@ def spectrum_arrays(ds: xr.Dataset, dims: tuple[str, ...]) -> dict[str, np.ndarr
     out = {"stiffness": grab("stiffness", np.nan), "phase": np.radians(grab("phase", np.nan)),
            "stiffness_stderr": grab("stiffness_stderr", np.nan),
            "phase_stderr": np.radians(grab("phase_stderr", np.nan)),
-           "quality": grab("quality", 0.0), "mean_indentation": grab("mean_indentation", np.nan)}
+           "quality": grab("quality", 0.0), "mean_indentation": grab("mean_indentation", np.nan),
+           "stderr_bins": grab("lockin_stderr_bins", 0.0)}
     return out
 
 
@@ -209,7 +214,11 @@ def pixel_fit_data(omega: np.ndarray, a: Mapping[str, np.ndarray],
     depth = a["mean_indentation"]
     if np.isfinite(depth[keep]).any():
         info["mean_indentation"] = float(np.nanmedian(depth[keep]))
-    return FitData(omega[keep], k[keep], w[keep], info, weighting, tuple(notes))
+    sigma_dof = None
+    bins = np.asarray(a.get("stderr_bins", np.zeros_like(stiffness)), dtype=float)[keep]
+    if weighting == "stderr" and np.any(bins > 0):
+        sigma_dof = np.where(bins > 0, 2.0 * bins, np.inf)
+    return FitData(omega[keep], k[keep], w[keep], info, weighting, tuple(notes), sigma_dof)
 
 
 def _spectrum_weights(omega: np.ndarray, k: np.ndarray, stiffness: np.ndarray,
@@ -238,7 +247,7 @@ def _spectrum_weights(omega: np.ndarray, k: np.ndarray, stiffness: np.ndarray,
     usable = np.isfinite(sig_re) & np.isfinite(sig_im) & (sig_re > 0) & (sig_im > 0)
     notes = []
     missing = keep & ~usable
-    if missing.all() or not (keep & usable).any():
+    if not (keep & usable).any():
         if weights == "stderr":
             raise ParameterError("weights='stderr': every stderr of the points fitted is "
                                  "missing or zero")
@@ -321,12 +330,34 @@ class Outcome:
 
     @property
     def pvalue(self) -> float:
-        """χ² goodness-of-fit p-value P(χ²_dof ≥ χ²) with known stderr, else NaN."""
+        """χ² goodness-of-fit p-value P(χ²_dof ≥ χ²) with known stderr, else NaN.
+
+        Stderr estimated from few values (``FitData.sigma_dof`` ν, the lock-in's) make each
+        weighted residual a Student t_ν, not a normal deviate: each is mapped to the normal
+        deviate of the same tail probability before the χ² is formed, so that a correct model
+        is not rejected for the heavy tails of its error estimates.
+        """
         if not self.data.sigma_known:
             return math.nan
         from scipy.stats import chi2
 
-        return float(chi2.sf(float(self.result.chisqr), self.dof))
+        return float(chi2.sf(self.calibrated_chisqr, self.dof))
+
+    @property
+    def calibrated_chisqr(self) -> float:
+        """χ² of the normal scores of the weighted residuals (χ² itself where σ is exact)."""
+        nu = self.data.sigma_dof
+        if nu is None:
+            return float(self.result.chisqr)
+        from scipy.stats import norm, t
+
+        r = np.asarray(self.result.residual, dtype=float)
+        nu = np.repeat(nu, r.size // nu.size)
+        finite = np.isfinite(nu)
+        z = r.copy()
+        tail = t.sf(np.abs(r[finite]), nu[finite])
+        z[finite] = np.sign(r[finite]) * norm.isf(np.maximum(tail, 1e-300))
+        return float(z @ z)
 
     def evaluate(self, x: np.ndarray) -> np.ndarray:
         """The best-fit model over ``x`` (ω or t)."""
@@ -369,20 +400,19 @@ def _outcome(model: FitModel, res: lmfit.minimizer.MinimizerResult, data: FitDat
     if res.errorbars and res.covar is not None and np.all(np.isfinite(res.covar)):
         jac = np.array([[grads[n].get(v, 0.0) for v in res.var_names] for n in model.names])
         cov = jac @ res.covar @ jac.T
-    lag1 = math.nan
+    outcome = Outcome(model, res, {n: values[n] for n in model.names}, cov, data)
     if data.weighting == "unweighted" and model.spec.name in AUTOCORRELATED_MODELS:
-        lag1 = residual_lag1(np.asarray(res.residual, dtype=float), data.x)
-        factor = math.sqrt((1.0 + lag1) / max(1.0 - lag1, 1e-12)) if lag1 > 0 else 1.0
+        outcome.lag1 = residual_lag1(np.asarray(res.residual, dtype=float), data.x)
         if cov is not None:
-            cov = cov * factor ** 2
-    return Outcome(model, res, {n: values[n] for n in model.names}, cov, data, lag1=lag1)
+            outcome.covariance = cov * outcome.stderr_factor ** 2
+    return outcome
 
 
 #: Lag-1 residual autocorrelation above which a curve fit warns (its stderr are corrected).
 LAG1_WARN = 0.5
 #: Curve models of measured series whose stderr are corrected for residual autocorrelation
 #: (the step model fits a simulated trajectory, whose residual is the solver's smooth error).
-AUTOCORRELATED_MODELS = ("relaxation", "creep")
+AUTOCORRELATED_MODELS = ("relaxation",)
 
 
 def residual_lag1(residual: np.ndarray, t: np.ndarray) -> float:
@@ -561,7 +591,10 @@ def _statistics_variables(info: Mapping[str, Any], names: list[str],
     from viscoforce.schema.fit import parameter_units
 
     out = {"chi2_pvalue": xr.DataArray(info["chi2_pvalue"], attrs={
-        "units": "1", "long_name": "chi-square goodness-of-fit p-value (NaN: stderr unknown)"}),
+        "units": "1", "long_name": "chi-square goodness-of-fit p-value (NaN: stderr unknown)",
+        "comment": "residuals whose stderr were estimated with nu degrees of freedom (the "
+                   "lock-in's 2 x lockin_stderr_bins) enter as normal scores of their t_nu "
+                   "tail probability"}),
         "identifiability": xr.DataArray(
             np.array([info["identifiability"][n] for n in names], dtype=np.int8),
             dims=("param_i",), attrs={
@@ -631,6 +664,7 @@ def select(data: FitData, name: str, *, modes: int | str = 1, criterion: str = "
             if not outcomes:
                 raise
             break
+        _share_effective_size(outcomes)  # the stopping rule scores as the final choice does
         scores = [o.criterion[criterion] for o in outcomes]
         worse = worse + 1 if len(scores) > 1 and scores[-1] >= min(scores[:-1]) else 0
         if worse >= 2:
@@ -652,8 +686,10 @@ def _share_effective_size(outcomes: list[Outcome]) -> None:
     rho = min(curve, key=lambda o: float(o.result.chisqr)).lag1
     n = curve[0].n_values
     n_eff = n * (1.0 - rho) / (1.0 + rho) if rho > 0 else float(n)
+    # one m for all (the criteria differ by m ln(χ²_a/χ²_b): unit-free only with a common m)
+    n_eff = min(max(n_eff, max(o.n_free for o in curve) + 2.0), float(n))
     for o in curve:
-        o.n_effective = min(max(n_eff, o.n_free + 2.0), float(n))
+        o.n_effective = n_eff
 
 
 def fit_data(data: FitData, name: str, *, modes: int | str = 1, criterion: str = "bic",

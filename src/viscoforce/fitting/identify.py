@@ -17,9 +17,12 @@ constraint is a stiff quadratic penalty on the parameter, so any parameter (a ch
 E0 = E_inf·10^log_E0 too) is profiled the same way.
 
 A step the parameters' window cannot reach (the target outside it, or the constrained fit
-stopped with a parameter on its bound) ends the walk on that side unbounded: the window bounds
-it, not the data. A step the fit cannot reach with every parameter free, or where the model
-cannot be evaluated, bounds it.
+pushed another parameter onto a bound it was not on at the best fit) ends the walk on that side
+unbounded: the window bounds it, not the data (the walk bisects back, since the profile may rise
+before the window). So does a step whose constrained fit did not converge within
+:data:`PROFILE_NFEV` evaluations per parameter or where the model gives NaN: unknown is
+reported as not bounded, never as a bound. A step the fit cannot reach with every parameter free
+(the data hold it off) bounds it.
 
 Codes (:data:`IDENTIFIABILITY`): 0 determined (bounded on both sides), 1 lower bound only
 (q > lower: the likelihood is flat towards larger q), 2 upper bound only (q < upper), 3 not
@@ -121,9 +124,19 @@ def _profile_one(layout: Sequence[_params.Item], residual: Residual, best: lmfit
     limits = []
     bounded = []
 
+    solved: dict[float, list[tuple[float, lmfit.Parameters]]] = {-1.0: [], 1.0: []}
+
     def root_at(step: float, side: float) -> float:
-        """√(Δχ²/scale) at ``step`` from the best value (NaN: the window holds it there)."""
-        delta = _delta_chi2(layout, residual, best, name, log, g0 + side * step, chisqr, scale)
+        """√(Δχ²/scale) at ``step`` from the best value (NaN: the window holds it there).
+
+        Each constrained fit starts from the solved step nearest to it on its side (a warm
+        start along the profile valley), else from the best fit.
+        """
+        near = min(solved[side], key=lambda item: abs(item[0] - step), default=(0.0, best))
+        delta, params = _delta_chi2(layout, residual, best, name, log, g0 + side * step, chisqr,
+                                    scale, start=near[1])
+        if params is not None:
+            solved[side].append((step, params))
         return math.sqrt(max(delta, 0.0) / scale) if delta == delta else math.nan
 
     for side in (-1.0, 1.0):
@@ -140,18 +153,28 @@ def _profile_one(layout: Sequence[_params.Item], residual: Residual, best: lmfit
 def _walk(root_at: Callable[[float], float], first: float, cap: float) -> float:
     """The step where √(Δχ²/scale) reaches 2 on one side (NaN: it never does before ``cap``).
 
-    The first step is the local 2σ: a profile that already rises to Δχ² ≥ :data:`FLAT` there is
-    extrapolated as a quadratic. Otherwise the step grows by :data:`GROWTH` until Δχ² ≥ 4 (then
-    bisected), the cap, or a step the window holds (NaN: bisected too, since the profile may
-    rise before the window is reached).
+    The first step is the local 2σ. Where the profile already rises to Δχ² ≥ :data:`FLAT` there,
+    the quadratic through the minimum predicts the 2σ point; it is evaluated, not assumed (a
+    profile that flattens beyond the first step walks on from it). Otherwise the step grows by
+    :data:`GROWTH` until Δχ² ≥ 4 (then bisected), the cap, or a step the window holds (NaN:
+    bisected too, since the profile may rise before the window is reached). A step the model
+    cannot reach with every parameter free (inf) is bracketed like Δχ² ≥ 4.
     """
     target = math.sqrt(DELTA_CHI2)
     root = root_at(first)
-    if root == root and root * root >= FLAT:
-        return first * target / root
     if root != root:
         return _bisect(root_at, 0.0, 0.0, first)
+    if root >= target:
+        return _bisect(root_at, 0.0, 0.0, first, root)
     prev, prev_root, step = first, root, first
+    if root * root >= FLAT:  # near-quadratic: try its 2σ point next, then walk on from there
+        predicted = min(first * target / root, cap)
+        r_pred = root_at(predicted)
+        if r_pred != r_pred:
+            return _bisect(root_at, prev, prev_root, predicted)
+        if r_pred >= target:
+            return _interpolate(prev, prev_root, predicted, r_pred)
+        prev, prev_root, step = predicted, r_pred, predicted
     while step < cap:
         step = min(step * GROWTH, cap)
         root = root_at(step)
@@ -163,9 +186,20 @@ def _walk(root_at: Callable[[float], float], first: float, cap: float) -> float:
     return math.nan
 
 
+def _interpolate(lo: float, r_lo: float, hi: float, r_hi: float) -> float:
+    """The step where √(Δχ²/scale) = 2, linear in √Δχ² between two bracketing steps."""
+    target = math.sqrt(DELTA_CHI2)
+    frac = (target - r_lo) / max(r_hi - r_lo, 1e-300) if math.isfinite(r_hi) else 1.0
+    return lo + min(max(frac, 0.0), 1.0) * (hi - lo)
+
+
 def _bisect(root_at: Callable[[float], float], lo: float, r_lo: float, hi: float,
             r_hi: float = math.nan) -> float:
-    """Bisect [lo, hi] for √(Δχ²/scale) = 2; ``r_hi`` NaN: hi is held by the window."""
+    """Bisect [lo, hi] for √(Δχ²/scale) = 2; ``r_hi`` NaN: hi is held by the window.
+
+    NaN when the profile never rose to 2 before the window (unbounded by the data) or when the
+    bracket shrank to the best value itself (nothing measured on that side).
+    """
     target = math.sqrt(DELTA_CHI2)
     for _ in range(BISECTIONS):
         mid = 0.5 * (lo + hi)
@@ -176,15 +210,20 @@ def _bisect(root_at: Callable[[float], float], lo: float, r_lo: float, hi: float
             hi, r_hi = mid, r_mid
         else:
             lo, r_lo = mid, r_mid
-    if r_hi != r_hi:  # never rose to 2 before the window: unbounded by the data
+    if r_hi != r_hi or lo == 0.0 and not math.isfinite(r_hi):
         return math.nan
-    frac = (target - r_lo) / max(r_hi - r_lo, 1e-300) if math.isfinite(r_hi) else 1.0
-    return lo + min(max(frac, 0.0), 1.0) * (hi - lo)
+    return _interpolate(lo, r_lo, hi, r_hi)
 
 
 def _delta_chi2(layout: Sequence[_params.Item], residual: Residual, best: lmfit.Parameters,
-                name: str, log: bool, target: float, chisqr: float, scale: float) -> float:
-    """Profile Δχ² with ``name`` held at ``target`` (log10 for positive parameters)."""
+                name: str, log: bool, target: float, chisqr: float, scale: float, *,
+                start: lmfit.Parameters | None = None
+                ) -> tuple[float, lmfit.Parameters | None]:
+    """Profile Δχ² with ``name`` held at ``target`` (log10 for positive parameters).
+
+    Returns (Δχ², the constrained fit's parameters where it met the target, else None); Δχ² is
+    NaN where the window holds the fit or nothing converged, inf where the data hold it off.
+    """
     # the penalty in the units of Δχ²/scale, so that the constraint neither drowns the data's
     # χ² (unweighted forces in N give χ² ~ 1e-17) nor lets the parameter drift off its target
     width = PENALTY * max(abs(target) if not log else 1.0, 1e-300) / math.sqrt(scale)
@@ -195,26 +234,45 @@ def _delta_chi2(layout: Sequence[_params.Item], residual: Residual, best: lmfit.
         g = math.log10(q) if log and q > 0 else q if not log else -math.inf
         return np.append(residual(params), (g - target) / width)
 
-    start = _shifted(layout, best, name, log, target)
+    lo, hi = _window(layout, best, name, log)
+    if not lo <= target <= hi:
+        return math.nan, None  # beyond the parameters' window: it bounds it, not the data
+    first = _shifted(layout, best if start is None else start, name, log, target)
+    n_var = sum(1 for p in first.values() if p.vary)
+    max_nfev = PROFILE_NFEV * (n_var + 1)
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", RuntimeWarning)
-            n_var = sum(1 for p in start.values() if p.vary)
-            res = lmfit.minimize(constrained, start, method="leastsq",
-                                 max_nfev=PROFILE_NFEV * (n_var + 1))
-        r = residual(res.params)
-    except (ValueError, ArithmeticError):  # the model cannot go there: that side is bounded
-        return math.inf
+            res = lmfit.minimize(constrained, first, method="leastsq", max_nfev=max_nfev)
+    except ArithmeticError:  # the model gave NaN/inf here: nothing measured, say unknown
+        return math.nan, None
+    if res.nfev >= max_nfev:  # not converged: its Δχ² would be an overestimate
+        return math.nan, None
+    if _window_bounds(layout, res.params) - _window_bounds(layout, best):
+        return math.nan, None  # a bound of the parameters' window held the fit, not the data
     values, _ = _params.to_reported(layout, res.params.valuesdict())
     q = values[name]
     reached = (math.log10(q) if q > 0 else math.nan) if log else q
     miss = abs(reached - target) if math.isfinite(reached) else math.inf
     if miss > 1e-2 * (1.0 if log else max(abs(target), 1e-300)):
-        lo, hi = _window(layout, best, name, log)
-        if not lo <= target <= hi or _params.at_bound(res.params):
-            return math.nan  # a bound of the parameters' window held it, not the data
-        return math.inf  # nothing at a bound: the data held the fit off its target
-    return max(float(np.sum(r * r)) - chisqr, 0.0)
+        return math.inf, None  # nothing at a bound: the data held the fit off its target
+    r = np.asarray(res.residual, dtype=float)[:-1]  # the data part (the penalty is last)
+    return max(float(r @ r) - chisqr, 0.0), res.params
+
+
+def _window_bounds(layout: Sequence[_params.Item], params: lmfit.Parameters) -> set[str]:
+    """Internal parameters on a bound of their window (an ordering bound, E0 = E_inf, is not one:
+    the fit there is as legitimate as anywhere, the data's Δχ² counts)."""
+    ordering = {f"log_{n}" for item in layout if isinstance(item, _params.Chain)
+                for n in item.names[1:]}
+    out = set()
+    for name in _params.at_bound(params):
+        key = f"log_{name}" if f"log_{name}" in params else name
+        p = params[key]
+        if key in ordering and p.value - p.min <= 1e-6 * max(p.max - p.min, 1.0):
+            continue
+        out.add(key)
+    return out
 
 
 def _window(layout: Sequence[_params.Item], best: lmfit.Parameters, name: str,
@@ -232,11 +290,11 @@ def _window(layout: Sequence[_params.Item], best: lmfit.Parameters, name: str,
     return (p.min, p.max) if p.vary else (p.value, p.value)
 
 
-def _shifted(layout: Sequence[_params.Item], best: lmfit.Parameters, name: str, log: bool,
+def _shifted(layout: Sequence[_params.Item], base: lmfit.Parameters, name: str, log: bool,
              target: float) -> lmfit.Parameters:
-    """The best parameters with ``name``'s own internal parameter moved to meet ``target``."""
-    start = best.copy()
-    values, _ = _params.to_reported(layout, best.valuesdict())
+    """A copy of ``base`` with ``name``'s own internal parameter moved to meet ``target``."""
+    start = base.copy()
+    values, _ = _params.to_reported(layout, base.valuesdict())
     key = f"log_{name}" if log else name
     if key not in start or not start[key].vary:
         return start
