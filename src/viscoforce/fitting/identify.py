@@ -261,8 +261,10 @@ def _delta_chi2(layout: Sequence[_params.Item], residual: Residual, best: lmfit.
 
 
 def _window_bounds(layout: Sequence[_params.Item], params: lmfit.Parameters) -> set[str]:
-    """Internal parameters on a bound of their window (an ordering bound, E0 = E_inf, is not one:
-    the fit there is as legitimate as anywhere, the data's Δχ² counts).
+    """Internal parameters on a bound of their window.
+
+    An ordering bound (E0 = E_inf) is not one: the fit there is as legitimate as anywhere, and
+    the data's Δχ² counts.
     """
     ordering = {f"log_{n}" for item in layout if isinstance(item, _params.Chain)
                 for n in item.names[1:]}
