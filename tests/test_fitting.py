@@ -18,7 +18,7 @@ from viscoforce.experiments.linear_response import linear_stiffness
 from viscoforce.fitting import fit_spectrum, make_model
 from viscoforce.fitting.fit import fit_data, spectrum_data
 from viscoforce.fitting.maps import fit_map
-from viscoforce.fitting.models import power_law_compliance, svda_position
+from viscoforce.fitting.models import svda_position
 from viscoforce.physics.materials import PronySeries, StandardLinearSolid
 from viscoforce.physics.paper import paper_pressure_law
 from viscoforce.physics.particle import Sphere
@@ -30,6 +30,14 @@ from viscoforce.svda import svda_complex_stiffness
 #: (estimated error > 1 %, issue 15); the warning itself is tested in tests/test_failure_regions.py.
 pytestmark = pytest.mark.filterwarnings(
     "ignore:the SVDA is about:viscoforce.exceptions.ModelValidityWarning")
+
+
+def power_law_compliance(omega, E0, C1, m):  # noqa: N803
+    """Oracle: C*(ω) = 1/E0 + C1 Γ(1 + m)(iω)^−m of C(t) = 1/E0 + C1 t^m (e^{+iωt})."""
+    from scipy.special import gamma
+
+    return 1.0 / E0 + C1 * gamma(1.0 + m) * (1j * np.asarray(omega, dtype=float)) ** (-m)
+
 
 
 OMEGA = np.geomspace(10.0, 1e6, 30)

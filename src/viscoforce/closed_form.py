@@ -41,6 +41,7 @@ from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike
+from scipy.special import gamma
 
 from viscoforce._typing import FloatArray
 from viscoforce._validation import (
@@ -48,6 +49,8 @@ from viscoforce._validation import (
     as_real_array,
     describe_value,
     require_finite,
+    require_in_range,
+    require_nonnegative,
     require_positive,
     require_sls_moduli,
 )
@@ -354,9 +357,30 @@ def prony_complex_compliance(omega: ArrayLike, glassy_compliance: float,
     w = as_nonnegative_array("omega", omega)
     jg, dj, taus_ = _prony_data(glassy_compliance, delta_compliances, taus)
     with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
-        c = jg + (1.0 / (1.0 + 1j * w[..., np.newaxis] * taus_)) @ dj
+        c = prony_compliance_core(w, jg, dj, taus_)
     return require_representable(c, "C*(omega)",
                                  "omega, glassy_compliance, delta_compliances, taus")
+
+
+def prony_compliance_core(omega: np.ndarray, glassy_compliance: float, delta_compliances: np.ndarray,
+                          taus: np.ndarray) -> np.ndarray:
+    """C*(ω) = J_g + Σ ΔJ_i/(1 + iωτ_i) without validation, for inputs already checked (fit loops).
+
+    Parameters
+    ----------
+    omega : numpy.ndarray
+        Angular frequencies [rad/s].
+    glassy_compliance : float
+        J_g [1/Pa].
+    delta_compliances, taus : numpy.ndarray
+        ΔJ_i [1/Pa] and τ_i [s], same length.
+
+    Returns
+    -------
+    numpy.ndarray
+        Complex C*(ω) [1/Pa].
+    """
+    return glassy_compliance + (1.0 / (1.0 + 1j * omega[..., np.newaxis] * taus)) @ delta_compliances
 
 
 # ── surface force ───────────────────────────────────────────────────────────────────────────────
@@ -394,10 +418,10 @@ def structural_complex_modulus(omega: ArrayLike, E_ref: float, alpha: float, mu:
         A frequency <= 0 or not finite, or a parameter out of its range.
     """
     w = _positive_omega(omega)
-    e_ref, f_ref = _require_positive("E_ref", E_ref), _require_positive(
-        "reference_frequency", reference_frequency)
-    a = _require_open_unit("alpha", alpha)
-    mu_ = _require_nonnegative("mu", mu)
+    e_ref = require_positive("E_ref", E_ref)
+    f_ref = require_positive("reference_frequency", reference_frequency)
+    a = require_in_range("alpha", alpha, 0.0, 1.0, inclusive=(False, False))
+    mu_ = require_nonnegative("mu", mu)
     with np.errstate(over="ignore", invalid="ignore"):
         e = e_ref * (1j * w / (2.0 * math.pi * f_ref)) ** a + 1j * w * mu_
     return require_representable(e, "E*(omega)", "omega, E_ref, alpha, mu")
@@ -427,13 +451,16 @@ def power_law_complex_modulus(omega: ArrayLike, E0: float, C1: float, m: float, 
     -------
     numpy.ndarray
         Complex E*(ω) [Pa].
-    """
-    from scipy.special import gamma
 
+    Raises
+    ------
+    ParameterError
+        A frequency <= 0 or not finite, or a parameter out of its range.
+    """
     w = _positive_omega(omega)
-    e0, c1 = _require_positive("E0", E0), _require_positive("C1", C1)
-    m_ = _require_open_unit("m", m)
-    mu_ = _require_nonnegative("mu", mu)
+    e0, c1 = require_positive("E0", E0), require_positive("C1", C1)
+    m_ = require_in_range("m", m, 0.0, 1.0, inclusive=(False, False))
+    mu_ = require_nonnegative("mu", mu)
     with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
         e = 1.0 / (1.0 / e0 + c1 * gamma(1.0 + m_) * (1j * w) ** (-m_)) + 1j * w * mu_
     return require_representable(e, "E*(omega)", "omega, E0, C1, m, mu")
@@ -445,27 +472,6 @@ def _positive_omega(omega: ArrayLike) -> FloatArray:
         raise ParameterError(f"omega must be > 0 rad/s for a power-law material, got min "
                              f"{float(np.min(w))!r}")
     return w
-
-
-def _require_positive(name: str, value: float) -> float:
-    v = float(value)
-    if not (v > 0 and math.isfinite(v)):
-        raise ParameterError(f"{name} must be > 0 and finite, got {value!r}")
-    return v
-
-
-def _require_nonnegative(name: str, value: float) -> float:
-    v = float(value)
-    if not (v >= 0 and math.isfinite(v)):
-        raise ParameterError(f"{name} must be >= 0 and finite, got {value!r}")
-    return v
-
-
-def _require_open_unit(name: str, value: float) -> float:
-    v = float(value)
-    if not 0.0 < v < 1.0:
-        raise ParameterError(f"{name} must be in (0, 1), got {value!r}")
-    return v
 
 
 def derjaguin_force(gap: ArrayLike, radius: float, P: float,

@@ -72,7 +72,30 @@ def hold_data(curves: xr.Dataset, *, curve: int = 0, segment: int | None = None)
 
 def fit_hold(curves: xr.Dataset, *, curve: int = 0, segment: int | None = None,
              modes: int | str = 1, criterion: str = "bic") -> xr.Dataset:
-    """Fit F(t) = F_inf + Σ dF_i e^{−t/τ_i} to the hold of one curve (``relaxation`` model)."""
+    """Fit F(t) = F_inf + Σ dF_i e^{−t/τ_i} to the hold of one curve (``relaxation`` model).
+
+    The τ_i are force-relaxation times at fixed position (not the creep times of Eq. 3). The
+    stderr are corrected for autocorrelated residuals (:mod:`viscoforce.fitting.fit`).
+
+    Parameters
+    ----------
+    curves : xarray.Dataset
+        A curves dataset (:mod:`viscoforce.schema.curves`).
+    curve : int
+        The curve (pixel) to fit, from 0.
+    segment : int, optional
+        The curve's segment to fit (from 0, file order); default the pause after the approach.
+    modes : int or "auto"
+        Relaxation modes.
+    criterion : {"bic", "aic"}
+        Information criterion of ``modes="auto"``.
+
+    Returns
+    -------
+    xarray.Dataset
+        The fit result (``F_inf``, ``dF_i``, ``tau_i`` [s]; ``attrs`` ``residual_lag1``,
+        ``stderr_correction``, ``effective_samples``).
+    """
     ds = fit_data(hold_data(curves, curve=curve, segment=segment), "relaxation", modes=modes,
                   criterion=criterion)
     ds.attrs["validity"] = validity_note("relaxation", ds)

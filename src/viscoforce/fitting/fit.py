@@ -121,8 +121,19 @@ class FitData:
 def spectrum_data(ds: xr.Dataset, *, weights: str | None = None) -> FitData:
     """ω, k* and weights of one spectrum (1-D over ``omega``), flagged and NaN points left out.
 
-    ``weights``: ``"stderr"``, ``"relative"`` or None (see the module docstring); the notes of
-    :func:`pixel_fit_data` (points left out, fallbacks) are issued as DataWarnings.
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        One spectrum (:mod:`viscoforce.schema.spectrum`) over ``omega`` only.
+    weights : {"stderr", "relative"}, optional
+        The residual weights (module docstring); None: the data's stderr where present, else
+        relative. The notes of :func:`pixel_fit_data` (points left out, fallbacks) are issued
+        as DataWarnings.
+
+    Returns
+    -------
+    FitData
+        ω [rad/s], k* [N/m], complex weights 1/σ_re + i/σ_im, provenance, weighting, notes.
 
     Raises
     ------
@@ -696,7 +707,27 @@ def fit_data(data: FitData, name: str, *, modes: int | str = 1, criterion: str =
              max_modes: int = MAX_AUTO_MODES, profile: bool = True, **fixed: Any) -> xr.Dataset:
     """Fit prepared data (:class:`FitData`) with model ``name``; ``modes="auto"`` selects.
 
-    ``profile``: profile-likelihood identifiability of the kept fit (default True).
+    Parameters
+    ----------
+    data : FitData
+        What the fit sees (:func:`spectrum_data`, :func:`viscoforce.fitting.curves.hold_data`).
+    name : str
+        A model of :data:`viscoforce.fitting.models.MODEL_NAMES`.
+    modes : int or "auto"
+        Relaxation modes; "auto" tries 1, 2, … (:func:`select`).
+    criterion : {"bic", "aic"}
+        Information criterion of ``modes="auto"``.
+    max_modes : int
+        Most modes "auto" tries.
+    profile : bool
+        Profile-likelihood identifiability of the kept fit (default True; False: the local test).
+    **fixed
+        The model's fixed inputs (:func:`viscoforce.fitting.models.make_model`).
+
+    Returns
+    -------
+    xarray.Dataset
+        The fit result (:func:`result_dataset`).
     """
     best, selection = select(data, name, modes=modes, criterion=criterion, max_modes=max_modes,
                              **fixed)
@@ -851,7 +882,7 @@ def fit_spectrum(spectrum: xr.Dataset, model: str, *, modes: int | str | None = 
     fixed = check_fixed(model, fixed)
     data = spectrum_data(spectrum, weights=weights)
     if model == "contact" and fixed.get("indentation") is None:
-        fixed["indentation"] = _data_indentation(spectrum)
+        fixed["indentation"] = _data_indentation(spectrum, data)
     if model in ("svda", "exact") and fixed.get("position") is None and fixed.get(
             "mean_force") is None:
         mean = float(np.nanmedian(spectrum["mean_force"].values))
@@ -969,8 +1000,12 @@ AUTO_MODELS = ("svda", "contact", "exact")
 
 def _auto_candidate(spectrum: xr.Dataset, name: str, modes: int | str, criterion: str,
                     problem: ContactProblem, fixed: Mapping[str, Any],
-                    data: FitData) -> tuple[xr.Dataset | None, float, str]:
-    """Fit one candidate of ``model="auto"``: (result or None, estimated model error, reason)."""
+                    data: FitData, profile: bool = False
+                    ) -> tuple[xr.Dataset | None, float, str]:
+    """Fit one candidate of ``model="auto"``: (result or None, estimated model error, reason).
+
+    ``profile``: profile-likelihood identifiability (the kept candidate's refit only).
+    """
     position, mean_force = fixed.get("position"), fixed.get("mean_force")
     radius = problem.sphere.radius
     if name == "svda":
@@ -984,7 +1019,7 @@ def _auto_candidate(spectrum: xr.Dataset, name: str, modes: int | str, criterion
         if math.isinf(error):
             return None, error, reason
         try:
-            ds = fit_data(data, "svda", profile=False, position=position,
+            ds = fit_data(data, "svda", profile=profile, position=position,
                           mean_force=mean_force, radius=radius, P=layer.P,
                           debye_length=layer.debye_length)
         except (ModelValidityError, ConvergenceError) as exc:
@@ -1002,7 +1037,7 @@ def _auto_candidate(spectrum: xr.Dataset, name: str, modes: int | str, criterion
             return None, math.inf, "needs an indentation (a position h0 < 0)"
         try:
             ds = fit_data(data, "contact", radius=radius,
-                          profile=False, indentation=depth,
+                          profile=profile, indentation=depth,
                           drag=fixed.get("drag"))
         except (ModelValidityError, ConvergenceError) as exc:
             return None, math.inf, f"fit failed: {str(exc).split(';')[0]}"
@@ -1010,7 +1045,7 @@ def _auto_candidate(spectrum: xr.Dataset, name: str, modes: int | str, criterion
                                       float(np.max(spectrum["omega"])))
         return ds, error, f"{reason} at the fitted moduli (k* proportional to E: bias = error)"
     ds = fit_data(data, "exact", modes=modes,
-                  criterion=criterion, profile=False,
+                  criterion=criterion, profile=profile,
                   problem=problem, position=position, mean_force=mean_force)
     return ds, GRID_ERROR, "the exact model on the default grid"
 
@@ -1061,7 +1096,9 @@ def fit_spectrum_auto(spectrum: xr.Dataset, *, modes: int | str = 1, criterion: 
                                             data)
         rows.append((name, error, reason, {}))
         if ds is not None and error <= meets(accuracy):
-            kept = ds
+            # the kept one again, with its profile likelihood (the same fit: deterministic)
+            kept = _auto_candidate(spectrum, name, modes, criterion, problem, fixed, data,
+                                   profile=True)[0]
             break
     choice = finish("fit model", rows, accuracy, "")
     if kept is None:  # exact fits or raises; keep the loop honest anyway
@@ -1074,12 +1111,20 @@ def fit_spectrum_auto(spectrum: xr.Dataset, *, modes: int | str = 1, criterion: 
     return kept
 
 
-def _data_indentation(spectrum: xr.Dataset) -> float:
+def _data_indentation(spectrum: xr.Dataset, data: FitData | None = None) -> float:
+    """The operating indentation δ0: the median ``mean_indentation`` of the points fitted.
+
+    The same rule as a map's pixels (:func:`pixel_fit_data`), so a spectrum fitted alone and as
+    a one-pixel map uses the same δ0.
+    """
     if "mean_indentation" not in spectrum.variables:
         raise ModelValidityError(
             "the contact model needs the operating indentation: this spectrum has no "
             "mean_indentation (no contact point found, or pre-contact); give --indentation D0")
-    value = float(np.nanmedian(spectrum["mean_indentation"].values))
+    value = (float(data.source["mean_indentation"]) if data is not None
+             and "mean_indentation" in data.source else math.nan)
+    if not math.isfinite(value):
+        value = float(np.nanmedian(spectrum["mean_indentation"].values))
     if not value > 0:
         raise ModelValidityError(
             f"the contact model refuses a pre-contact spectrum: median mean_indentation "

@@ -16,8 +16,10 @@ criterion (BIC by default; AIC with ``criterion="aic"``):
 Rule: the candidate with the lowest criterion is the best; the one kept is the SIMPLEST (fewest
 parameters; then the lowest criterion) whose criterion is within :data:`MARGIN` of the best.
 ΔBIC = 6 is "strong" evidence on the Kass–Raftery scale (a Bayes factor of ≈ 20): a richer
-model must beat a simpler one by that much to be kept. The explanation lists every candidate
-with its criterion, reduced χ² and p-value (when the data carry stderr).
+model must beat a simpler one by that much to be kept. With ``criterion="aic"`` the same margin
+is used on the AIC scale, a heuristic (ΔAIC 6: the simpler model is e^−3 ≈ 5 % as likely). The
+explanation lists every candidate with its criterion, reduced χ² and p-value (when the data
+carry stderr).
 """
 
 from __future__ import annotations
@@ -126,9 +128,9 @@ def fit_measured_auto(spectrum: xr.Dataset, *, modes: int | str = "auto", criter
                              f"{material!r} has one")
     decay = fixed.pop("debye_length", None)
     base = check_fixed("contact", {k: v for k, v in fixed.items() if v is not None})
-    if base.get("indentation") is None:
-        base["indentation"] = _data_indentation(spectrum)
     data = spectrum_data(spectrum, weights=weights)
+    if base.get("indentation") is None:
+        base["indentation"] = _data_indentation(spectrum, data)
     families = (material,) if material else ("prony", "power-law", "structural")
     rows: list[dict[str, Any]] = []
     kept: list[tuple[str, Outcome, dict[str, Any]]] = []

@@ -405,6 +405,9 @@ def _contact_model(spec: ModelSpec) -> FitModel:
     if kind not in CONTACT_MATERIALS:
         raise ParameterError(f"material must be one of {', '.join(CONTACT_MATERIALS)}, "
                              f"got {kind!r}")
+    if spec.fixed.get("reference_frequency") is not None and kind != "structural":
+        raise ParameterError(f"reference_frequency is the f_ref of material 'structural'; "
+                             f"material {kind!r} has none")
     if newtonian and kind != "power-law":
         raise ParameterError(f"newtonian=True adds a viscosity to material 'power-law'; "
                              f"material {kind!r} has {'one' if kind == 'structural' else 'none'}")
@@ -424,14 +427,19 @@ def _contact_model(spec: ModelSpec) -> FitModel:
         return _contact_guess(kind, modes, newtonian, f_ref, modulus, omega)
 
     window = _omega_window if kind in ("sls", "prony") else None
-    return FitModel(ModelSpec(spec.name, modes, spec.fixed), function,
+    fixed = {**spec.fixed, "reference_frequency": f_ref} if kind == "structural" else spec.fixed
+    return FitModel(ModelSpec(spec.name, modes, fixed), function,
                     _contact_layout(kind, modes, newtonian), "omega", guesser, window)
 
 
 def _contact_modulus_function(kind: str, modes: int, newtonian: bool, f_ref: float
                               ) -> Callable[[np.ndarray, Mapping[str, float]], np.ndarray]:
     """E*(ω) [Pa] of a contact material from its SPEC values (the paper's E)."""
-    from viscoforce.closed_form import power_law_complex_modulus, structural_complex_modulus
+    from viscoforce.closed_form import (
+        power_law_complex_modulus,
+        prony_compliance_core,
+        structural_complex_modulus,
+    )
 
     if kind == "structural":
         return lambda omega, v: structural_complex_modulus(omega, v["E_ref"], v["alpha"],
@@ -448,9 +456,8 @@ def _contact_modulus_function(kind: str, modes: int, newtonian: bool, f_ref: flo
         full = _expand_one_mode(v, modes) if modes > 1 and "tau" in v else v
         e = np.array([full[n] for n in moduli])
         tau = np.array([full[n] for n in taus])
-        dj = 1.0 / e[1:] - 1.0 / e[:-1]
-        w = np.asarray(omega, dtype=float)
-        compliance = 1.0 / e[0] + (1.0 / (1.0 + 1j * w[..., None] * tau)) @ dj
+        compliance = prony_compliance_core(np.asarray(omega, dtype=float), 1.0 / e[0],
+                                           1.0 / e[1:] - 1.0 / e[:-1], tau)
         return 1.0 / compliance
 
     return prony
@@ -522,12 +529,6 @@ def _viscosity_guess(modulus: np.ndarray, omega: np.ndarray) -> float:
     """μ from the imaginary part at the highest frequency (a tenth of it), > 0."""
     i = int(np.argmax(omega))
     return max(0.1 * abs(float(modulus[i].imag)), 1e-6 * abs(modulus[i])) / float(omega[i])
-
-
-def power_law_compliance(omega: np.ndarray, E0: float, C1: float, m: float) -> np.ndarray:  # noqa: N803
-    """C*(ω) = 1/E0 + C1 Γ(1 + m)(iω)^−m of C(t) = 1/E0 + C1 t^m (e^{+iωt} convention)."""
-    w = np.asarray(omega, dtype=float)
-    return 1.0 / E0 + C1 * gamma(1.0 + m) * (1j * w) ** (-m)
 
 
 def _prony_model(spec: ModelSpec) -> FitModel:
