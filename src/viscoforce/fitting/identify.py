@@ -39,6 +39,7 @@ from dataclasses import dataclass
 import lmfit
 import numpy as np
 
+from viscoforce.exceptions import ViscoforceError
 from viscoforce.fitting import _params
 
 #: Identifiability codes of a fitted parameter.
@@ -244,8 +245,8 @@ def _delta_chi2(layout: Sequence[_params.Item], residual: Residual, best: lmfit.
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", RuntimeWarning)
             res = lmfit.minimize(constrained, first, method="leastsq", max_nfev=max_nfev)
-    except ArithmeticError:  # the model gave NaN/inf here: nothing measured, say unknown
-        return math.nan, None
+    except (ArithmeticError, ViscoforceError):  # the model gave NaN/inf, or cannot be solved
+        return math.nan, None  # here (a state outside its grid): nothing measured, say unknown
     if res.nfev >= max_nfev:  # not converged: its Δχ² would be an overestimate
         return math.nan, None
     if _window_bounds(layout, res.params) - _window_bounds(layout, best):
