@@ -50,7 +50,7 @@ import re
 from abc import ABC, abstractmethod
 from collections.abc import Mapping
 from dataclasses import dataclass
-from typing import Any, ClassVar, Self
+from typing import Any, ClassVar
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -517,7 +517,7 @@ class _AngledTip(Tip):
         object.__setattr__(self, "half_angle", theta)
 
     @classmethod
-    def from_degrees(cls, half_angle_deg: float) -> Self:
+    def from_degrees(cls, half_angle_deg: float) -> _AngledTip:
         """Build the tip from its half-angle in degrees.
 
         Parameters
