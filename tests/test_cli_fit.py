@@ -132,7 +132,7 @@ def test_real_zip_of_curves_is_fitted_per_curve(capsys, tmp_path):
 
 @pytest.mark.skipif(not MOD_MAP.is_file(), reason="real data not present")
 def test_real_modulation_map_contact_fit(capsys, tmp_path):
-    code, out, err = _run(capsys, "fit", MOD_MAP, "--model", "contact", "--curve", "3",
+    code, out, err = _run(capsys, "fit", MOD_MAP, "--model", "contact", "--R", "10um", "--curve", "3",
                           "--json", "--plot", tmp_path / "fit.png")
     assert code == 0, err
     info = json.loads(out)

@@ -88,7 +88,8 @@ def test_newtonian_power_law_and_reference_frequency_flags(capsys, structural_fi
 
 @needs_map
 def test_real_map_curve_with_the_chooser(capsys):
-    code, out, err = _run(capsys, "fit", MAP, "--model", "auto", "--curve", "0", "--json")
+    code, out, err = _run(capsys, "fit", MAP, "--model", "auto", "--curve", "0", "--R", "10um",
+                          "--json")
     assert code == 0, err
     info = json.loads(out)
     assert info["candidate"] in {row["label"] for row in info["selection"]}
@@ -98,12 +99,33 @@ def test_real_map_curve_with_the_chooser(capsys):
 
 @needs_map
 def test_real_map_summary_counts_good_pixels_only(capsys):
-    code, out, err = _run(capsys, "fit", MAP, "--model", "contact", "--material", "structural",
+    code, out, err = _run(capsys, "fit", MAP, "--model", "contact", "--R", "10um", "--material", "structural",
                           "--scheduler", "synchronous", "--json")
     assert code == 0, err
     info = json.loads(out)
     assert info["n_fits"] == 16
     assert info["n_good"] + sum(info["left_out"].values()) == 16
-    code, out, _ = _run(capsys, "fit", MAP, "--model", "contact", "--material", "structural",
+    code, out, _ = _run(capsys, "fit", MAP, "--model", "contact", "--R", "10um", "--material", "structural",
                         "--scheduler", "synchronous")
     assert "good" in out and "left out of the summary" in out and "Pa" in out
+
+
+@needs_map
+def test_measured_data_need_the_tip_and_report_youngs_moduli(capsys):
+    code, _, err = _run(capsys, "fit", MAP, "--model", "auto", "--curve", "0")
+    assert code == 2 and "the moduli need the tip, which this jpk file does not record" in err
+    code, _, err = _run(capsys, "fit", MAP, "--model", "auto", "--curve", "0", "--R", "10um",
+                        "--tip", "cone:20")
+    assert code == 2 and "give --tip or --R" in err
+    code, out, err = _run(capsys, "fit", MAP, "--model", "contact", "--curve", "0", "--tip",
+                          "pyramid:20", "--material", "structural", "--poisson", "0.45", "--json")
+    assert code == 0, err
+    info = json.loads(out)
+    e_ref = info["params"]["E_ref"]["value"]
+    young = info["derived"]["E_ref_young"]
+    assert young["value"] == pytest.approx(e_ref * (1 - 0.45**2) / 2, rel=1e-12)
+    assert info["derived"]["E_ref_shear"]["value"] == pytest.approx(young["value"] / 2.9, rel=1e-12)
+    assert info["poisson"] == 0.45 and info["tip_shape"] == "pyramid"
+    code, _, err = _run(capsys, "fit", MAP, "--model", "contact", "--curve", "0", "--R", "10um",
+                        "--poisson", "0.7")
+    assert code == 2 and "poisson must be in [0, 0.5]" in err

@@ -317,7 +317,7 @@ def test_chooser_on_measured_data_refuses_what_it_cannot_honour():
         fit_spectrum(spec, "auto", radius=R, problem=object())
     with pytest.raises(ParameterError, match="accuracy chooses between the theory"):
         fit_spectrum(spec, "auto", radius=R, accuracy=1e-3)
-    with pytest.raises(ParameterError, match="needs the tip radius"):
+    with pytest.raises(ParameterError, match="needs the tip: tip="):
         fit_spectrum(spec, "auto")
 
 

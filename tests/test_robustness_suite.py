@@ -854,9 +854,11 @@ CLI_CASES = [
      r"mean_force must be > 0"),
     ("fit-mean-force-nan", _with(FIT, "--model", "svda", "--mean-force", "nan"),
      r"argument --mean-force"),
-    ("fit-contact-indentation-negative", _with(FIT, "--model", "contact", "--indentation",
-                                               "-5nm"),
+    ("fit-contact-indentation-negative", _with(FIT, "--model", "contact", "--R", "10um",
+                                               "--indentation", "-5nm"),
      r"the contact model needs a positive operating indentation"),
+    ("fit-contact-no-tip", _with(FIT, "--model", "contact", "--indentation", "5nm"),
+     r"the moduli need the tip, which this csv-spectrum file does not record"),
     ("fit-modes-effort", _with(FIT, "--model", "prony", "--modes", "1000000"), r"--modes"),
     ("fit-workers-zero", _with(FIT, "--model", "svda", "--h0", "2nm", "--workers", "0"),
      r"argument --workers"),
@@ -892,8 +894,8 @@ def test_cli_user_error(capsys, untouched, argv, match):
 
 
 def test_cli_fit_refuses_negative_drag(capsys, untouched):
-    run_user_error(capsys, _with(FIT, "--model", "contact", "--indentation", "5nm", "--drag",
-                                 "-1N*s/m"), r"drag", untouched)
+    run_user_error(capsys, _with(FIT, "--model", "contact", "--R", "10um", "--indentation",
+                                 "5nm", "--drag", "-1N*s/m"), r"drag", untouched)
 
 
 def test_cli_unrecognised_option_names_the_command(capsys, untouched):

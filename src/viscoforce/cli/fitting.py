@@ -25,6 +25,7 @@ from viscoforce.cli._args import (
     real_type,
 )
 from viscoforce.cli._output import print_json, print_written
+from viscoforce.physics.paper import PAPER
 
 __all__ = ["SUBCOMMANDS", "modes_type", "read_data"]
 
@@ -78,6 +79,27 @@ FIT_FLAGS = FlagGroup("model", (
          "--model auto: the relative model error required, in [1e-4, 0.1] (default 1e-3)"),
 ))
 
+def _tip_type(text: str):
+    from viscoforce.physics.tips import parse_tip
+
+    return parse_tip(text)
+
+
+#: The system flags of fit and bode: --R without a default (measured data need the tip; the
+#: theory's models take the paper's 10 µm when it is not given), --tip and --poisson.
+FIT_SYSTEM_FLAGS = FlagGroup(SYSTEM_FLAGS.title, (
+    Flag("--R", "length", None, "LENGTH",
+         "the paper's sphere radius R (paraboloidal profile; svda/exact/step default 10 µm; "
+         "measured data: give --R or --tip)"),
+    *(f for f in SYSTEM_FLAGS.flags if f.flag != "--R"),
+    Flag("--tip", _tip_type, None, "SHAPE:SIZE",
+         "tip of the contact model: sphere:R | paraboloid:R | cone:HALF_ANGLE | "
+         "pyramid:HALF_ANGLE (four-sided, Bilodeau) | flat:RADIUS (angles in degrees)"),
+    Flag("--poisson", real_type(0.0), None, "NU",
+         "the sample's Poisson's ratio in [0, 0.5] for the Young's and shear moduli "
+         "(default 0.5)"),
+))
+
 MAP_FLAGS = FlagGroup("maps (several spectra or curves)", (
     Flag("--identifiability", choice_type("local", "profile", what="--identifiability"), None,
          "local|profile",
@@ -100,7 +122,7 @@ def _add_fit_flags(parser: argparse.ArgumentParser, *, required: bool) -> None:
     parser.add_argument("--newtonian", action="store_true",
                         help="contact --material power-law: fit a Newtonian viscosity mu in "
                              "parallel")
-    add_flags(parser, SYSTEM_FLAGS)
+    add_flags(parser, FIT_SYSTEM_FLAGS)
     add_flags(parser, NUMERICS_FLAGS)
 
 
@@ -186,7 +208,7 @@ def _fixed(args: argparse.Namespace, ds, kind: str) -> dict[str, Any]:
         if bad:
             raise UsageError(f"--model auto on measured data cannot honour {', '.join(bad)} (it "
                              "compares power-law with and without mu itself)")
-        return {"radius": args.R, "indentation": args.indentation, "drag": args.drag,
+        return {**_tip_inputs(args, ds), "indentation": args.indentation, "drag": args.drag,
                 "material": args.material, "reference_frequency": args.reference_frequency,
                 "debye_length": args.debye_length}
     if model != "contact":
@@ -212,6 +234,13 @@ def _fixed(args: argparse.Namespace, ds, kind: str) -> dict[str, Any]:
                              f"F{median}{hint}")
         fixed["position" if args.h0 is not None else "mean_force"] = (
             args.h0 if args.h0 is not None else args.mean_force)
+    if model in ("svda", "exact", "step", "auto"):
+        if args.tip is not None:
+            raise UsageError(f"--model {model} models the paper's sphere: give --R, not --tip "
+                             "(--tip applies to --model contact and --model auto on measured "
+                             "data)")
+        if args.R is None:
+            args.R = PAPER.R
     if model == "svda":
         fixed.update(radius=args.R, P=args.P, debye_length=args.debye_length)
     if model in ("exact", "step", "auto"):
@@ -219,13 +248,35 @@ def _fixed(args: argparse.Namespace, ds, kind: str) -> dict[str, Any]:
     if model == "auto" and args.drag is not None:
         fixed["drag"] = args.drag
     if model == "contact":
-        fixed.update(radius=args.R, indentation=args.indentation, drag=args.drag,
+        fixed.update(**_tip_inputs(args, ds), indentation=args.indentation, drag=args.drag,
                      material=args.material or "sls", debye_length=args.debye_length)
         if args.newtonian:
             fixed["newtonian"] = True
         if args.reference_frequency is not None:
             fixed["reference_frequency"] = args.reference_frequency
     return fixed
+
+
+def _tip_inputs(args: argparse.Namespace, ds) -> dict[str, Any]:
+    """``tip`` or ``radius`` of the contact model; measured data without either are refused.
+
+    A measured file does not record the tip here: a silent 10 µm would put every modulus off by
+    √(10 µm / R). Spectra the project simulated (``source`` "simulation" or none) take the
+    paper's sphere.
+    """
+    if args.tip is not None and args.R is not None:
+        raise UsageError("give --tip or --R (the paper's sphere), not both")
+    if args.tip is not None:
+        return {"tip": args.tip}
+    if args.R is not None:
+        return {"radius": args.R}
+    source = str(ds.attrs.get("source", "simulation"))
+    if source != "simulation":
+        raise UsageError(
+            f"the moduli need the tip, which this {source} file does not record: give --tip "
+            "sphere:R | paraboloid:R | cone:HALF_ANGLE | pyramid:HALF_ANGLE | flat:RADIUS "
+            "(e.g. --tip sphere:5um) or --R (the paper's sphere)")
+    return {"radius": PAPER.R}
 
 
 def _problem(args: argparse.Namespace, ds, kind: str):
@@ -307,13 +358,13 @@ def fit_one(args: argparse.Namespace, ds, kind: str):
             raise UsageError("--accuracy needs --model auto")
         weights = {} if args.weights is None else {"weights": args.weights}
         return fit_spectrum(ds, args.model, modes=args.modes, criterion=args.criterion,
-                            **weights, **fixed)
+                            poisson=args.poisson, **weights, **fixed)
     if args.weights is not None:
         raise UsageError("--weights applies to spectra (curve fits are unweighted)")
     modes = 1 if args.modes is None else args.modes
     if kind == "curves":
         return fit_hold(ds, segment=args.segment, modes=modes, criterion=args.criterion)
-    return fit_step(ds, problem=fixed["problem"])
+    return fit_step(ds, problem=fixed["problem"], poisson=args.poisson)
 
 
 # ── fit ─────────────────────────────────────────────────────────────────────────────────────────
@@ -364,6 +415,15 @@ def _single_json(result) -> dict[str, Any]:
         "weighting": str(result.attrs.get("weighting", "")),
         "at_bound": [s for s in str(result.attrs.get("at_bound", "")).split(", ")
                      if s and s != "none"]}
+    derived = {str(n): {"value": float(result[n]), "stderr": float(result[f"{n}_stderr"])}
+               for n in result.data_vars if str(n).endswith(("_young", "_shear"))}
+    if derived:
+        out["derived"] = derived
+        out["poisson"] = float(result.attrs.get("poisson", 0.5))
+    for key in ("tip", "tip_shape", "tip_radius", "tip_half_angle"):
+        if key in result.attrs:
+            value = result.attrs[key]
+            out[key] = value if isinstance(value, str) else float(value)
     for key in ("material", "candidate", "residual_lag1", "effective_samples", "validity"):
         if key in result.attrs:
             value = result.attrs[key]
@@ -415,6 +475,16 @@ def _print_single(info: dict[str, Any]) -> None:
         if "report_as" in p:
             line += f"   -> report as {p['report_as']} (2 sigma profile likelihood)"
         print(line)
+    if info.get("derived"):
+        nu = info["poisson"]
+        print(f"  Young's and shear moduli (Poisson's ratio {nu:g}; E above is the paper's "
+              "2/E = sum (1 - nu^2)/E_i):")
+        for name, p in info["derived"].items():
+            unit = parameter_units(name.rsplit("_", 1)[0])
+            print(f"  {name:<12} = {show_value(p['value'], unit, 4)} ± "
+                  f"{show_value(p['stderr'], unit, 3)}")
+    if "tip" in info:
+        print(f"  tip: {info['tip']}")
     if info["at_bound"]:
         print(f"  at a bound (not identified by these data): {', '.join(info['at_bound'])}")
     for row in info.get("selection", []):
@@ -495,7 +565,7 @@ def run_fit(args: argparse.Namespace) -> int:
         result, texts = _fit_recording(
             fit_map, ds, args.model, modes=1 if args.modes is None else args.modes,
             criterion=args.criterion, scheduler=args.scheduler, workers=args.workers,
-            progress=progress, segment=args.segment, **options, **fixed)
+            progress=progress, segment=args.segment, poisson=args.poisson, **options, **fixed)
         info = _map_json(result)
     else:
         result, texts = _fit_recording(fit_one, args, ds, kind)

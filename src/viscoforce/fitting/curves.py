@@ -14,7 +14,13 @@ import numpy as np
 import xarray as xr
 
 from viscoforce.exceptions import ParameterError
-from viscoforce.fitting.fit import FitData, fit_data, validity_note, warn_fit
+from viscoforce.fitting.fit import (
+    FitData,
+    add_derived_moduli,
+    fit_data,
+    validity_note,
+    warn_fit,
+)
 from viscoforce.schema import select_curve, validate_curves, validate_trajectory
 
 
@@ -115,7 +121,8 @@ def trajectory_data(trajectory: xr.Dataset) -> tuple[FitData, tuple[np.ndarray, 
             (t, h))
 
 
-def fit_step(trajectory: xr.Dataset, *, problem: Any) -> xr.Dataset:
+def fit_step(trajectory: xr.Dataset, *, problem: Any, poisson: float | None = None
+             ) -> xr.Dataset:
     """Fit the exact model's response to the trajectory's drive (``step`` model: tau, E0, E_inf).
 
     Identifiability by the local test (a profile would cost a simulation per evaluation).
@@ -124,4 +131,5 @@ def fit_step(trajectory: xr.Dataset, *, problem: Any) -> xr.Dataset:
     ds = fit_data(data, "step", problem=problem, position_trace=trace, profile=False)
     ds.attrs["validity"] = validity_note("step", ds)
     warn_fit(ds)
+    ds = add_derived_moduli(ds, poisson)
     return ds

@@ -27,6 +27,7 @@ whose likelihood is one-sided is reported as a bound, not as a value with an err
 from __future__ import annotations
 
 import math
+import re
 import warnings
 from collections.abc import Mapping
 from dataclasses import dataclass
@@ -628,9 +629,71 @@ def _fixed_attrs(fixed: Mapping[str, Any]) -> dict[str, Any]:
         if key == "problem":
             out.update({f"system_{k}": v for k, v in value.parameters().items()
                         if not k.startswith(("E", "tau", "delta", "material"))})
+            out.update(tip_shape="paraboloid", tip_radius=float(value.sphere.radius),
+                       tip="the paper's sphere (paraboloidal profile), R = "
+                           f"{float(value.sphere.radius):.4g} m")
+        elif key == "tip" and hasattr(value, "as_attrs"):
+            out.update(value.as_attrs())
+            out["tip"] = value.describe()
         elif isinstance(value, int | float | str) and not isinstance(value, bool):
             out[key] = value
     return out
+
+
+# ── the field's moduli ──────────────────────────────────────────────────────────────────────────
+
+#: Fitted quantities in the paper's modulus convention (2/E = Σ(1 − ν²)/E_i), by name pattern:
+#: moduli [Pa] and the structural viscosity μ [Pa s] (an E-like coefficient of iω).
+PAPER_CONVENTION = re.compile(r"E0|E_inf|E_\d+|E_ref|E|mu")
+
+
+def add_derived_moduli(ds: xr.Dataset, poisson: float | None = None) -> xr.Dataset:
+    """``<name>_young`` and ``<name>_shear`` (with ``_stderr``) of every paper-convention modulus.
+
+    Young's modulus Y = E(1 − ν²)/2 (a rigid tip; the paper's E is twice Johnson's E*) and the
+    shear modulus G = Y/(2(1 + ν)); both linear in E, so the stderr convert the same way. At
+    ν = 0.5, E = 8/3 Y = 8 G. Works on a single fit or a map (elementwise).
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        A fit result.
+    poisson : float, optional
+        The sample's Poisson's ratio ν in [0, 0.5] (default 0.5, incompressible; recorded in
+        ``attrs["poisson"]``).
+
+    Returns
+    -------
+    xarray.Dataset
+        ``ds`` with the derived variables.
+    """
+    from viscoforce.physics.tips import DEFAULT_POISSON, shear_from_young, young_from_paper
+
+    nu = DEFAULT_POISSON if poisson is None else poisson
+    young_from_paper(1.0, nu)  # validates ν (the message names the range)
+    out = {}
+    for name in (str(n) for n in ds["param_i"].values):
+        if not PAPER_CONVENTION.fullmatch(name):
+            continue
+        unit = str(ds[name].attrs.get("units", "Pa"))
+        for suffix, convert, what in (
+                ("young", lambda x: young_from_paper(x, nu), "Young's"),
+                ("shear", lambda x: shear_from_young(young_from_paper(x, nu), nu), "shear")):
+            for tail, source in (("", name), ("_stderr", f"{name}_stderr")):
+                values = np.asarray(ds[source].values, dtype=float)
+                out[f"{name}_{suffix}{tail}"] = xr.DataArray(
+                    convert(values) if values.ndim else float(convert(values)),
+                    dims=ds[source].dims, attrs={
+                        "units": unit, "poisson": float(nu),
+                        "long_name": f"{'standard error of ' if tail else ''}{what} "
+                                     f"{'viscosity' if name == 'mu' else 'modulus'} from {name} "
+                                     f"(nu = {nu:g})"})
+    result = ds.assign(out)
+    result.attrs["poisson"] = float(nu)
+    result.attrs["modulus_convention"] = (
+        "E (and E0, E_inf, E_i, E_ref, mu) is the paper's: 2/E = sum (1 - nu_i^2)/E_i, twice "
+        "Johnson's E*; <name>_young = E (1 - nu^2)/2, <name>_shear = <name>_young/(2 (1 + nu))")
+    return result
 
 
 # ── public entry points ─────────────────────────────────────────────────────────────────────────
@@ -820,7 +883,8 @@ def warn_fit(ds: xr.Dataset, *, stacklevel: int = 4) -> None:
 
 def fit_spectrum(spectrum: xr.Dataset, model: str, *, modes: int | str | None = None,
                  criterion: str = "bic", accuracy: float | None = None,
-                 weights: str | None = None, **fixed: Any) -> xr.Dataset:
+                 weights: str | None = None, poisson: float | None = None,
+                 **fixed: Any) -> xr.Dataset:
     """Fit one spectrum (over ``omega``) with a spectrum model.
 
     Parameters
@@ -847,6 +911,9 @@ def fit_spectrum(spectrum: xr.Dataset, model: str, *, modes: int | str | None = 
     weights : {"stderr", "relative"}, optional
         Weights of the residual (module docstring); default: the data's stderr when present,
         else relative with a DataWarning.
+    poisson : float, optional
+        The sample's Poisson's ratio in [0, 0.5] (default 0.5) of the derived Young's and shear
+        moduli (:func:`add_derived_moduli`).
     **fixed
         The model's fixed inputs (see :func:`viscoforce.fitting.models.make_model`); for
         ``contact`` the ``indentation`` defaults to the data's median ``mean_indentation``.
@@ -866,11 +933,12 @@ def fit_spectrum(spectrum: xr.Dataset, model: str, *, modes: int | str | None = 
                     "accuracy chooses between the theory's approximations (with position or "
                     "mean_force, --h0/--mean-force); on measured data model 'auto' compares "
                     "materials by the criterion instead: leave accuracy out")
-            return fit_measured_auto(spectrum, modes="auto" if modes is None else modes,
-                                     criterion=criterion, weights=weights, **fixed)
-        return fit_spectrum_auto(spectrum, modes=1 if modes is None else modes,
-                                 criterion=criterion, accuracy=accuracy, weights=weights,
-                                 **fixed)
+            return add_derived_moduli(fit_measured_auto(
+                spectrum, modes="auto" if modes is None else modes, criterion=criterion,
+                weights=weights, **fixed), poisson)
+        return add_derived_moduli(fit_spectrum_auto(
+            spectrum, modes=1 if modes is None else modes, criterion=criterion,
+            accuracy=accuracy, weights=weights, **fixed), poisson)
     modes = _check_modes(model, 1 if modes is None else modes) if model in MODEL_NAMES else 1
     if criterion not in CRITERIA:
         raise ParameterError(f"criterion must be one of {', '.join(CRITERIA)}, got {criterion!r}")
@@ -902,7 +970,7 @@ def fit_spectrum(spectrum: xr.Dataset, model: str, *, modes: int | str | None = 
         _warn_model_bias(ds, model, *contact_bias(ds, fixed, data.x, decay))
     ds.attrs["validity"] = validity_note(model, ds)
     warn_fit(ds)
-    return ds
+    return add_derived_moduli(ds, poisson)
 
 
 #: What the validity of each model rests on when no estimate is made (``attrs["validity"]``).

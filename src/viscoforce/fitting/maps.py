@@ -34,6 +34,7 @@ from viscoforce.fitting.curves import hold_data
 from viscoforce.fitting.fit import (
     PVALUE_WARN,
     FitData,
+    add_derived_moduli,
     local_identifiability,
     pixel_fit_data,
     select,
@@ -223,7 +224,7 @@ def cluster(scheduler: str | None = None, workers: int | None = None) -> Iterato
 def fit_map(ds: xr.Dataset, model: str, *, modes: int | str = 1, criterion: str = "bic",
             scheduler: str | None = None, workers: int | None = None, progress: bool = True,
             segment: int | None = None, identifiability: str = "local",
-            **fixed: Any) -> xr.Dataset:
+            poisson: float | None = None, **fixed: Any) -> xr.Dataset:
     """Fit every pixel and return the results over the data's extra dims.
 
     Pixels are the spectra over the extra dims (spectrum models) or the curves (``relaxation``).
@@ -248,6 +249,9 @@ def fit_map(ds: xr.Dataset, model: str, *, modes: int | str = 1, criterion: str 
         Show a progress bar (distributed fits only).
     segment : int, optional
         Curve segment of a ``relaxation`` map.
+    poisson : float, optional
+        Poisson's ratio in [0, 0.5] (default 0.5) of the derived ``<name>_young`` and
+        ``<name>_shear`` (:func:`viscoforce.fitting.fit.add_derived_moduli`).
     identifiability : {"local", "profile"}
         How each parameter's identifiability is judged: ``"local"`` (stderr > |value|, none,
         or at a bound) costs nothing; ``"profile"`` walks the profile likelihood (several refits
@@ -299,8 +303,9 @@ def fit_map(ds: xr.Dataset, model: str, *, modes: int | str = 1, criterion: str 
     else:
         results = _distributed(items, model, modes, criterion, fixed, scheduler, workers,
                                progress, profile)
-    return _assemble(results, dims, layout, model, criterion if modes == "auto" else None, n,
-                     profile=profile)
+    return add_derived_moduli(
+        _assemble(results, dims, layout, model, criterion if modes == "auto" else None, n,
+                  profile=profile), poisson)
 
 
 def _distributed(items: list[FitData | str], model: str, modes: int | str, criterion: str,

@@ -54,7 +54,8 @@ MIN_DOF = 2
 #: Material families compared (``material=`` restricts the comparison to one).
 FAMILIES = ("sls", "prony", "power-law", "structural")
 #: Inputs the measured-data chooser takes.
-INPUTS = ("radius", "indentation", "drag", "material", "reference_frequency", "debye_length")
+INPUTS = ("radius", "tip", "indentation", "drag", "material", "reference_frequency",
+          "debye_length")
 
 
 def _candidates(family: str, modes: int | str) -> list[tuple[str, int, dict[str, Any]]]:
@@ -86,7 +87,8 @@ def fit_measured_auto(spectrum: xr.Dataset, *, modes: int | str = "auto", criter
     weights : {"stderr", "relative"}, optional
         Residual weights (:func:`viscoforce.fitting.fit.spectrum_data`).
     **fixed
-        ``radius`` [m] (required), ``indentation`` [m] (default: the data's median
+        ``tip`` (a :class:`viscoforce.physics.tips.Tip` or its text) or ``radius`` [m] (the
+        paper's sphere; one is required), ``indentation`` [m] (default: the data's median
         ``mean_indentation``), ``drag`` [N·s/m], ``material`` (one family only: sls, prony,
         power-law, structural), ``reference_frequency`` [Hz] (structural), ``debye_length`` [m]
         (the Hertz validity estimate of the kept fit).
@@ -116,8 +118,10 @@ def fit_measured_auto(spectrum: xr.Dataset, *, modes: int | str = "auto", criter
             "mean_force for the theory chooser, or name the model)")
     if criterion not in CRITERIA:
         raise ParameterError(f"criterion must be one of {', '.join(CRITERIA)}, got {criterion!r}")
-    if fixed.get("radius") is None:
-        raise ParameterError("model 'auto' on measured data needs the tip radius (radius=, --R)")
+    if fixed.get("radius") is None and fixed.get("tip") is None:
+        raise ParameterError("model 'auto' on measured data needs the tip: tip= (--tip "
+                             "sphere:R | paraboloid:R | cone:ANGLE | pyramid:ANGLE | flat:RADIUS) "
+                             "or radius= (--R, the paper's sphere)")
     material = fixed.pop("material", None)
     if material is not None and material not in FAMILIES:
         raise ParameterError(f"material must be one of {', '.join(FAMILIES)} (or None: all), "

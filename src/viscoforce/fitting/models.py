@@ -397,7 +397,8 @@ def exact_stiffness(problem: ContactProblem, position: float | None, mean_force:
 
 
 def _contact_model(spec: ModelSpec) -> FitModel:
-    radius, depth = _need(spec, "radius", "indentation")
+    (depth,) = _need(spec, "indentation")
+    tip = contact_tip(spec.fixed.get("radius"), spec.fixed.get("tip"))
     drag = float(spec.fixed.get("drag") or 0.0)
     kind = spec.fixed.get("material", "sls")
     newtonian = bool(spec.fixed.get("newtonian") or False)
@@ -415,7 +416,7 @@ def _contact_model(spec: ModelSpec) -> FitModel:
         raise ModelValidityError(
             f"the contact model needs a positive operating indentation, got {depth!r} m: this "
             "spectrum is pre-contact (use --model svda or exact), or give --indentation D0")
-    root = math.sqrt(radius * depth)
+    root = float(tip.contact_stiffness_factor(depth))  # S(δ0) = (dF/dδ)/E: √(Rδ0) for Hertz
     modes = spec.modes if kind == "prony" else 1
     moduli = _contact_modulus_function(kind, modes, newtonian, f_ref)
 
@@ -427,9 +428,32 @@ def _contact_model(spec: ModelSpec) -> FitModel:
         return _contact_guess(kind, modes, newtonian, f_ref, modulus, omega)
 
     window = _omega_window if kind in ("sls", "prony") else None
-    fixed = {**spec.fixed, "reference_frequency": f_ref} if kind == "structural" else spec.fixed
+    fixed = {**spec.fixed, "reference_frequency": f_ref} if kind == "structural" else dict(
+        spec.fixed)
+    fixed["tip"] = tip
     return FitModel(ModelSpec(spec.name, modes, fixed), function,
                     _contact_layout(kind, modes, newtonian), "omega", guesser, window)
+
+
+def contact_tip(radius: float | None, tip: Any = None):
+    """The tip of the contact model: ``tip``, or the paper's sphere of ``radius``.
+
+    ``tip`` is a :class:`viscoforce.physics.tips.Tip` or its CLI text; ``radius`` stands for the
+    paper's sphere (paraboloidal profile h0 + r²/2R: Hertz).
+
+    Raises
+    ------
+    ParameterError
+        Neither or both given.
+    """
+    from viscoforce.physics.tips import Paraboloid, tip_from
+
+    if (radius is None) == (tip is None):
+        raise ParameterError(
+            "the contact model needs the tip: give tip= (--tip sphere:R | paraboloid:R | "
+            "cone:ANGLE | pyramid:ANGLE | flat:RADIUS) or radius= (--R, the paper's sphere), "
+            + ("not both" if radius is not None else "neither was given"))
+    return Paraboloid(radius) if tip is None else tip_from(tip)
 
 
 def _contact_modulus_function(kind: str, modes: int, newtonian: bool, f_ref: float
@@ -630,8 +654,8 @@ MAX_MODES = 12
 _FIXED: dict[str, tuple[str, ...]] = {
     "svda": ("position", "mean_force", "radius", "P", "debye_length"),
     "exact": ("position", "mean_force", "problem"),
-    "contact": ("radius", "indentation", "drag", "material", "debye_length", "newtonian",
-                "reference_frequency"),
+    "contact": ("radius", "tip", "indentation", "drag", "material", "debye_length",
+                "newtonian", "reference_frequency"),
     "prony": (), "relaxation": (), "step": ("problem", "position_trace")}
 
 
@@ -663,8 +687,15 @@ def check_fixed(name: str, fixed: Mapping[str, Any]) -> dict[str, Any]:
         "problem": lambda n, v: require_instance(n, v, ContactProblem),
         "material": lambda n, v: v if v in CONTACT_MATERIALS else _bad_material(v),
         "newtonian": _require_bool, "reference_frequency": require_positive,
+        "tip": lambda n, v: _as_tip(v),
         "position_trace": lambda n, v: v}
     return {k: (None if v is None else checks[k](k, v)) for k, v in fixed.items()}
+
+
+def _as_tip(value: Any):
+    from viscoforce.physics.tips import tip_from
+
+    return tip_from(value)
 
 
 def _require_bool(name: str, value: Any) -> bool:
