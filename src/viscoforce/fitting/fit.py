@@ -559,6 +559,7 @@ def result_dataset(outcome: Outcome, data: FitData, *,
     attrs: dict[str, Any] = {**data.source, "nfev": info["nfev"], "message": info["message"],
                              "at_bound": ", ".join(info["at_bound"]) or "none",
                              "weighting": info["weighting"], "chisqr": info["chisqr"],
+                             "chisqr_calibrated": outcome.calibrated_chisqr,
                              "dof": info["dof"],
                              "identifiability_method": "profile likelihood (2 sigma)" if profile
                              else "local (stderr > value, none, or at a bound)"}
@@ -858,12 +859,19 @@ def warn_goodness(ds: xr.Dataset, *, stacklevel: int = 3) -> bool:
     if math.isfinite(p) and p < PVALUE_WARN:
         warnings.warn(
             f"the model does not describe these data: chi-square {ds.attrs.get('chisqr', math.nan):.4g}"
-            f" for {ds.attrs.get('dof', '?')} degrees of freedom (redchi "
+            f"{_calibrated_text(ds)} for {ds.attrs.get('dof', '?')} degrees of freedom (redchi "
             f"{float(ds['redchi']):.3g}), p = {p:.2g} < {PVALUE_WARN:g}; its stderr assume it "
             "does. Try another model or material (--model auto), or check the data's stderr",
             GoodnessOfFitWarning, stacklevel=stacklevel)
         return True
     return False
+
+
+def _calibrated_text(ds: xr.Dataset) -> str:
+    calibrated = float(ds.attrs.get("chisqr_calibrated", math.nan))
+    if math.isfinite(calibrated) and not math.isclose(calibrated, float(ds.attrs["chisqr"])):
+        return f" ({calibrated:.4g} with the residuals' stderr-dof calibration)"
+    return ""
 
 
 def warn_fit(ds: xr.Dataset, *, stacklevel: int = 4) -> None:
