@@ -51,6 +51,11 @@ LOAD_FLAGS = FlagGroup(None, (
          "deflection sensitivity, e.g. 50nm/V (for files without calibration)"),
     Flag("--drag", "drag", None, "DRAG",
          "hydrodynamic drag B, subtracted from the spectrum as i*omega*B, e.g. 1e-6N*s/m"),
+    Flag("--tip", None, None, "SHAPE:SIZE",
+         "tip (sphere:R | paraboloid:R | cone:ANGLE | pyramid:ANGLE | flat:RADIUS): adds "
+         "E_storage, E_loss, G_storage, G_loss per point to a spectrum"),
+    Flag("--poisson", None, None, "NU",
+         "the sample's Poisson's ratio in [0, 0.5] for those moduli (default 0.5)"),
 ))
 
 
@@ -93,6 +98,26 @@ def _phase_lag(values: list | None, data) -> float | dict[float, float] | None:
     return {p: next((v for f, v in lags.items() if abs(f - p) <= 1e-9 * p), 0.0) for p in present}
 
 
+def _with_moduli(ds, args: argparse.Namespace):
+    """The spectrum with E′, E″, G′, G″ per point (``--tip``, ``--poisson``)."""
+    from viscoforce.experiments.moduli import add_complex_modulus
+    from viscoforce.physics.tips import parse_tip
+
+    if "omega" not in ds.dims:
+        raise UsageError("--tip and --poisson give the complex modulus of a spectrum; this file "
+                         "gives curves (no modulation segments, or --raw)")
+    if args.tip is None:
+        raise UsageError("--poisson needs --tip (the moduli need the tip's contact size)")
+    poisson = None
+    if args.poisson is not None:
+        try:
+            poisson = float(args.poisson)
+        except ValueError:
+            raise UsageError(f"--poisson must be a number in [0, 0.5], got {args.poisson!r}"
+                             ) from None
+    return add_complex_modulus(ds, parse_tip(args.tip), poisson=poisson)
+
+
 def has_modulation(ds) -> bool:
     """Whether a curves dataset has sine-modulation segments."""
     names = ds.get("segment_name")
@@ -123,6 +148,8 @@ def run_load(args: argparse.Namespace) -> int:
                 reference = modulation_spectrum(reference)
         ds = modulation_spectrum(data, phase_lag=_phase_lag(args.phase_lag, data), drag=args.drag,
                                  phase_reference=reference)
+    if args.tip is not None or args.poisson is not None:
+        ds = _with_moduli(ds, args)
     if args.out:
         ds.to_netcdf(args.out, engine="h5netcdf")
     kind = "spectrum" if "omega" in ds.dims else "curves"

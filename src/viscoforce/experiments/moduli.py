@@ -1,0 +1,129 @@
+"""The complex modulus per frequency of a measured spectrum: E′, E″ (Young's) and G′, G″ (shear).
+
+For a linear viscoelastic sample in contact at operating indentation δ0, the small-amplitude
+dynamic stiffness is k*(ω) = E*(ω)·S(δ0) (+ iωB), with S = (dF/dδ)/E the tip's contact size
+(:mod:`viscoforce.physics.tips`; √(Rδ0) for a Hertz sphere) and E* the paper's modulus
+(2/E = Σ(1 − ν²)/E_i). So, point by point,
+
+    E*(ω) = (k*(ω) − iωB)/S(δ0),   Y* = E*(1 − ν²)/2,   G* = Y*/(2(1 + ν)),
+
+with δ0 the point's ``mean_indentation``. ``E_storage`` = Re Y*, ``E_loss`` = Im Y*,
+``G_storage`` = Re G*, ``G_loss`` = Im G* [Pa] — what PyFMRheo and the cell-rheology literature
+report. Their stderr come from ``stiffness_stderr`` and ``phase_stderr`` (radial and tangential
+errors of k*, as the fits weight them); the error of δ0 is not included (it enters S only as
+δ0^½ for a sphere and is common to all frequencies of a curve). The hydrodynamic drag B is
+subtracted here only when given and the spectrum's own ``attrs["drag"]`` is 0 (it is never
+subtracted twice).
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+import xarray as xr
+
+from viscoforce.exceptions import ModelValidityError, ParameterError
+from viscoforce.physics.tips import DEFAULT_POISSON, Tip, tip_from, young_from_paper
+
+__all__ = ["MODULUS_VARIABLES", "add_complex_modulus"]
+
+#: The variables :func:`add_complex_modulus` writes (each also with ``_stderr``).
+MODULUS_VARIABLES = ("E_storage", "E_loss", "G_storage", "G_loss")
+
+
+def add_complex_modulus(spectrum: xr.Dataset, tip: Tip | str, *, poisson: float | None = None,
+                        drag: float | None = None) -> xr.Dataset:
+    """The spectrum with E′, E″, G′, G″ [Pa] per point and their stderr (module docstring).
+
+    Parameters
+    ----------
+    spectrum : xarray.Dataset
+        A measured spectrum with ``stiffness``, ``phase`` and ``mean_indentation`` (the contact
+        point known), any extra dims.
+    tip : Tip or str
+        The tip (:func:`viscoforce.physics.tips.tip_from`: a Tip or ``"sphere:5um"`` …).
+    poisson : float, optional
+        The sample's Poisson's ratio in [0, 0.5] (default 0.5).
+    drag : float, optional
+        Hydrodynamic drag B [N·s/m] to subtract (refused when the spectrum already had one
+        subtracted).
+
+    Returns
+    -------
+    xarray.Dataset
+        ``spectrum`` with ``E_storage``, ``E_loss``, ``G_storage``, ``G_loss`` and their
+        ``_stderr`` over the spectrum's dims (NaN where a point has no indentation > 0);
+        ``attrs`` ``tip``, ``poisson``, ``complex_modulus``.
+
+    Raises
+    ------
+    ModelValidityError
+        No ``mean_indentation`` (no contact point found).
+    ParameterError
+        A bad tip, Poisson's ratio or drag, or a drag subtracted twice.
+    """
+    tip = tip_from(tip)
+    if tip is None:
+        raise ParameterError("tip must be a Tip or its text (e.g. 'sphere:5um'), got None")
+    nu = DEFAULT_POISSON if poisson is None else poisson
+    young = float(young_from_paper(1.0, nu))  # validates ν
+    shear = young / (2.0 * (1.0 + float(nu)))
+    if "mean_indentation" not in spectrum.variables:
+        raise ModelValidityError(
+            "the complex modulus needs the operating indentation: this spectrum has no "
+            "mean_indentation (no contact point found on the approach)")
+    already = float(spectrum.attrs.get("drag", 0.0) or 0.0)
+    if drag is not None:
+        if not (isinstance(drag, int | float) and math.isfinite(drag) and drag >= 0):
+            raise ParameterError(f"drag must be >= 0 N*s/m and finite, got {drag!r}")
+        if already:
+            raise ParameterError(f"this spectrum already had a drag of {already:g} N*s/m "
+                                 "subtracted (load --drag); do not subtract it again")
+    omega = spectrum["omega"]
+    stiffness, phase = xr.broadcast(spectrum["stiffness"], spectrum["phase"])
+    chi = np.radians(phase)
+    k = stiffness * np.exp(1j * chi) - 1j * omega * float(drag or 0.0)
+    depth = spectrum["mean_indentation"].broadcast_like(stiffness)
+    size = xr.apply_ufunc(_contact_size, depth, kwargs={"tip": tip})
+    modulus = k / size  # the paper's E*(ω)
+    s_err = _stderr(spectrum, "stiffness", stiffness)
+    p_err = np.radians(_stderr(spectrum, "phase", stiffness))
+    sig_re = np.hypot(np.cos(chi) * s_err, stiffness * np.sin(chi) * p_err) / size
+    sig_im = np.hypot(np.sin(chi) * s_err, stiffness * np.cos(chi) * p_err) / size
+    out: dict[str, Any] = {}
+    for name, factor, part, sigma, what in (
+            ("E_storage", young, "real", sig_re, "Young's storage modulus E'"),
+            ("E_loss", young, "imag", sig_im, "Young's loss modulus E''"),
+            ("G_storage", shear, "real", sig_re, "shear storage modulus G'"),
+            ("G_loss", shear, "imag", sig_im, "shear loss modulus G''")):
+        attrs = {"units": "Pa", "long_name": f"{what} (nu = {nu:g}, {tip.describe()})"}
+        out[name] = (getattr(modulus, part) * factor).assign_attrs(attrs)
+        out[f"{name}_stderr"] = (sigma * factor).assign_attrs(
+            {**attrs, "long_name": f"standard error of {what}"})
+    result = spectrum.assign(out)
+    result.attrs.update(tip.as_attrs())
+    result.attrs.update(
+        tip=tip.describe(), poisson=float(nu),
+        complex_modulus=("E* = (k* - i omega B)/S(mean_indentation), S = (dF/d delta)/E of the "
+                         "tip; E_* = Young's Y* = E*(1 - nu^2)/2, G_* = Y*/(2(1 + nu)); "
+                         f"drag subtracted here: {float(drag or 0.0):g} N*s/m"))
+    return result
+
+
+def _contact_size(depth: np.ndarray, *, tip: Tip) -> np.ndarray:
+    """S(δ0) [m] where δ0 > 0, NaN elsewhere (no contact)."""
+    d = np.asarray(depth, dtype=float)
+    ok = np.isfinite(d) & (d > 0)
+    out = np.full(d.shape, np.nan)
+    if ok.any():
+        out[ok] = tip.contact_stiffness_factor(d[ok])
+    return out
+
+
+def _stderr(spectrum: xr.Dataset, name: str, like: xr.DataArray) -> xr.DataArray:
+    key = f"{name}_stderr"
+    if key not in spectrum.variables:
+        return xr.full_like(like, np.nan)
+    return spectrum[key].broadcast_like(like)
