@@ -74,3 +74,23 @@ def test_load_adds_the_moduli_of_the_real_map(tmp_path, capsys):
         assert np.all(ds["E_loss"].values[good] > 0)  # passive: phase in (0, 90°)
         assert ds["E_storage"].attrs["units"] == "Pa"
     assert main(["load", str(MAP), "--poisson", "0.4"]) == 2
+
+
+@pytest.mark.skipif(not MAP.is_file(), reason="bundled real map missing")
+def test_bode_modulus_panel(tmp_path, capsys):
+    out = tmp_path / "bode.png"
+    assert main(["bode", str(MAP), "--curve", "0", "--tip", "cone:35", "--modulus",
+                 "--out", str(out)]) == 0
+    assert out.stat().st_size > 10_000
+    assert main(["bode", str(MAP), "--curve", "0", "--modulus", "--out", str(out)]) == 2
+    assert "--modulus needs --tip" in capsys.readouterr().err
+
+
+def test_bode_plot_modulus_needs_the_moduli():
+    from viscoforce.plotting import bode_plot
+
+    spec, _ = _spectrum(Paraboloid(5e-6))
+    with pytest.raises(ParameterError, match="modulus=True needs exactly one spectrum with"):
+        bode_plot(spec, modulus=True)
+    handle = bode_plot(add_complex_modulus(spec, Paraboloid(5e-6)), modulus=True)
+    assert len(handle.axes) == 3 and "Young's modulus" in handle.axes[2].get_ylabel()

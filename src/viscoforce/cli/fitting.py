@@ -141,6 +141,9 @@ def add_bode(parser: argparse.ArgumentParser) -> None:
     """Flags of ``viscoforce bode``."""
     _add_fit_flags(parser, required=False)
     parser.set_defaults(model=None)
+    parser.add_argument("--modulus", action="store_true",
+                        help="add a panel of Young's storage and loss moduli (needs --tip, or a "
+                             "spectrum loaded with --tip)")
     add_outputs(parser, [Output("--out", FIGURE, "FILE.png", "the Bode plot")])
 
 
@@ -625,7 +628,16 @@ def run_bode(args: argparse.Namespace) -> int:
     from viscoforce.cli.model import _save_figure
     from viscoforce.plotting import bode_plot
 
-    _save_figure(bode_plot(ds, fit=fit), args.out)
+    if args.modulus and ("E_storage" not in ds or args.tip is not None):
+        if args.tip is None:
+            raise UsageError("--modulus needs --tip (the complex modulus needs the tip's contact "
+                             "size), or a spectrum loaded with load --tip")
+        from viscoforce.experiments.moduli import add_complex_modulus
+
+        ds = add_complex_modulus(ds, args.tip, poisson=args.poisson)
+    measured_data = str(ds.attrs.get("source", "simulation")) != "simulation"
+    _save_figure(bode_plot(ds, fit=fit, modulus=args.modulus,
+                           frequency_unit="Hz" if measured_data else "rad/s"), args.out)
     print_written(args.out)
     return 0
 

@@ -292,6 +292,27 @@ def _draw_residuals(ax: Axes, ds: xr.Dataset, fit: xr.Dataset, scale: float) -> 
     return [re, im]
 
 
+def _draw_modulus(ax: Axes, ds: xr.Dataset, scale: float) -> list[Artist]:
+    """Young's storage and loss moduli E′, E″ [Pa] with error bars, unflagged points."""
+    x = np.asarray(ds["omega"].values, dtype=float) * scale
+    keep = np.ones(x.shape, dtype=bool)
+    if "quality" in ds.variables:
+        keep &= np.broadcast_to(np.asarray(ds["quality"].values), x.shape) == 0
+    drawn: list[Artist] = []
+    for name, label, face in (("E_storage", "E′ (storage)", None), ("E_loss", "E″ (loss)", "none")):
+        y = np.asarray(ds[name].values, dtype=float)
+        err = ds.get(f"{name}_stderr")
+        yerr = None if err is None else np.broadcast_to(np.asarray(err.values, float), y.shape)[keep]
+        art = ax.errorbar(x[keep], y[keep], yerr=yerr, marker="o", linestyle="none", capsize=2,
+                          mfc=face, label=label)
+        drawn.append(art)
+    ax.set_yscale("log")
+    nu = ds.attrs.get("poisson", 0.5)
+    ax.set_ylabel(f"Young's modulus [Pa] (ν = {float(nu):g})")
+    ax.legend(fontsize="small", title=str(ds.attrs.get("tip", "")), title_fontsize="small")
+    return drawn
+
+
 def _on(artist: Artist, ax: Axes) -> bool:
     """Whether ``artist`` (a line, text or error-bar container) was drawn on ``ax``."""
     from matplotlib.container import Container
@@ -304,7 +325,8 @@ def bode_plot(spectra: xr.Dataset | Mapping[str, xr.Dataset] | Sequence[xr.Datas
               fit: xr.Dataset | None = None, ax: Sequence[Axes] | None = None,
               magnitude: Magnitude = "stiffness", frequency_unit: FrequencyUnit = "rad/s",
               markers: bool | None = None, select: Mapping[str, int] | None = None,
-              title: str | None = None, residuals: bool = False) -> PlotHandle:
+              title: str | None = None, residuals: bool = False,
+              modulus: bool = False) -> PlotHandle:
     """Bode plot: magnitude and phase χ against a log frequency axis (data, methods, fits).
 
     Parameters
@@ -335,6 +357,9 @@ def bode_plot(spectra: xr.Dataset | Mapping[str, xr.Dataset] | Sequence[xr.Datas
         besides ``omega`` need it.
     title : str, optional
         Figure title.
+    modulus : bool
+        One spectrum carrying ``E_storage``, ``E_loss`` (:func:`viscoforce.experiments.moduli.
+        add_complex_modulus`, ``load --tip``): a panel of Young's storage and loss moduli [Pa].
     residuals : bool
         With ``fit`` and one spectrum: a third panel of the residuals of the real and
         imaginary parts of k*, in units of their stderr (the χ² terms), or relative to |k*_fit|
@@ -394,11 +419,16 @@ def bode_plot(spectra: xr.Dataset | Mapping[str, xr.Dataset] | Sequence[xr.Datas
     residuals = _require_flag("residuals", residuals)
     if residuals and (fit_ds is None or len(items) != 1 or ax is not None):
         raise ParameterError("residuals=True needs a fit, exactly one spectrum and no ax")
+    modulus = _require_flag("modulus", modulus)
+    if modulus and (len(items) != 1 or ax is not None or "E_storage" not in items[0][1]):
+        raise ParameterError("modulus=True needs exactly one spectrum with E_storage and E_loss "
+                             "(load --tip, or viscoforce.experiments.moduli.add_complex_modulus) "
+                             "and no ax")
     if ax is None:
-        rows = 3 if residuals else 2
-        figure, axes = plt.subplots(rows, 1, sharex=True, figsize=(6.4, 5.6 + 1.8 * residuals),
-                                    layout="constrained",
-                                    gridspec_kw={"height_ratios": [3, 3, 2][:rows]})
+        ratios = [3, 3] + [2] * residuals + [3] * modulus
+        figure, axes = plt.subplots(len(ratios), 1, sharex=True,
+                                    figsize=(6.4, 5.6 + 1.8 * residuals + 2.6 * modulus),
+                                    layout="constrained", gridspec_kw={"height_ratios": ratios})
     else:
         axes = tuple(ax)
         figure = axes[0].figure
@@ -411,6 +441,8 @@ def bode_plot(spectra: xr.Dataset | Mapping[str, xr.Dataset] | Sequence[xr.Datas
         drawn += _draw_fit((axes[0], axes[1]), fit_ds, scale)
     if residuals:
         drawn += _draw_residuals(axes[2], items[0][1], fit_ds, scale)
+    if modulus:
+        drawn += _draw_modulus(axes[-1], items[0][1], scale)
     shown = [np.asarray(ds[magnitude].values, dtype=float) for _, ds in items]
     if fit_ds is not None:
         shown.append(np.asarray(fit_ds["fit_stiffness"].values, dtype=float))
