@@ -232,7 +232,8 @@ def jpk_hold(path: Path) -> dict[str, Any]:
                           "t_stop_s": float(data.x[sl][-1]), "redchi": finite(refit["redchi"]),
                           "tau": moved}
     return {"status": "ok", "file": str(path), "samples": int(size),
-            "force_baseline_subtracted": int(curves.attrs.get("force_baseline_subtracted", 0)),
+            "force_baseline_subtracted": int("force_baseline" in ds.attrs
+                                             or curves.attrs.get("force_baseline_subtracted", 0)),
             "hold_s": float(data.x[-1] - data.x[0]), "modes": n,
             "selection": selection, "selection_note": ds.attrs.get("selection_note"),
             "criterion": ds.attrs.get("criterion"), "params": params,
@@ -268,7 +269,8 @@ def hold_row(r: dict[str, Any]) -> tuple[str, str, str]:
             num(m["shift_in_stderr"], 2) + loose(m) for m in w["tau"].values())
             + f" without the {text} 10 % ({cut:.0f} s)")
     f_inf = r["params"]["F_inf"]
-    baseline = "" if r["force_baseline_subtracted"] else " (force not baseline-corrected)"
+    baseline = (" (relative to the file's free-cantilever baseline)"
+                if r["force_baseline_subtracted"] else " (force not baseline-corrected)")
     result = (f"{kept} ({r['samples']} samples): τ = {taus} s; F_inf = "
               f"{num(f_inf['value'] * 1e9, 2)} nN{baseline}. Stderr × "
               f"{r['stderr_correction']:.2f} for residual lag-1 autocorrelation "

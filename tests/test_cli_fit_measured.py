@@ -129,3 +129,22 @@ def test_measured_data_need_the_tip_and_report_youngs_moduli(capsys):
     code, _, err = _run(capsys, "fit", MAP, "--model", "contact", "--curve", "0", "--R", "10um",
                         "--poisson", "0.7")
     assert code == 2 and "poisson must be in [0, 0.5]" in err
+
+
+SR = Path(__file__).resolve().parents[2] / "shared" / "data" / "real" / "afmformats" / \
+    "fmt-jpk-sr_cell1-0008.jpk-force"
+
+
+@pytest.mark.skipif(not SR.is_file(), reason="real stress-relaxation file absent")
+def test_relaxation_force_is_relative_to_the_free_cantilever_baseline():
+    from viscoforce.fitting.curves import hold_data
+    from viscoforce.io.instruments import load_instrument
+
+    curves = load_instrument(SR)
+    data = hold_data(curves)
+    row = int(np.flatnonzero(curves["segment_name"].values == "pause")[-1])
+    baseline = float(curves["segment_baseline"].values[row])
+    raw = curves["force"].values[curves["segment"].values == row]
+    np.testing.assert_allclose(data.y, raw[np.isfinite(raw)] - baseline, rtol=0, atol=1e-20)
+    assert data.source["force_baseline"] == baseline
+    assert "free-cantilever baseline" in data.source["force_reference"]

@@ -1,8 +1,10 @@
 """Force-curve data for the ``relaxation`` and ``step`` models.
 
-``relaxation`` fits the force on a hold: by default the pause segment that follows the first
-approach of a curve (``segment=N`` picks the curve's N-th segment, counted from 0 in the file's
-order), with t from the start of that segment. ``step`` fits a trajectory (time, position, force:
+``relaxation`` fits the force on a hold (its τ_i are force-relaxation times at fixed position,
+not creep times; F relative to the file's free-cantilever baseline where it has one): by
+default the pause segment that follows the first approach of a curve (``segment=N`` picks the
+curve's N-th segment, counted from 0 in the file's order), with t from the start of that
+segment. ``step`` fits a trajectory (time, position, force:
 what ``simulate`` writes): the position history is the drive of the exact model.
 """
 
@@ -71,17 +73,39 @@ def hold_data(curves: xr.Dataset, *, curve: int = 0, segment: int | None = None)
     t, f = t[ok], f[ok]
     source = {"data_kind": "curves", "data_points": int(t.size), "segment_start": float(t[0]),
               "curve": int(curve)}
+    baseline = _free_baseline(one, int(one["segment"].values[start]))
+    if baseline is not None:
+        f = f - baseline
+        source.update(force_baseline=baseline, force_reference=(
+            "F relative to the free-cantilever baseline recorded in the file for this segment "
+            "(segment_baseline): F_inf and dF_i are forces on the sample"))
+    else:
+        source["force_reference"] = ("force as recorded: the file gives no free-cantilever "
+                                     "baseline, so F_inf includes the cantilever's offset")
     if "source" in curves.attrs:
         source["data_source"] = str(curves.attrs["source"])
     return FitData(t - t[0], f, None, source)
+
+
+def _free_baseline(one: xr.Dataset, row: int) -> float | None:
+    """The file's free-cantilever force baseline [N] of segment-table row ``row``, if any."""
+    if "segment_baseline" not in one.variables:
+        return None
+    values = np.asarray(one["segment_baseline"].values, dtype=float).reshape(-1)
+    if not 0 <= row < values.size or not np.isfinite(values[row]):
+        return None
+    return float(values[row])
 
 
 def fit_hold(curves: xr.Dataset, *, curve: int = 0, segment: int | None = None,
              modes: int | str = 1, criterion: str = "bic") -> xr.Dataset:
     """Fit F(t) = F_inf + Σ dF_i e^{−t/τ_i} to the hold of one curve (``relaxation`` model).
 
-    The τ_i are force-relaxation times at fixed position (not the creep times of Eq. 3). The
-    stderr are corrected for autocorrelated residuals (:mod:`viscoforce.fitting.fit`).
+    The τ_i are force-relaxation times at fixed position (not the creep times of Eq. 3: for a
+    standard linear solid the force decays with τ·E_inf/E0). F is taken relative to the file's
+    free-cantilever baseline where it records one (``attrs["force_baseline"]``,
+    ``attrs["force_reference"]``). The stderr are corrected for autocorrelated residuals
+    (:mod:`viscoforce.fitting.fit`).
 
     Parameters
     ----------
