@@ -169,6 +169,13 @@ def _real(folder: Path, out: Path, report: dict[str, Any]) -> None:
                                   fit["selection_redchi"].values, strict=True):
         print(f"     candidate {str(label):<13} BIC {float(bic):9.4g}, redchi {float(redchi):.3g}")
     print("\n".join(_params(fit)))
+    young = [n for n in fit.data_vars if str(n).endswith("_young")]
+    if young:
+        print(f"   as Young's moduli (Poisson's ratio {float(fit.attrs['poisson']):g}; the "
+              "values above are the paper's E = 2Y/(1 - nu^2)):")
+        for n in young:
+            print(_show(str(n), float(fit[n]), float(fit[f"{n}_stderr"]),
+                        str(fit[n].attrs["units"])))
     for name in (str(n) for n in fit["param_i"].values):
         text = bound_text(fit, name)
         if text:
