@@ -148,3 +148,23 @@ def test_relaxation_force_is_relative_to_the_free_cantilever_baseline():
     np.testing.assert_allclose(data.y, raw[np.isfinite(raw)] - baseline, rtol=0, atol=1e-20)
     assert data.source["force_baseline"] == baseline
     assert "free-cantilever baseline" in data.source["force_reference"]
+
+
+@needs_map
+def test_fit_out_csv_is_one_row_per_pixel_with_units(capsys, tmp_path):
+    import csv
+
+    out = tmp_path / "fits.csv"
+    code, _, err = _run(capsys, "fit", MAP, "--model", "contact", "--R", "10um", "--material",
+                        "structural", "--scheduler", "synchronous", "--out", out)
+    assert code == 0, err
+    with out.open(newline="") as handle:
+        rows = list(csv.reader(handle))
+    header, body = rows[0], rows[1:]
+    assert len(body) == 16
+    assert {"curve", "x (m)", "y (m)", "alpha (1)", "E_ref (Pa)", "E_ref_stderr (Pa)",
+            "E_ref_young (Pa)", "quality", "chi2_pvalue (1)"} <= set(header)
+    assert all(len(row) == len(header) for row in body)
+    code, _, err = _run(capsys, "fit", MAP, "--model", "contact", "--R", "10um", "--out",
+                        tmp_path / "fits.txt")
+    assert code == 2 and "must end in .nc (netCDF) or .csv" in err

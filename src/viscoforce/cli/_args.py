@@ -36,6 +36,7 @@ __all__ = [
     "FIGURE",
     "MATERIAL_FLAGS",
     "NETCDF",
+    "NETCDF_OR_CSV",
     "NUMERICS_FLAGS",
     "SYSTEM_FLAGS",
     "Flag",
@@ -457,6 +458,8 @@ NUMERICS_FLAGS = FlagGroup("numerics", (
 
 #: Output kinds of :class:`Output`.
 NETCDF, FIGURE, DIRECTORY = "netcdf", "figure", "directory"
+#: An output that is a netCDF file (.nc) or a CSV table (.csv), by its extension.
+NETCDF_OR_CSV = "netcdf-or-csv"
 
 #: Figure formats assumed when matplotlib cannot be asked.
 _FALLBACK_FIGURE_FORMATS = ("eps", "jpeg", "jpg", "pdf", "png", "ps", "svg", "tif", "tiff",
@@ -526,6 +529,8 @@ def _check_one(flag: str, text: str, kind: str) -> None:
     suffix = path.suffix.lower()
     if kind == NETCDF and suffix != ".nc":
         raise UsageError(f"{shown}: a netCDF file name must end in .nc")
+    if kind == NETCDF_OR_CSV and suffix not in (".nc", ".csv"):
+        raise UsageError(f"{shown}: the file name must end in .nc (netCDF) or .csv (a table)")
     if kind == FIGURE:
         formats = figure_formats()
         listed = ", ".join(f".{f}" for f in formats)

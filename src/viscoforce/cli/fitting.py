@@ -12,7 +12,7 @@ from typing import Any
 
 from viscoforce.cli._args import (
     FIGURE,
-    NETCDF,
+    NETCDF_OR_CSV,
     NUMERICS_FLAGS,
     SYSTEM_FLAGS,
     Flag,
@@ -130,7 +130,9 @@ def add_fit(parser: argparse.ArgumentParser) -> None:
     """Flags of ``viscoforce fit``."""
     _add_fit_flags(parser, required=True)
     add_flags(parser, MAP_FLAGS)
-    add_outputs(parser, [Output("--out", NETCDF, "FILE.nc", "write the fit result (netCDF)"),
+    add_outputs(parser, [Output("--out", NETCDF_OR_CSV, "FILE.nc|FILE.csv",
+                                "write the fit result: netCDF (.nc) or a table, one row per "
+                                "curve/pixel with units in the headers (.csv)"),
                          Output("--plot", FIGURE, "FILE.png", "data and fit (one spectrum/curve)")])
     parser.add_argument("--json", action="store_true", help="print one JSON object (SI units)")
     parser.add_argument("--progress", action=argparse.BooleanOptionalAction, default=None,
@@ -574,7 +576,9 @@ def run_fit(args: argparse.Namespace) -> int:
         result, texts = _fit_recording(fit_one, args, ds, kind)
         info = _single_json(result)
     info["warnings"] = texts
-    if args.out:
+    if args.out and args.out.lower().endswith(".csv"):
+        write_table(result, args.out)
+    elif args.out:
         result.to_netcdf(args.out, engine="h5netcdf")
     if args.plot:
         _plot(ds, kind, result, args)
@@ -587,6 +591,45 @@ def run_fit(args: argparse.Namespace) -> int:
         _print_single(info)
     print_written(args.out, args.plot)
     return 0
+
+
+def write_table(result, path: str) -> None:
+    """A fit result as CSV: one row per curve/pixel, ``name (unit)`` headers.
+
+    Columns: the map's coordinates, each parameter and its stderr, the derived Young's and shear
+    moduli, ``redchi``, ``chi2_pvalue``, ``quality`` (maps), ``success``, ``modes``.
+    """
+    import csv
+
+    import numpy as np
+
+    names = [str(n) for n in result["param_i"].values]
+    columns = [n for name in names for n in (name, f"{name}_stderr")]
+    columns += [str(n) for n in result.data_vars if str(n).endswith(
+        ("_young", "_shear", "_young_stderr", "_shear_stderr"))]
+    columns += [n for n in ("redchi", "chi2_pvalue", "quality", "success", "modes")
+                if n in result.variables]
+    dims = [str(d) for d in result["success"].dims]
+    coords = [str(c) for c in result.coords
+              if c not in ("param_i", "param_j", "omega", "time")
+              and set(result[c].dims) <= set(dims) and result[c].dims]
+    shape = tuple(result.sizes[d] for d in dims)
+
+    def header(name: str) -> str:
+        unit = str(result[name].attrs.get("units", ""))
+        return f"{name} ({unit})" if unit else name
+
+    def column(name: str) -> np.ndarray:
+        da = result[name]
+        return np.broadcast_to(np.asarray(da.transpose(*(d for d in dims if d in da.dims))
+                                          .values), shape).reshape(-1)
+
+    with open(path, "w", newline="") as handle:
+        writer = csv.writer(handle)
+        writer.writerow([header(c) for c in (*coords, *columns)])
+        for row in zip(*(column(c) for c in (*coords, *columns)), strict=True):
+            writer.writerow([f"{v:.10g}" if isinstance(v, float | np.floating) else v
+                             for v in row])
 
 
 def _plot(ds, kind: str, result, args: argparse.Namespace) -> None:
