@@ -29,7 +29,9 @@ from viscoforce.physics.paper import PAPER
 
 __all__ = ["SUBCOMMANDS", "modes_type", "read_data"]
 
-_MODELS = ("svda", "exact", "contact", "prony", "relaxation", "step", "auto")
+_MODELS = ("svda", "exact", "contact", "prony", "relaxation", "step", "hertz", "creep", "auto")
+#: Models of measured force curves (a curves dataset).
+_CURVE_MODELS = ("relaxation", "hertz", "creep")
 _MATERIALS = ("sls", "prony", "power-law", "structural")
 _WEIGHTS = ("stderr", "relative")
 
@@ -56,7 +58,8 @@ def modes_type(text: str) -> int | str:
 
 FIT_FLAGS = FlagGroup("model", (
     Flag("--modes", modes_type, None, "N|auto",
-         "relaxation modes (exact, contact --material prony, prony, relaxation; default 1); "
+         "relaxation modes (exact, contact --material prony, prony, relaxation, creep; default "
+         "1); "
          "auto: 1, 2, ... by the criterion (the default of --model auto on measured data)"),
     Flag("--criterion", None, "bic", "bic|aic", "information criterion of --modes auto"),
     Flag("--h0", "length", None, "LENGTH", "mean position (svda, exact)"),
@@ -73,7 +76,9 @@ FIT_FLAGS = FlagGroup("model", (
          "fit weights: the data's stderr (default when present) or relative 1/|k*|"),
     Flag("--drag", "drag", None, "DRAG", "hydrodynamic drag B of the contact model (i*omega*B)"),
     Flag("--segment", integer_type(0), None, "N",
-         "relaxation: the curve's N-th segment (from 0; default the pause after the approach)"),
+         "relaxation, hertz, creep: the curve's N-th segment (from 0; default the model's own: "
+         "the constant-height pause after the approach, the approach, the constant-force "
+         "pause)"),
     Flag("--curve", integer_type(0), None, "I", "fit only curve (pixel) I of a map"),
     Flag("--accuracy", real_type(0.0), None, "REL",
          "--model auto: the relative model error required, in [1e-4, 0.1] (default 1e-3)"),
@@ -93,8 +98,9 @@ FIT_SYSTEM_FLAGS = FlagGroup(SYSTEM_FLAGS.title, (
          "measured data: give --R or --tip)"),
     *(f for f in SYSTEM_FLAGS.flags if f.flag != "--R"),
     Flag("--tip", _tip_type, None, "SHAPE:SIZE",
-         "tip of the contact model: sphere:R | paraboloid:R | cone:HALF_ANGLE | "
-         "pyramid:HALF_ANGLE (four-sided, Bilodeau) | flat:RADIUS (angles in degrees)"),
+         "tip of the contact and hertz models: sphere:R | paraboloid:R | cone:HALF_ANGLE | "
+         "pyramid:HALF_ANGLE (four-sided, Bilodeau) | flat:RADIUS (angles in degrees; default "
+         "the file's own where it records one)"),
     Flag("--poisson", real_type(0.0), None, "NU",
          "the sample's Poisson's ratio in [0, 0.5] for the Young's and shear moduli "
          "(default 0.5)"),
@@ -110,9 +116,15 @@ MAP_FLAGS = FlagGroup("maps (several spectra or curves)", (
 ))
 
 
-def _add_fit_flags(parser: argparse.ArgumentParser, *, required: bool) -> None:
-    parser.add_argument("data", metavar="DATA",
-                        help="spectrum or curves: an instrument file, a netCDF file or a CSV")
+def _add_fit_flags(parser: argparse.ArgumentParser, *, required: bool, batch: bool = False
+                   ) -> None:
+    if batch:
+        parser.add_argument("data", metavar="DATA", nargs="+",
+                            help="spectrum or curves: an instrument file, a netCDF file or a "
+                                 "CSV; several files or a folder fit each into one table")
+    else:
+        parser.add_argument("data", metavar="DATA",
+                            help="spectrum or curves: an instrument file, a netCDF file or a CSV")
     parser.add_argument("--format", default=None, metavar="NAME",
                         help="instrument file format (default: detected)")
     parser.add_argument("--model", choices=_MODELS, required=required, default=None,
@@ -128,7 +140,7 @@ def _add_fit_flags(parser: argparse.ArgumentParser, *, required: bool) -> None:
 
 def add_fit(parser: argparse.ArgumentParser) -> None:
     """Flags of ``viscoforce fit``."""
-    _add_fit_flags(parser, required=True)
+    _add_fit_flags(parser, required=True, batch=True)
     add_flags(parser, MAP_FLAGS)
     add_outputs(parser, [Output("--out", NETCDF_OR_CSV, "FILE.nc|FILE.csv",
                                 "write the fit result: netCDF (.nc) or a table, one row per "
@@ -252,6 +264,11 @@ def _fixed(args: argparse.Namespace, ds, kind: str) -> dict[str, Any]:
         fixed["problem"] = _problem(args, ds, kind)
     if model == "auto" and args.drag is not None:
         fixed["drag"] = args.drag
+    if model == "hertz":
+        fixed["tip"] = _hertz_tip(args, ds)
+    if model in ("relaxation", "creep") and (args.tip is not None or args.R is not None):
+        raise UsageError(f"--model {model} fits {'forces' if model == 'relaxation' else 'the tip position'}"
+                         " over time: it takes no --tip or --R")
     if model == "contact":
         fixed.update(**_tip_inputs(args, ds), indentation=args.indentation, drag=args.drag,
                      material=args.material or "sls", debye_length=args.debye_length)
@@ -284,6 +301,26 @@ def _tip_inputs(args: argparse.Namespace, ds) -> dict[str, Any]:
     return {"radius": PAPER.R}
 
 
+def _hertz_tip(args: argparse.Namespace, ds):
+    """The hertz model's tip: --tip, --R (a sphere) or the file's own; else a usage error."""
+    from viscoforce.fitting.curves import file_tip
+    from viscoforce.physics.tips import Sphere
+
+    if args.tip is not None and args.R is not None:
+        raise UsageError("give --tip or --R (a sphere), not both")
+    if args.tip is not None:
+        return args.tip
+    if args.R is not None:
+        return Sphere(args.R)
+    tip = file_tip(ds)
+    if tip is None:
+        raise UsageError(
+            f"--model hertz needs the tip, which this {ds.attrs.get('source', '')} file does not "
+            "record: give --tip sphere:R | paraboloid:R | cone:HALF_ANGLE | pyramid:HALF_ANGLE | "
+            "flat:RADIUS (e.g. --tip cone:20) or --R")
+    return tip
+
+
 def _problem(args: argparse.Namespace, ds, kind: str):
     import numpy as np
 
@@ -301,12 +338,12 @@ def _problem(args: argparse.Namespace, ds, kind: str):
 
 def _check_model(args: argparse.Namespace, kind: str) -> None:
     spectrum_models = ("svda", "exact", "contact", "prony", "auto")
-    wanted = {"spectrum": spectrum_models, "curves": ("relaxation",), "trajectory": ("step",)}
+    wanted = {"spectrum": spectrum_models, "curves": _CURVE_MODELS, "trajectory": ("step",)}
     if args.model not in wanted[kind]:
         raise UsageError(f"--model {args.model} does not fit {kind} data; for {kind}: "
                          f"{', '.join(wanted[kind])}")
     if args.modes == "auto" and args.model not in ("exact", "contact", "prony", "relaxation",
-                                                   "auto"):
+                                                   "creep", "auto"):
         raise UsageError(f"--modes auto needs a model with several modes, not {args.model}")
     if args.criterion not in ("bic", "aic"):
         raise UsageError(f"--criterion must be bic or aic, got {args.criterion!r}")
@@ -344,7 +381,7 @@ def _select_curve(ds, kind: str, index: int | None):
 
 def fit_one(args: argparse.Namespace, ds, kind: str):
     """The fit result of one spectrum, curve or trajectory."""
-    from viscoforce.fitting.curves import fit_hold, fit_step
+    from viscoforce.fitting.curves import fit_curve, fit_hold, fit_step
     from viscoforce.fitting.fit import fit_spectrum
 
     fixed = _fixed(args, ds, kind)
@@ -368,7 +405,13 @@ def fit_one(args: argparse.Namespace, ds, kind: str):
         raise UsageError("--weights applies to spectra (curve fits are unweighted)")
     modes = 1 if args.modes is None else args.modes
     if kind == "curves":
-        return fit_hold(ds, segment=args.segment, modes=modes, criterion=args.criterion)
+        if args.model == "hertz" and args.modes not in (None, 1):
+            raise UsageError("--model hertz has no modes: leave --modes out")
+        if args.model == "relaxation":
+            return fit_hold(ds, segment=args.segment, modes=modes, criterion=args.criterion)
+        return fit_curve(ds, args.model, segment=args.segment, modes=modes,
+                         criterion=args.criterion, tip=fixed.get("tip"),
+                         poisson=args.poisson if args.model == "hertz" else None)
     return fit_step(ds, problem=fixed["problem"], poisson=args.poisson)
 
 
@@ -543,8 +586,41 @@ def _fit_recording(run, *args: Any, **kwargs: Any):
     return result, texts
 
 
+#: File suffixes a folder given as DATA contributes to a batch fit (what ``load`` reads).
+BATCH_SUFFIXES = (".jpk-force", ".jpk-force-map", ".zip", ".ibw", ".csv", ".tsv", ".txt", ".nc",
+                  ".uff", ".spm")
+
+
+def data_paths(items: list[str] | str) -> list[str]:
+    """The files of DATA: each file as given, each folder's readable files (sorted, recursive)."""
+    from pathlib import Path
+
+    out: list[str] = []
+    for item in [items] if isinstance(items, str) else items:
+        path = Path(item)
+        if path.is_dir():
+            found = sorted(str(p) for p in path.rglob("*") if p.is_file()
+                           and p.name.lower().endswith(BATCH_SUFFIXES)
+                           and not p.name.startswith(".") and p.stem.upper() not in (
+                               "README", "LICENSE", "SOURCE", "NOTES"))
+            if not found:
+                raise UsageError(f"DATA {item}: the folder holds no file to fit (suffixes "
+                                 f"{', '.join(BATCH_SUFFIXES)})")
+            out.extend(found)
+        else:
+            out.append(item)
+    return out
+
+
 def run_fit(args: argparse.Namespace) -> int:
-    """Fit DATA; one spectrum/curve → parameters, a map → per-pixel parameters."""
+    """Fit DATA; one spectrum/curve → parameters, a map → per-pixel parameters.
+
+    Several files (or a folder) are fitted one after the other into one table (:func:`run_batch`).
+    """
+    paths = data_paths(args.data)
+    if len(paths) > 1:
+        return run_batch(args, paths)
+    args.data = paths[0]
     ds = read_data(args.data, args.format)
     kind = _kind(ds)
     _check_model(args, kind)
@@ -593,14 +669,12 @@ def run_fit(args: argparse.Namespace) -> int:
     return 0
 
 
-def write_table(result, path: str) -> None:
-    """A fit result as CSV: one row per curve/pixel, ``name (unit)`` headers.
+def table_rows(result) -> tuple[list[str], list[list[Any]]]:
+    """A fit result as table rows: ``name (unit)`` headers and one row per curve/pixel.
 
     Columns: the map's coordinates, each parameter and its stderr, the derived Young's and shear
     moduli, ``redchi``, ``chi2_pvalue``, ``quality`` (maps), ``success``, ``modes``.
     """
-    import csv
-
     import numpy as np
 
     names = [str(n) for n in result["param_i"].values]
@@ -611,7 +685,7 @@ def write_table(result, path: str) -> None:
                 if n in result.variables]
     dims = [str(d) for d in result["success"].dims]
     coords = [str(c) for c in result.coords
-              if c not in ("param_i", "param_j", "omega", "time")
+              if c not in ("param_i", "param_j", "omega", "time", "tip_position")
               and set(result[c].dims) <= set(dims) and result[c].dims]
     shape = tuple(result.sizes[d] for d in dims)
 
@@ -624,12 +698,167 @@ def write_table(result, path: str) -> None:
         return np.broadcast_to(np.asarray(da.transpose(*(d for d in dims if d in da.dims))
                                           .values), shape).reshape(-1)
 
+    headers = [header(c) for c in (*coords, *columns)]
+    rows = [list(row) for row in zip(*(column(c) for c in (*coords, *columns)), strict=True)]
+    return headers, rows
+
+
+def _write_csv(path: str, headers: list[str], rows: list[list[Any]]) -> None:
+    import csv
+
+    import numpy as np
+
     with open(path, "w", newline="") as handle:
         writer = csv.writer(handle)
-        writer.writerow([header(c) for c in (*coords, *columns)])
-        for row in zip(*(column(c) for c in (*coords, *columns)), strict=True):
-            writer.writerow([f"{v:.10g}" if isinstance(v, float | np.floating) else v
-                             for v in row])
+        writer.writerow(headers)
+        for row in rows:
+            writer.writerow(["" if v is None else f"{v:.10g}" if isinstance(
+                v, float | np.floating) else v for v in row])
+
+
+def write_table(result, path: str) -> None:
+    """A fit result as CSV: one row per curve/pixel, ``name (unit)`` headers (:func:`table_rows`)."""
+    _write_csv(path, *table_rows(result))
+
+
+# ── batch: many files into one table ────────────────────────────────────────────────────────────
+
+def _fit_file(args: argparse.Namespace, path: str):
+    """The fit result of one file of a batch (a map's curves fitted in this process)."""
+    ds = read_data(path, args.format)
+    kind = _kind(ds)
+    _check_model(args, kind)
+    ds = _select_curve(ds, kind, args.curve)
+    if _extra_dims(ds, kind):
+        from viscoforce.fitting.maps import fit_map
+
+        options = {} if args.identifiability is None else {
+            "identifiability": args.identifiability}
+        return fit_map(ds, args.model, modes=1 if args.modes is None else args.modes,
+                       criterion=args.criterion, scheduler=args.scheduler or "synchronous",
+                       workers=args.workers, progress=False, segment=args.segment,
+                       poisson=args.poisson, **options, **_fixed(args, ds, kind))
+    return fit_one(args, ds, kind)
+
+
+def run_batch(args: argparse.Namespace, paths: list[str]) -> int:
+    """Fit each file with the same model and flags into one table: a row per curve/pixel.
+
+    A file that cannot be read or fitted is a row with ``success`` 0 and its reason in
+    ``message``; the exit status is 0 when at least one curve was fitted.
+    """
+    import numpy as np
+    from tqdm.auto import tqdm
+
+    from viscoforce.exceptions import ViscoforceError
+
+    if args.model == "auto":
+        raise UsageError("--model auto fits one spectrum: name the model for a batch of files")
+    if args.plot:
+        raise UsageError("--plot draws one spectrum or curve: give one file")
+    if args.curve is not None:
+        raise UsageError("--curve picks a curve of one file: give one file")
+    progress = sys.stderr.isatty() if args.progress is None else args.progress
+    headers: list[str] = ["file", "curve", "message"]
+    rows: list[dict[str, Any]] = []
+    files: list[dict[str, Any]] = []
+    texts: list[str] = []
+    for path in tqdm(paths, desc=f"fit {args.model}", unit="file", disable=not progress):
+        try:
+            result, caught = _fit_recording(_fit_file, args, path)
+        except (UsageError, ViscoforceError, ValueError, ArithmeticError) as exc:
+            reason = str(exc).splitlines()[0]
+            rows.append({"file": path, "curve": 0, "message": reason, "success": 0})
+            files.append({"file": path, "n_fits": 0, "n_failed": 1, "error": reason})
+            continue
+        texts.extend(f"{path}: {t}" for t in caught)
+        names, values = table_rows(result)
+        names = ["curve" if h.split(" (")[0] == "curve" else h for h in names]
+        headers.extend(h for h in names if h not in headers)
+        n_failed = 0
+        for i, row in enumerate(values):
+            entry = dict(zip(names, row, strict=True))
+            entry.update(file=path, curve=int(entry.get("curve", i)), message="")
+            if "message" in result.variables and result["message"].ndim:
+                entry["message"] = str(np.asarray(result["message"].values).reshape(-1)[i])
+            n_failed += int(not int(entry.get("success", 1)))
+            rows.append(entry)
+        files.append({"file": path, "n_fits": len(values), "n_failed": n_failed})
+    headers = [h for h in headers if h != "curve"]
+    headers.insert(1, "curve")
+    headers.remove("message")
+    headers.append("message")
+    if "success" in headers:
+        headers.remove("success")
+        headers.insert(len(headers) - 1, "success")
+    else:
+        headers.insert(len(headers) - 1, "success")
+    table = [[row.get(h) for h in headers] for row in rows]
+    if args.out and args.out.lower().endswith(".csv"):
+        _write_csv(args.out, headers, table)
+    elif args.out:
+        _table_dataset(headers, table, args.model).to_netcdf(args.out, engine="h5netcdf")
+    fitted = [r for r in rows if int(r.get("success") or 0)]
+    params: dict[str, dict[str, float]] = {}
+    for h in headers:
+        name = h.split(" (")[0]
+        if h in ("file", "curve", "message", "success") or name.endswith("_stderr") or name in (
+                "x", "y", "redchi", "chi2_pvalue", "quality", "modes"):
+            continue
+        values = np.array([float(r[h]) for r in fitted if r.get(h) is not None], dtype=float)
+        values = values[np.isfinite(values)]
+        if values.size:
+            q25, median, q75 = np.percentile(values, [25, 50, 75])
+            params[name] = {"median": float(median), "q25": float(q25), "q75": float(q75),
+                            "n": int(values.size)}
+    info = {"model": args.model, "n_files": len(paths), "n_fits": len(rows),
+            "n_failed": len(rows) - len(fitted), "params": params, "files": files,
+            "warnings": texts}
+    if args.json:
+        print_json(info)
+    else:
+        from viscoforce.schema.fit import parameter_units
+
+        print(f"model {args.model}: {len(paths)} files, {len(rows)} fits, {len(fitted)} fitted")
+        for name, p in params.items():
+            try:
+                unit = parameter_units(name.removesuffix("_young").removesuffix("_shear"))
+            except ViscoforceError:
+                unit = ""
+            print(f"  {name:<14} median {show_value(p['median'], unit)}, IQR "
+                  f"{show_value(p['q25'], unit, 3)} .. {show_value(p['q75'], unit, 3)} "
+                  f"({p['n']} fits)")
+        for entry in files:
+            if "error" in entry:
+                print(f"  {entry['file']}: not fitted: {entry['error']}")
+        print_written(args.out)
+    if not fitted:
+        print(f"error: no curve of the {len(paths)} files could be fitted with --model "
+              f"{args.model} (reasons in the table's message column)", file=sys.stderr)
+        return 2
+    return 0
+
+
+def _table_dataset(headers: list[str], table: list[list[Any]], model: str):
+    """The batch table as a netCDF-ready dataset over ``fit`` (units from the headers)."""
+    import numpy as np
+    import xarray as xr
+
+    data = {}
+    for j, h in enumerate(headers):
+        name, _, unit = h.partition(" (")
+        column = [row[j] for row in table]
+        if name in ("file", "message"):
+            data[name] = ("fit", np.array(["" if v is None else str(v) for v in column]))
+        else:
+            values = np.array([np.nan if v is None else float(v) for v in column])
+            attrs = {"units": unit.rstrip(")")} if unit else {}
+            if name in ("curve", "success", "modes", "quality") and np.all(np.isfinite(values)):
+                values = values.astype(np.int32)
+            data[name] = ("fit", values, attrs)
+    ds = xr.Dataset(data)
+    ds.attrs.update(model=model, long_name="batch fit: one row per curve/pixel of each file")
+    return ds
 
 
 def _plot(ds, kind: str, result, args: argparse.Namespace) -> None:
@@ -640,10 +869,10 @@ def _plot(ds, kind: str, result, args: argparse.Namespace) -> None:
         handle = bode_plot(ds, fit=result)
     else:
         if kind == "curves":
-            from viscoforce.fitting.curves import hold_data
+            from viscoforce.fitting.curves import curve_data
 
-            hold = hold_data(ds, segment=args.segment)
-            data = (hold.x, hold.y)
+            fitted = curve_data(ds, args.model, segment=args.segment)
+            data = (fitted.x, fitted.y)
         else:
             data = (ds["time"].values, ds["force"].values)
         handle = fit_curve_plot(result, data=data, title=str(args.data))

@@ -113,8 +113,9 @@ def at_bound(params: lmfit.Parameters, *, rtol: float = 1e-6) -> list[str]:
     for p in params.values():
         if not p.vary:
             continue
-        span = (p.max - p.min) if math.isfinite(p.max) and math.isfinite(p.min) else 1.0
-        tol = rtol * max(abs(span), 1.0)
+        span = (p.max - p.min) if math.isfinite(p.max) and math.isfinite(p.min) else math.nan
+        # relative to the window (a contact point's window is micrometres, a log window decades)
+        tol = rtol * (abs(span) if math.isfinite(span) and span > 0 else max(abs(p.value), 1.0))
         if (math.isfinite(p.min) and p.value - p.min <= tol) or (
                 math.isfinite(p.max) and p.max - p.value <= tol):
             hits.append(p.name.removeprefix("log_"))

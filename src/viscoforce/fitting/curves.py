@@ -1,10 +1,11 @@
-"""Force-curve data for the ``relaxation`` and ``step`` models.
+"""Force-curve data for the ``relaxation``, ``hertz``, ``creep`` and ``step`` models.
 
 ``relaxation`` fits the force on a hold (its τ_i are force-relaxation times at fixed position,
 not creep times; F relative to the file's free-cantilever baseline where it has one): by
 default the pause segment that follows the first approach of a curve (``segment=N`` picks the
 curve's N-th segment, counted from 0 in the file's order), with t from the start of that
-segment. ``step`` fits a trajectory (time, position, force:
+segment. ``hertz`` fits the approach (force over the tip position), ``creep`` the tip position
+on a constant-force pause (:func:`fit_curve`). ``step`` fits a trajectory (time, position, force:
 what ``simulate`` writes): the position history is the drive of the exact model.
 """
 
@@ -38,6 +39,86 @@ def segment_runs(curve: xr.Dataset) -> list[tuple[int, int, str]]:
     return [(int(a), int(b), str(names[seg[a]])) for a, b in zip(starts, stops, strict=True)]
 
 
+def _segment_types(one: xr.Dataset) -> np.ndarray | None:
+    if "segment_type" not in one.variables:
+        return None
+    return np.asarray(one["segment_type"].values).astype(str)
+
+
+def _chosen_run(one: xr.Dataset, segment: int | None, model: str
+                ) -> tuple[int, int, str]:
+    """The (start, stop, name) run a curve model fits: ``segment`` or the model's default.
+
+    relaxation: the first pause after the approach that is not a constant-force pause; creep:
+    the first constant-force pause after the approach (any pause when the file does not say);
+    hertz: the first approach.
+    """
+    runs = segment_runs(one)
+    if segment is not None:
+        if isinstance(segment, bool) or not isinstance(segment, int | np.integer) or not (
+                0 <= segment < len(runs)):
+            raise ParameterError(f"segment must be an integer in [0, {len(runs) - 1}] (the "
+                                 f"curve has {len(runs)} segments: "
+                                 f"{', '.join(r[2] for r in runs)}), got {segment!r}")
+        return runs[int(segment)]
+    listing = ", ".join(r[2] for r in runs) or "none"
+    if model == "hertz":
+        approaches = [r for r in runs if r[2] == "approach"]
+        if not approaches:
+            raise ParameterError(f"the hertz model fits the approach segment; this curve's "
+                                 f"segments are {listing}: give --segment N")
+        return approaches[0]
+    after = [i for i, r in enumerate(runs) if r[2] == "approach"]
+    pauses = [r for r in runs[after[0] + 1:] if r[2] == "pause"] if after else []
+    types = _segment_types(one)
+    seg = np.asarray(one["segment"].values)
+
+    def kind(run: tuple[int, int, str]) -> str:
+        return "" if types is None else types[int(seg[run[0]])].lower()
+
+    what = {"relaxation": "hold (pause) segment after the approach",
+            "creep": "constant-force pause after the approach"}[model]
+    # the file's own label decides where it has one: a constant-force pause creeps, a
+    # constant-height pause relaxes
+    refuse, other = (("constant-height", "relaxation (a constant-height pause: the force "
+                      "relaxes)") if model == "creep" else
+                     ("constant-force", "creep (a constant-force pause: the tip position "
+                      "creeps)"))
+    wanted = [r for r in pauses if refuse not in kind(r)]
+    if not wanted:
+        held = [f"{r[2]} ({kind(r)})" for r in pauses if kind(r)]
+        hint = f"; its pause is {', '.join(held)}: fit it with --model {other}" if held else ""
+        raise ParameterError(f"the {model} model fits a {what}; this curve's segments are "
+                             f"{listing}{hint}; or give --segment N")
+    return wanted[0]
+
+
+def _segment_arrays(one: xr.Dataset, run: tuple[int, int, str], x_name: str, y_name: str,
+                    what: str) -> tuple[np.ndarray, np.ndarray]:
+    start, stop, _ = run
+    x = np.asarray(one[x_name].values[start:stop], dtype=float)
+    y = np.asarray(one[y_name].values[start:stop], dtype=float)
+    ok = np.isfinite(x) & np.isfinite(y)
+    if ok.sum() < 4:
+        missing = "" if np.isfinite(one[x_name].values[start:stop]).any() else (
+            f" (the file gives no {x_name.replace('_', ' ')})")
+        raise ParameterError(f"the {what} segment has {int(ok.sum())} finite samples of "
+                             f"{x_name} and {y_name}; need >= 4{missing}")
+    return x[ok], y[ok]
+
+
+def _source(curves: xr.Dataset, one: xr.Dataset, run: tuple[int, int, str], n: int,
+            curve: int) -> dict[str, Any]:
+    source: dict[str, Any] = {"data_kind": "curves", "data_points": int(n), "curve": int(curve),
+                              "segment_start": float(one["time"].values[run[0]])}
+    types = _segment_types(one)
+    if types is not None:
+        source["segment_type"] = str(types[int(one["segment"].values[run[0]])])
+    if "source" in curves.attrs:
+        source["data_source"] = str(curves.attrs["source"])
+    return source
+
+
 def hold_data(curves: xr.Dataset, *, curve: int = 0, segment: int | None = None) -> FitData:
     """T [s] from the start of the hold and F [N] on it, of curve ``curve``.
 
@@ -47,33 +128,10 @@ def hold_data(curves: xr.Dataset, *, curve: int = 0, segment: int | None = None)
         No pause after an approach (or ``segment`` out of range), or too few finite samples.
     """
     one = select_curve(validate_curves(curves), curve)
-    runs = segment_runs(one)
-    if segment is not None:
-        if isinstance(segment, bool) or not isinstance(segment, int | np.integer) or not (
-                0 <= segment < len(runs)):
-            raise ParameterError(f"segment must be an integer in [0, {len(runs) - 1}] (the "
-                                 f"curve has {len(runs)} segments: "
-                                 f"{', '.join(r[2] for r in runs)}), got {segment!r}")
-        chosen = runs[int(segment)]
-    else:
-        after = [i for i, r in enumerate(runs) if r[2] == "approach"]
-        pauses = [r for r in runs[after[0] + 1:] if r[2] == "pause"] if after else []
-        if not pauses:
-            raise ParameterError(
-                "the relaxation model fits a hold (pause) segment after the approach; this "
-                f"curve's segments are {', '.join(r[2] for r in runs) or 'none'}: give "
-                "--segment N")
-        chosen = pauses[0]
-    start, stop, _ = chosen
-    t = np.asarray(one["time"].values[start:stop], dtype=float)
-    f = np.asarray(one["force"].values[start:stop], dtype=float)
-    ok = np.isfinite(t) & np.isfinite(f)
-    if ok.sum() < 4:
-        raise ParameterError(f"the hold segment has {int(ok.sum())} finite samples; need >= 4")
-    t, f = t[ok], f[ok]
-    source = {"data_kind": "curves", "data_points": int(t.size), "segment_start": float(t[0]),
-              "curve": int(curve)}
-    baseline = _free_baseline(one, int(one["segment"].values[start]))
+    chosen = _chosen_run(one, segment, "relaxation")
+    t, f = _segment_arrays(one, chosen, "time", "force", "hold")
+    source = _source(curves, one, chosen, t.size, curve)
+    baseline = _free_baseline(one, int(one["segment"].values[chosen[0]]))
     if baseline is not None:
         f = f - baseline
         source.update(force_baseline=baseline, force_reference=(
@@ -82,9 +140,64 @@ def hold_data(curves: xr.Dataset, *, curve: int = 0, segment: int | None = None)
     else:
         source["force_reference"] = ("force as recorded: the file gives no free-cantilever "
                                      "baseline, so F_inf includes the cantilever's offset")
-    if "source" in curves.attrs:
-        source["data_source"] = str(curves.attrs["source"])
     return FitData(t - t[0], f, None, source)
+
+
+def creep_data(curves: xr.Dataset, *, curve: int = 0, segment: int | None = None) -> FitData:
+    """T [s] from the start of the constant-force pause and the tip position [m] on it.
+
+    The tip position grows toward the sample (``tip_position`` of the curves schema: the
+    calibrated sensor height where the file has one, up to an offset), so a creeping sample
+    gives dz_i < 0 in z(t) = z_inf + Σ dz_i e^{−t/τ_i}.
+
+    Raises
+    ------
+    ParameterError
+        No constant-force pause after the approach (or ``segment`` out of range), or too few
+        finite samples.
+    """
+    one = select_curve(validate_curves(curves), curve)
+    chosen = _chosen_run(one, segment, "creep")
+    t, z = _segment_arrays(one, chosen, "time", "tip_position", "creep")
+    source = _source(curves, one, chosen, t.size, curve)
+    f = np.asarray(one["force"].values[chosen[0]:chosen[1]], dtype=float)
+    baseline = _free_baseline(one, int(one["segment"].values[chosen[0]]))
+    held = float(np.nanmedian(f)) - (baseline or 0.0)
+    source.update(creep_force=held, creep_force_spread=float(np.nanstd(f)),
+                  tip_position_reference=str(curves.attrs.get(
+                      "tip_position_convention", "tip position toward the sample")))
+    return FitData(t - t[0], z, None, source)
+
+
+def approach_data(curves: xr.Dataset, *, curve: int = 0, segment: int | None = None) -> FitData:
+    """Tip position z [m] (toward the sample) and force F [N] over the approach of a curve.
+
+    The force is as recorded (the hertz model fits its baseline and tilt).
+
+    Raises
+    ------
+    ParameterError
+        No approach segment (or ``segment`` out of range), or too few finite samples (files
+        without a height channel have no tip position).
+    """
+    one = select_curve(validate_curves(curves), curve)
+    chosen = _chosen_run(one, segment, "hertz")
+    z, f = _segment_arrays(one, chosen, "tip_position", "force", "approach")
+    source = _source(curves, one, chosen, z.size, curve)
+    return FitData(z, f, None, source)
+
+
+#: Data of each curve model: the function that cuts its segment out of a curves dataset.
+CURVE_DATA = {"relaxation": hold_data, "creep": creep_data, "hertz": approach_data}
+
+
+def curve_data(curves: xr.Dataset, model: str, *, curve: int = 0,
+               segment: int | None = None) -> FitData:
+    """What curve model ``model`` (relaxation, hertz, creep) fits on curve ``curve``."""
+    if model not in CURVE_DATA:
+        raise ParameterError(f"model must be one of {', '.join(CURVE_DATA)} for force curves, "
+                             f"got {model!r}")
+    return CURVE_DATA[model](curves, curve=curve, segment=segment)
 
 
 def _free_baseline(one: xr.Dataset, row: int) -> float | None:
@@ -130,6 +243,90 @@ def fit_hold(curves: xr.Dataset, *, curve: int = 0, segment: int | None = None,
                   criterion=criterion)
     ds.attrs["validity"] = validity_note("relaxation", ds)
     warn_fit(ds)
+    return ds
+
+
+def file_tip(curves: xr.Dataset):
+    """The tip the file records (attrs of :meth:`~viscoforce.physics.tips.Tip.as_attrs`), or None."""
+    from viscoforce.physics.tips import Tip
+
+    if "tip_shape" not in curves.attrs:
+        return None
+    return Tip.from_attrs(curves.attrs)
+
+
+def fit_curve(curves: xr.Dataset, model: str, *, curve: int = 0, segment: int | None = None,
+              modes: int | str = 1, criterion: str = "bic", tip: Any = None,
+              poisson: float | None = None) -> xr.Dataset:
+    """Fit one segment of one measured force curve: ``relaxation``, ``hertz`` or ``creep``.
+
+    * ``relaxation`` — F(t) = F_inf + Σ dF_i e^{−t/τ_i} on a constant-height hold (τ_i are
+      force-relaxation times; see :func:`fit_hold`).
+    * ``hertz`` — the approach: F(z) = baseline + baseline_slope·(z − contact_point) +
+      E·shape(z − contact_point) in contact, with the tip's indentation law
+      (:mod:`viscoforce.physics.tips`); ``E`` is the paper's modulus (E = 2Y/(1 − ν²)), also
+      reported as ``E_young`` and ``E_shear``.
+    * ``creep`` — the tip position on a constant-force pause, z(t) = z_inf + Σ dz_i e^{−t/τ_i}
+      (τ_i creep times, ascending; ``attrs["creep_force"]`` the force held).
+
+    The stderr of all three are corrected for autocorrelated residuals (lag-1 AR model; attrs
+    ``residual_lag1``, ``stderr_correction``).
+
+    Parameters
+    ----------
+    curves : xarray.Dataset
+        A curves dataset (:mod:`viscoforce.schema.curves`).
+    model : {"relaxation", "hertz", "creep"}
+        The curve model.
+    curve : int
+        The curve (pixel) to fit, from 0.
+    segment : int, optional
+        The curve's segment to fit (from 0, file order); default the model's own (the approach,
+        the constant-height or the constant-force pause after it).
+    modes : int or "auto"
+        Exponential modes (relaxation, creep; hertz has none).
+    criterion : {"bic", "aic"}
+        Information criterion of ``modes="auto"``.
+    tip : Tip or str, optional
+        The tip (hertz; ``"sphere:5um"`` etc.); default the file's own when it records one.
+    poisson : float, optional
+        Poisson's ratio in [0, 0.5] of ``E_young``, ``E_shear`` (hertz; default 0.5).
+
+    Returns
+    -------
+    xarray.Dataset
+        The fit result; hertz also holds the best-fit approach (``fit_approach_force`` over
+        ``tip_position``), creep the best-fit ``fit_tip_position`` over ``time``.
+
+    Raises
+    ------
+    ParameterError
+        No segment for the model, too few samples, bad options, or hertz without a tip.
+    """
+    if model == "relaxation":
+        if tip is not None or poisson is not None:
+            raise ParameterError("the relaxation model takes no tip or poisson (it fits forces)")
+        return fit_hold(curves, curve=curve, segment=segment, modes=modes, criterion=criterion)
+    data = curve_data(curves, model, curve=curve, segment=segment)
+    fixed: dict[str, Any] = {}
+    if model == "hertz":
+        if modes not in (1, None):
+            raise ParameterError(f"the hertz model has no modes (modes=1), got {modes!r}")
+        modes = 1
+        tip = tip if tip is not None else file_tip(curves)
+        if tip is None:
+            raise ParameterError(
+                "the hertz model needs the tip, which this file does not record: give tip= "
+                "(--tip sphere:R | paraboloid:R | cone:HALF_ANGLE | pyramid:HALF_ANGLE | "
+                "flat:RADIUS)")
+        fixed["tip"] = tip
+    elif tip is not None or poisson is not None:
+        raise ParameterError("the creep model takes no tip or poisson (it fits the tip position)")
+    ds = fit_data(data, model, modes=modes, criterion=criterion, **fixed)
+    ds.attrs["validity"] = validity_note(model, ds)
+    warn_fit(ds)
+    if model == "hertz":
+        ds = add_derived_moduli(ds, poisson)
     return ds
 
 

@@ -18,7 +18,8 @@ Statistics follow from what the weights are (``attrs["weighting"]``):
   scaled by the reduced χ² (lmfit's ``scale_covar``), AIC/BIC are lmfit's n ln(χ²/n) forms and
   there is no p-value. It is used when asked (``weights="relative"``) or, with a DataWarning,
   when the data carry no usable stderr.
-- ``unweighted`` — force curves (relaxation, step): as ``relative`` with unit weights.
+- ``unweighted`` — force curves (relaxation, step, hertz, creep): as ``relative`` with unit
+  weights; the stderr of measured curves are corrected for autocorrelated residuals.
 
 Each single fit also profiles its parameters (:mod:`viscoforce.fitting.identify`): a parameter
 whose likelihood is one-sided is reported as a bound, not as a value with an error.
@@ -424,7 +425,7 @@ def _outcome(model: FitModel, res: lmfit.minimizer.MinimizerResult, data: FitDat
 LAG1_WARN = 0.5
 #: Curve models of measured series whose stderr are corrected for residual autocorrelation
 #: (the step model fits a simulated trajectory, whose residual is the solver's smooth error).
-AUTOCORRELATED_MODELS = ("relaxation",)
+AUTOCORRELATED_MODELS = ("relaxation", "hertz", "creep")
 
 
 def residual_lag1(residual: np.ndarray, t: np.ndarray) -> float:
@@ -580,9 +581,13 @@ def result_dataset(outcome: Outcome, data: FitData, *,
         omega = np.union1d(np.geomspace(lo / 2, hi * 2, FIT_CURVE_POINTS), data.x)
         k = outcome.evaluate(omega)
         curves = {"omega": omega, "fit_stiffness": np.abs(k), "fit_phase": np.degrees(np.angle(k))}
+    elif model.independent == "z":
+        z = np.sort(data.x)
+        curves = {"tip_position": z, "fit_approach_force": outcome.evaluate(z)}
     else:
         t = np.sort(data.x)
-        curves = {"time": t, "fit_force": outcome.evaluate(t)}
+        name = "fit_tip_position" if model.spec.name == "creep" else "fit_force"
+        curves = {"time": t, name: outcome.evaluate(t)}
     ds = make_fit_result({n: (info["values"][n], info["stderr"][n]) for n in model.names},
                          correlation=info["correlation"], success=info["success"],
                          redchi=info["redchi"], aic=info["aic"], bic=info["bic"],
@@ -991,6 +996,12 @@ VALIDITY = {
     "contact": "not estimated: Hertz contact's bias needs the surface force's decay length "
                "(debye_length, --debye-length)",
     "svda": "not estimated",
+    "hertz": "elastic contact of the tip's shape on a half-space (Sneddon/Hertz/Bilodeau): "
+             "valid for indentations small against the sample's thickness, with no adhesion; a "
+             "viscoelastic sample's E is an effective modulus at the approach speed",
+    "creep": "phenomenological sum of exponentials of the tip position: its times are the creep "
+             "compliance's exactly for a flat punch, to first order in dz/indentation for a "
+             "sphere, paraboloid, cone or pyramid",
 }
 
 

@@ -30,7 +30,7 @@ import numpy as np
 import xarray as xr
 
 from viscoforce.exceptions import ParameterError, ViscoforceError
-from viscoforce.fitting.curves import hold_data
+from viscoforce.fitting.curves import curve_data
 from viscoforce.fitting.fit import (
     PVALUE_WARN,
     FitData,
@@ -80,9 +80,9 @@ def pixel_data(ds: xr.Dataset, model: str, *, segment: int | None = None
     ds : xarray.Dataset
         A spectrum over (*map dims, ``omega``) for a spectrum model, else a curves dataset.
     model : str
-        Model name (a spectrum model, or ``relaxation``).
+        Model name (a spectrum model, or a curve model: ``relaxation``, ``hertz``, ``creep``).
     segment : int, optional
-        The curves' segment of a ``relaxation`` map (see :func:`~.curves.hold_data`).
+        The curves' segment of a curve-model map (see :func:`~.curves.curve_data`).
 
     Returns
     -------
@@ -108,7 +108,7 @@ def pixel_data(ds: xr.Dataset, model: str, *, segment: int | None = None
     else:
         dims = ("curve",)
         n = int(ds.sizes["curve"])
-        out = [_or_reason(lambda i=i: hold_data(ds, curve=i, segment=segment))
+        out = [_or_reason(lambda i=i: curve_data(ds, model, curve=i, segment=segment))
                for i in range(n)]
     shape = {d: int(ds.sizes[d]) for d in dims}
     return out, dims, {"coords": map_coords(ds, dims), "shape": shape}
@@ -227,7 +227,8 @@ def fit_map(ds: xr.Dataset, model: str, *, modes: int | str = 1, criterion: str 
             poisson: float | None = None, **fixed: Any) -> xr.Dataset:
     """Fit every pixel and return the results over the data's extra dims.
 
-    Pixels are the spectra over the extra dims (spectrum models) or the curves (``relaxation``).
+    Pixels are the spectra over the extra dims (spectrum models) or the curves (``relaxation``,
+    ``hertz``, ``creep``).
 
     Parameters
     ----------
@@ -248,7 +249,7 @@ def fit_map(ds: xr.Dataset, model: str, *, modes: int | str = 1, criterion: str 
     progress : bool
         Show a progress bar (distributed fits only).
     segment : int, optional
-        Curve segment of a ``relaxation`` map.
+        Curve segment of a curve-model map (default: the model's own segment).
     poisson : float, optional
         Poisson's ratio in [0, 0.5] (default 0.5) of the derived ``<name>_young`` and
         ``<name>_shear`` (:func:`viscoforce.fitting.fit.add_derived_moduli`).

@@ -1,11 +1,15 @@
-"""lmfit models of the SPEC's Models table: svda, exact, contact, prony, relaxation, step.
+"""lmfit models of the SPEC's Models table.
+
+svda, exact, contact, prony, relaxation, step, hertz and creep.
 
 Each model is an :class:`lmfit.Model` over plain functions of the project's physics whose
 parameters carry the SPEC's exact names (``tau``, ``E0``, ``E_inf``; ``E_1``…, ``tau_1``…;
-``k_inf``, ``dk_i``; ``F_inf``, ``dF_i``; ``C1``, ``m``). The spectrum models return the complex
-stiffness k*(ω) = F̂/δ̂ [N/m] (phase = lead of the force over the indentation); the curve models
-a force [N] over time. :meth:`FitModel.guess` derives a start from the data alone, with the
-ordering constraints of :mod:`viscoforce.fitting._params`.
+``k_inf``, ``dk_i``; ``F_inf``, ``dF_i``; ``C1``, ``m``; ``E``, ``contact_point``; ``z_inf``,
+``dz_i``). The spectrum models return the complex stiffness k*(ω) = F̂/δ̂ [N/m] (phase = lead of
+the force over the indentation); the curve models a force [N] over time (relaxation, step), a
+force [N] over the tip position (hertz) or a tip position [m] over time (creep).
+:meth:`FitModel.guess` derives a start from the data alone, with the ordering constraints of
+:mod:`viscoforce.fitting._params`.
 
 Build a model with :func:`make_model`; the ``spec`` (name, modes, fixed inputs) is what travels to
 dask workers, which rebuild the model there (closures over a problem do not pickle cheaply).
@@ -29,7 +33,7 @@ from viscoforce.physics.materials import PronySeries, StandardLinearSolid, Visco
 from viscoforce.problem import ContactProblem
 
 #: Model names of the SPEC table (``--model``).
-MODEL_NAMES = ("svda", "exact", "contact", "prony", "relaxation", "step")
+MODEL_NAMES = ("svda", "exact", "contact", "prony", "relaxation", "step", "hertz", "creep")
 #: Materials of the ``contact`` model (``--material``).
 CONTACT_MATERIALS = ("sls", "prony", "power-law", "structural")
 #: Reference frequency f_ref [Hz] of the structural material's E_ref (default of the fixed input).
@@ -39,7 +43,9 @@ EXPONENT_BOUNDS = (1e-3, 0.999)
 #: Models whose data are spectra (the others fit force curves over time).
 SPECTRUM_MODELS = ("svda", "exact", "contact", "prony")
 #: Models with a number of relaxation modes (``--modes``).
-MODAL_MODELS = ("exact", "contact", "prony", "relaxation")
+MODAL_MODELS = ("exact", "contact", "prony", "relaxation", "creep")
+#: Models of force curves measured on an instrument (a curves dataset: one segment of a curve).
+CURVE_MODELS = ("relaxation", "hertz", "creep")
 #: Largest number of modes tried by ``modes="auto"``.
 MAX_AUTO_MODES = 4
 
@@ -78,8 +84,10 @@ class FitModel(lmfit.Model):
     def __init__(self, spec: ModelSpec, function: Callable[..., np.ndarray],
                  layout: Sequence[P.Item], independent: str,
                  guesser: Callable[[np.ndarray, np.ndarray], dict[str, float]],
-                 tau_window: Callable[[np.ndarray], tuple[float, float]] | None = None):
+                 tau_window: Callable[[np.ndarray], tuple[float, float]] | None = None,
+                 bounded_windows: Callable[..., dict[str, tuple[float, float]]] | None = None):
         self.spec = spec
+        self._bounded_windows = bounded_windows
         self.layout = list(layout)
         self.independent = independent
         self._guesser = guesser
@@ -97,19 +105,25 @@ class FitModel(lmfit.Model):
         return P.reported_names(self.layout)
 
     def parameters_from(self, values: Mapping[str, float], x: np.ndarray, *,
-                        expressions: bool = True) -> lmfit.Parameters:
+                        expressions: bool = True, y: np.ndarray | None = None
+                        ) -> lmfit.Parameters:
         """Parameters starting at ``values`` (SPEC names), with the bounds for data over ``x``.
 
         ``expressions=False``: the internal parameters only (see
-        :func:`viscoforce.fitting._params.build_parameters`).
+        :func:`viscoforce.fitting._params.build_parameters`). ``y``: the data, for models whose
+        bounded parameters take their window from it (hertz: baseline, slope).
         """
         layout = self.layout
+        if self._bounded_windows is not None:
+            windows = self._bounded_windows(x, y)
+            layout = [P.Bounded(i.name, *windows[i.name]) if isinstance(i, P.Bounded)
+                      and i.name in windows else i for i in layout]
         if self._tau_window is not None:
             window = self._tau_window(x)
             layout = [P.Chain(i.names, window) if isinstance(i, P.Chain) and i.names[0].startswith(
                 "tau") else i for i in layout]
         layout = [P.Chain(i.names, MODULUS_BOUNDS) if isinstance(i, P.Chain) and i.names[0] in (
-            "E_inf", "E0") else i for i in layout]
+            "E_inf", "E0", "E") else i for i in layout]
         return P.build_parameters(layout, values, expressions=expressions)
 
     def guess(self, data: np.ndarray, x: np.ndarray | None = None, **kws: Any) -> lmfit.Parameters:
@@ -119,12 +133,13 @@ class FitModel(lmfit.Model):
         if x is None:
             raise ParameterError(f"guess needs the independent variable {self.independent!r}")
         x = np.asarray(x, dtype=float)
-        return self.parameters_from(self._guesser(np.asarray(data), x), x)
+        return self.parameters_from(self._guesser(np.asarray(data), x), x, y=np.asarray(data))
 
     def internal_guess(self, data: np.ndarray, x: np.ndarray) -> lmfit.Parameters:
         """The internal (``log_…``) parameters of :meth:`guess`, without the expressions."""
         x = np.asarray(x, dtype=float)
-        return self.parameters_from(self._guesser(np.asarray(data), x), x, expressions=False)
+        return self.parameters_from(self._guesser(np.asarray(data), x), x, expressions=False,
+                                    y=np.asarray(data))
 
 
 def _signed(function: Callable[..., np.ndarray], independent: str,
@@ -583,13 +598,14 @@ def _prony_model(spec: ModelSpec) -> FitModel:
 
 # ── curve models ────────────────────────────────────────────────────────────────────────────────
 
-def _relaxation_model(spec: ModelSpec) -> FitModel:
+def _exponential_model(spec: ModelSpec, level: str, step: str) -> FitModel:
+    """``level`` + Σ ``step``_i e^{−t/τ_i}: the relaxation (F_inf, dF_i) and creep (z_inf, dz_i)."""
     modes = spec.modes
-    dfs = [f"dF_{i}" for i in range(1, modes + 1)]
+    dfs = [f"{step}_{i}" for i in range(1, modes + 1)]
     taus = [f"tau_{i}" for i in range(1, modes + 1)]
 
     def function(t: np.ndarray, v: Mapping[str, float]) -> np.ndarray:
-        f = np.full(np.shape(t), v["F_inf"], dtype=float)
+        f = np.full(np.shape(t), v[level], dtype=float)
         for df, tau in zip(dfs, taus, strict=True):
             f += v[df] * np.exp(-t / v[tau])
         return f
@@ -604,13 +620,114 @@ def _relaxation_model(spec: ModelSpec) -> FitModel:
         crossed = np.flatnonzero(np.sign(excess - target) != np.sign(f_start - f_inf - target))
         t0 = float(t[crossed[0]] - t[0]) if crossed.size else float(np.ptp(t)) / 3
         tau = max(t0, float(np.ptp(t)) / t.size)
-        out = {"F_inf": f_inf, **{df: (f_start - f_inf) / modes for df in dfs}}
+        out = {level: f_inf, **{df: (f_start - f_inf) / modes for df in dfs}}
         out.update(zip(taus, _spread(tau, modes, _time_window(t)), strict=True))
         return out
 
-    layout: list[P.Item] = [P.Signed("F_inf"), *(P.Signed(df) for df in dfs),
+    layout: list[P.Item] = [P.Signed(level), *(P.Signed(df) for df in dfs),
                             P.Chain(tuple(taus))]
     return FitModel(spec, function, layout, "t", guesser, _time_window)
+
+
+def _relaxation_model(spec: ModelSpec) -> FitModel:
+    return _exponential_model(spec, "F_inf", "dF")
+
+
+def _creep_model(spec: ModelSpec) -> FitModel:
+    return _exponential_model(spec, "z_inf", "dz")
+
+
+def _hertz_model(spec: ModelSpec) -> FitModel:
+    """F(z) = b + s·(z − c) + E·shape(max(z − c, 0)) over the tip position z toward the sample.
+
+    ``E`` the paper's modulus, ``contact_point`` c [m], ``baseline`` b [N] (the free-cantilever
+    force at contact) and ``baseline_slope`` s [N/m] (a tilted baseline, kept in contact); the
+    tip's ``force_shape`` (:mod:`viscoforce.physics.tips`) gives the indentation law.
+    """
+    (tip,) = _need(spec, "tip")
+    window = spec.fixed.get("contact_window")
+
+    def function(z: np.ndarray, v: Mapping[str, float]) -> np.ndarray:
+        z = np.asarray(z, dtype=float)
+        delta = np.maximum(z - v["contact_point"], 0.0)
+        return (v["baseline"] + v["baseline_slope"] * (z - v["contact_point"])
+                + v["E"] * tip.force_shape(delta))
+
+    def guesser(f: np.ndarray, z: np.ndarray) -> dict[str, float]:
+        return hertz_guess(tip, np.asarray(z, dtype=float), np.asarray(f, dtype=float))
+
+    def windows(z: np.ndarray, f: np.ndarray | None = None) -> dict[str, tuple[float, float]]:
+        out = {"contact_point": window if window is not None else contact_window(tip, z)}
+        if f is not None:
+            f = np.asarray(f, dtype=float)
+            span = float(np.ptp(f)) or float(np.max(np.abs(f))) or 1e-12
+            z_span = float(np.ptp(z)) or 1e-9
+            out["baseline"] = (float(np.min(f)) - 2 * span, float(np.max(f)) + 2 * span)
+            out["baseline_slope"] = (-10 * span / z_span, 10 * span / z_span)
+        return out
+
+    layout: list[P.Item] = [P.Chain(("E",)), P.Bounded("contact_point", -1.0, 1.0),
+                            P.Bounded("baseline", -1.0, 1.0),
+                            P.Bounded("baseline_slope", -1.0, 1.0)]
+    return FitModel(spec, function, layout, "z", guesser, bounded_windows=windows)
+
+
+def contact_window(tip: Any, z: np.ndarray) -> tuple[float, float]:
+    """Where a contact point may lie [m]: within the approach, no deeper than the tip allows."""
+    lo, hi = float(np.min(z)), float(np.max(z))
+    deepest = getattr(tip, "max_indentation", None)
+    if deepest is not None:
+        lo = max(lo, hi - 0.99 * float(deepest))
+    return lo, hi
+
+
+#: Contact points tried by the Hertz guess (each with a linear least-squares E and baseline).
+HERTZ_GUESS_POINTS = 64
+
+
+def hertz_linear(tip: Any, z: np.ndarray, f: np.ndarray, contact: float
+                 ) -> tuple[np.ndarray, float]:
+    """(E, baseline, slope) by linear least squares at a given contact point, and the SSE."""
+    delta = np.maximum(z - contact, 0.0)
+    design = np.column_stack([tip.force_shape(delta), np.ones_like(z), z - contact])
+    scale = np.max(np.abs(design), axis=0)
+    scale[scale == 0] = 1.0
+    coef, *_ = np.linalg.lstsq(design / scale, f, rcond=None)
+    coef = coef / scale
+    return coef, float(np.sum((design @ coef - f) ** 2))
+
+
+def hertz_guess(tip: Any, z: np.ndarray, f: np.ndarray) -> dict[str, float]:
+    """A start for the Hertz fit: the best of a grid of contact points, each linear in the rest.
+
+    Given the contact point the model is linear in (E, baseline, slope); the grid spans the
+    contact window (:func:`contact_window`), then one refinement between its neighbours.
+    """
+    lo, hi = contact_window(tip, z)
+    inner = np.sort(z[(z >= lo) & (z <= hi)])
+    if inner.size < 4:
+        raise ParameterError("the approach has fewer than 4 points where contact may lie")
+    # candidates: quantiles of the data (dense where the data are), excluding the last points
+    grid = np.quantile(inner, np.linspace(0.02, 0.98, HERTZ_GUESS_POINTS))
+    best = None
+    for _ in range(2):
+        for c in grid:
+            coef, sse = hertz_linear(tip, z, f, float(c))
+            if coef[0] > 0 and (best is None or sse < best[1]):
+                best = (float(c), sse, coef)
+        if best is None:
+            break
+        step = float(np.median(np.diff(grid))) if grid.size > 1 else float(np.ptp(z)) / 10
+        grid = np.linspace(best[0] - step, best[0] + step, 21)
+        grid = grid[(grid >= lo) & (grid <= hi)]
+    if best is None:
+        raise ParameterError("no contact point in the approach gives a positive modulus: the "
+                             "force does not rise with the tip position (is this the approach "
+                             "segment of a repulsive contact?)")
+    c, _, coef = best
+    e = min(max(float(coef[0]), MODULUS_BOUNDS[0] * 10), MODULUS_BOUNDS[1] / 10)
+    return {"E": e, "contact_point": c, "baseline": float(coef[1]),
+            "baseline_slope": float(coef[2])}
 
 
 def _step_model(spec: ModelSpec) -> FitModel:
@@ -656,7 +773,8 @@ _FIXED: dict[str, tuple[str, ...]] = {
     "exact": ("position", "mean_force", "problem"),
     "contact": ("radius", "tip", "indentation", "drag", "material", "debye_length",
                 "newtonian", "reference_frequency"),
-    "prony": (), "relaxation": (), "step": ("problem", "position_trace")}
+    "prony": (), "relaxation": (), "step": ("problem", "position_trace"),
+    "hertz": ("tip", "contact_window"), "creep": ()}
 
 
 def check_fixed(name: str, fixed: Mapping[str, Any]) -> dict[str, Any]:
@@ -687,7 +805,7 @@ def check_fixed(name: str, fixed: Mapping[str, Any]) -> dict[str, Any]:
         "problem": lambda n, v: require_instance(n, v, ContactProblem),
         "material": lambda n, v: v if v in CONTACT_MATERIALS else _bad_material(v),
         "newtonian": _require_bool, "reference_frequency": require_positive,
-        "tip": lambda n, v: _as_tip(v),
+        "tip": lambda n, v: _as_tip(v), "contact_window": _window,
         "position_trace": lambda n, v: v}
     return {k: (None if v is None else checks[k](k, v)) for k, v in fixed.items()}
 
@@ -696,6 +814,18 @@ def _as_tip(value: Any):
     from viscoforce.physics.tips import tip_from
 
     return tip_from(value)
+
+
+def _window(name: str, value: Any) -> tuple[float, float]:
+    try:
+        lo, hi = (float(v) for v in value)
+    except (TypeError, ValueError):
+        raise ParameterError(f"{name} must be (low, high) tip positions [m], got {value!r}"
+                             ) from None
+    if not (math.isfinite(lo) and math.isfinite(hi) and lo < hi):
+        raise ParameterError(f"{name} must be finite (low, high) with low < high [m], got "
+                             f"{value!r}")
+    return lo, hi
 
 
 def _require_bool(name: str, value: Any) -> bool:
@@ -711,7 +841,8 @@ def _bad_material(value: Any) -> None:
 
 _BUILDERS: dict[str, Callable[[ModelSpec], FitModel]] = {
     "svda": _svda_model, "exact": _exact_model, "contact": _contact_model,
-    "prony": _prony_model, "relaxation": _relaxation_model, "step": _step_model}
+    "prony": _prony_model, "relaxation": _relaxation_model, "step": _step_model,
+    "hertz": _hertz_model, "creep": _creep_model}
 
 
 def make_model(name: str, modes: int = 1, **fixed: Any) -> FitModel:
@@ -720,7 +851,8 @@ def make_model(name: str, modes: int = 1, **fixed: Any) -> FitModel:
     Parameters
     ----------
     name : str
-        ``svda``, ``exact``, ``contact``, ``prony``, ``relaxation`` or ``step``.
+        ``svda``, ``exact``, ``contact``, ``prony``, ``relaxation``, ``step``, ``hertz`` or
+        ``creep``.
     modes : int
         Relaxation modes (≥ 1; only the models in :data:`MODAL_MODELS` take more than one).
     **fixed
@@ -729,7 +861,9 @@ def make_model(name: str, modes: int = 1, **fixed: Any) -> FitModel:
         ``drag``, ``material`` (contact: ``sls``, ``prony``, ``power-law``, ``structural``),
         ``newtonian`` (contact power-law: fit a viscosity ``mu`` too), ``reference_frequency``
         [Hz] (contact structural: f_ref of ``E_ref``, default 1 Hz), ``debye_length`` (contact:
-        the validity estimate); ``position_trace`` = (t, h0) (step).
+        the validity estimate); ``position_trace`` = (t, h0) (step); ``tip`` (hertz: a
+        :class:`~viscoforce.physics.tips.Tip` or its text, required) and ``contact_window`` =
+        (low, high) [m] (hertz: where the contact point may lie; default the approach).
 
     Raises
     ------

@@ -464,14 +464,19 @@ def bode_plot(spectra: xr.Dataset | Mapping[str, xr.Dataset] | Sequence[xr.Datas
 
 def fit_curve_plot(fit: xr.Dataset, *, data: tuple[Any, Any] | None = None,
                    ax: Axes | None = None, title: str | None = None) -> PlotHandle:
-    """A force-curve fit (``relaxation``, ``step``): data and best-fit force against time.
+    """A force-curve fit: data and best fit against time or tip position.
+
+    relaxation, step: force vs time; hertz: force vs tip position, the contact point marked;
+    creep: tip position vs time.
 
     Parameters
     ----------
     fit : xarray.Dataset
-        Fit result with ``fit_force`` over ``time`` (:mod:`viscoforce.schema.fit`).
-    data : (t, F), optional
-        The fitted samples: time [s] (on the fit's time axis) and force [N].
+        Fit result with ``fit_force`` over ``time``, ``fit_approach_force`` over
+        ``tip_position`` or ``fit_tip_position`` over ``time`` (:mod:`viscoforce.schema.fit`).
+    data : (x, y), optional
+        The fitted samples on the fit's axes: time [s] or tip position [m], and force [N] or
+        tip position [m].
     ax : matplotlib.axes.Axes, optional
         Axes to draw on; default a new figure.
     title : str, optional
@@ -487,28 +492,44 @@ def fit_curve_plot(fit: xr.Dataset, *, data: tuple[Any, Any] | None = None,
     if not isinstance(fit, xr.Dataset):
         raise ParameterError(f"fit must be a fit-result Dataset, got {type(fit).__name__}")
     validate_fit_result(fit)
-    if "fit_force" not in fit.variables:
-        raise ParameterError("fit has no best-fit force curve ('fit_force' over 'time'): it is "
-                             "not a relaxation or step fit")
+    axes_of = {"fit_force": "time", "fit_approach_force": "tip_position",
+               "fit_tip_position": "time"}
+    y_name = next((n for n in axes_of if n in fit.variables), None)
+    if y_name is None:
+        raise ParameterError("fit has no best-fit curve ('fit_force' or 'fit_tip_position' over "
+                             "'time', 'fit_approach_force' over 'tip_position'): it is not a "
+                             "relaxation, step, hertz or creep fit")
+    x_name = axes_of[y_name]
     figure, axes = _new_or_given_axes(ax, (6.4, 4.2))
-    t = np.asarray(fit["time"].values, dtype=float)
-    scale, unit = (1e3, "ms") if np.ptp(t) < 1.0 else (1.0, "s")
+    x = np.asarray(fit[x_name].values, dtype=float)
+    if x_name == "time":
+        scale, unit = (1e3, "ms") if np.ptp(x) < 1.0 else (1.0, "s")
+        x_label = f"time from the start of the segment [{unit}]"
+        shift = 0.0
+    else:  # µm from the contact point
+        scale, shift = 1e6, float(fit["contact_point"]) if "contact_point" in fit else 0.0
+        x_label = "tip position toward the sample from the contact point [µm]"
+    y_scale, y_label = ((1e9, "tip position toward the sample [nm]") if y_name ==
+                        "fit_tip_position" else (1e9, "force [nN]"))
     drawn: list[Artist] = []
     if data is not None:
-        dt, df = (np.asarray(a, dtype=float) for a in data)
-        (points,) = axes.plot(dt * scale, df * 1e9, ".", ms=2, color="0.45", label="data")
+        dx, dy = (np.asarray(a, dtype=float) for a in data)
+        (points,) = axes.plot((dx - shift) * scale, dy * y_scale, ".", ms=2, color="0.45",
+                              label="data")
         drawn.append(points)
-    (line,) = axes.plot(t * scale, np.asarray(fit["fit_force"].values) * 1e9,
+    (line,) = axes.plot((x - shift) * scale, np.asarray(fit[y_name].values) * y_scale,
                         label=f"fit ({fit.attrs['model']})", **FIT_STYLE)
     drawn.append(line)
+    if x_name == "tip_position":
+        drawn.append(axes.axvline(0.0, color="0.6", lw=0.8, ls=":", label="contact point"))
     box = axes.text(0.98, 0.95, _parameter_text(fit), transform=axes.transAxes, va="top",
                     ha="right", fontsize="small", family="monospace",
                     bbox={"boxstyle": "round", "facecolor": "white", "alpha": 0.85,
                           "edgecolor": "0.7"})
     drawn.append(box)
-    axes.set_xlabel(f"time from the start of the segment [{unit}]")
-    axes.set_ylabel("force [nN]")
-    axes.legend(loc="lower left")
+    axes.set_xlabel(x_label)
+    axes.set_ylabel(y_label)
+    axes.legend(loc="lower left" if x_name == "time" else "upper left")
     if title:
         axes.set_title(title)
     return PlotHandle(figure, (axes,), tuple(drawn))

@@ -55,6 +55,12 @@ FIT_VARIABLES: dict[str, VariableSpec] = {
     "fit_phase": VariableSpec("degree", "best-fit phase", (EXTRA, "omega"), required=False),
     "time": VariableSpec("s", "time", ("time",), required=False),
     "fit_force": VariableSpec("N", "best-fit force", (EXTRA, "time"), required=False),
+    "fit_tip_position": VariableSpec("m", "best-fit tip position toward the sample",
+                                     (EXTRA, "time"), required=False),
+    "tip_position": VariableSpec("m", "tip position toward the sample", ("tip_position",),
+                                 required=False),
+    "fit_approach_force": VariableSpec("N", "best-fit force over the approach",
+                                       (EXTRA, "tip_position"), required=False),
 }
 #: ``success`` flag codes.
 SUCCESS_FLAGS: dict[int, str] = {0: "failed", 1: "succeeded"}
@@ -62,8 +68,11 @@ SUCCESS_FLAGS: dict[int, str] = {0: "failed", 1: "succeeded"}
 #: Units of the SPEC's parameter names (``E_2``, ``tau_3``, … by pattern); others need ``units=``.
 PARAMETER_UNITS: dict[str, str] = {"tau": "s", "E0": "Pa", "E_inf": "Pa", "k_inf": "N/m",
                                    "F_inf": "N", "C1": "Pa-1 s-m", "m": "1",
-                                   "E_ref": "Pa", "alpha": "1", "mu": "Pa s"}
-_PATTERNS = ((r"tau_\d+", "s"), (r"E_\d+", "Pa"), (r"dk_\d+", "N/m"), (r"dF_\d+", "N"))
+                                   "E_ref": "Pa", "alpha": "1", "mu": "Pa s", "E": "Pa",
+                                   "contact_point": "m", "baseline": "N",
+                                   "baseline_slope": "N/m", "z_inf": "m"}
+_PATTERNS = ((r"tau_\d+", "s"), (r"E_\d+", "Pa"), (r"dk_\d+", "N/m"), (r"dF_\d+", "N"),
+             (r"dz_\d+", "m"))
 
 
 def parameter_units(name: str, units: Mapping[str, str] | None = None) -> str:
@@ -86,7 +95,10 @@ def make_fit_result(params: Mapping[str, tuple[float, float | None]], *,
                     aic: float, bic: float, modes: int, model: str,
                     omega: ArrayLike | None = None, fit_stiffness: ArrayLike | None = None,
                     fit_phase: ArrayLike | None = None, time: ArrayLike | None = None,
-                    fit_force: ArrayLike | None = None, units: Mapping[str, str] | None = None,
+                    fit_force: ArrayLike | None = None, fit_tip_position: ArrayLike | None = None,
+                    tip_position: ArrayLike | None = None,
+                    fit_approach_force: ArrayLike | None = None,
+                    units: Mapping[str, str] | None = None,
                     attrs: Mapping[str, Any] | None = None) -> xr.Dataset:
     """Build the result of one fit.
 
@@ -108,6 +120,10 @@ def make_fit_result(params: Mapping[str, tuple[float, float | None]], *,
         Best-fit spectrum: ω [rad/s], stiffness [N/m], phase [degree].
     time, fit_force : array_like, optional
         Best-fit force curve (relaxation, step models): t [s], F [N].
+    fit_tip_position : array_like, optional
+        Best-fit tip position [m] over ``time`` (creep model).
+    tip_position, fit_approach_force : array_like, optional
+        Best-fit approach (hertz model): tip position toward the sample [m], F [N].
     units : mapping, optional
         Units of parameters not in :data:`PARAMETER_UNITS`.
     attrs : mapping, optional
@@ -153,9 +169,11 @@ def make_fit_result(params: Mapping[str, tuple[float, float | None]], *,
         data[name] = variable(shaped(name, value, (), ()), (), t[name])
     data["modes"] = variable(modes, (), t["modes"], name="modes")
     coords: dict[str, Any] = {"param_i": ("param_i", names), "param_j": ("param_j", names)}
+    axes = {"omega": omega, "time": time, "tip_position": tip_position}
     for axis, curves in (("omega", {"fit_stiffness": fit_stiffness, "fit_phase": fit_phase}),
-                         ("time", {"fit_force": fit_force})):
-        x = omega if axis == "omega" else time
+                         ("time", {"fit_force": fit_force, "fit_tip_position": fit_tip_position}),
+                         ("tip_position", {"fit_approach_force": fit_approach_force})):
+        x = axes[axis]
         if x is None:
             if any(v is not None for v in curves.values()):
                 raise SchemaError(f"a best-fit curve over {axis!r} needs {axis}=")
