@@ -292,6 +292,11 @@ def _tip_inputs(args: argparse.Namespace, ds) -> dict[str, Any]:
         return {"tip": args.tip}
     if args.R is not None:
         return {"radius": args.R}
+    from viscoforce.fitting.curves import file_tip
+
+    recorded = file_tip(ds)
+    if recorded is not None:  # the file's own tip metadata
+        return {"tip": recorded}
     source = str(ds.attrs.get("source", "simulation"))
     if source != "simulation":
         raise UsageError(
