@@ -16,6 +16,13 @@ name              kind      what
 ``csv-spectrum``  spectrum  spectrum CSV/TSV
                             (:func:`viscoforce.io.csv_formats.read_spectrum_csv`); option
                             ``drive_amplitude``
+``afmformats``    curves    Asylum ``.ibw``, AFM Workshop, Chiaro, NT-MDT
+                            (:func:`viscoforce.io.afm.read_afmformats`)
+``uff``           curves    UFF text force curve ``.uff``, e.g. a Bruker Nanoscope curve
+                            (:func:`viscoforce.io.bruker.read_uff`); options
+                            ``spring_constant``, ``sensitivity``
+``nanoscope``     curves    Bruker Nanoscope binary ``.spm``: recognised and refused with
+                            what would read it (:func:`viscoforce.io.bruker.refuse_nanoscope`)
 ================  ========  =============================================================
 
 :func:`load_instrument` detects the format by CONTENT (zip members, header line), never by the
@@ -57,6 +64,7 @@ from viscoforce.exceptions import (
     ViscoforceError,
 )
 from viscoforce.io.afm import AFMFORMATS_EXTENSIONS, detect_afmformats, read_afmformats
+from viscoforce.io.bruker import detect_nanoscope, detect_uff, read_uff, refuse_nanoscope
 from viscoforce.io.csv_formats import header_names, read_curves_csv, read_spectrum_csv
 from viscoforce.io.curves import jpk_to_curves
 from viscoforce.io.jpk import read_jpk
@@ -190,6 +198,15 @@ FORMATS: tuple[InstrumentFormat, ...] = (
                     "sensitivity)",
         extensions=AFMFORMATS_EXTENSIONS, detect=detect_afmformats, read=read_afmformats,
         kind="curves", options=("spring_constant", "sensitivity")),
+    InstrumentFormat(
+        name="uff", description="UFF text force curve (e.g. a Bruker Nanoscope curve as text)",
+        extensions=(".uff",), detect=detect_uff, read=read_uff, kind="curves",
+        options=("spring_constant", "sensitivity")),
+    InstrumentFormat(
+        name="nanoscope",
+        description="Bruker Nanoscope binary: recognised only, refused with what would read it",
+        extensions=(".spm",), detect=detect_nanoscope, read=refuse_nanoscope, kind="curves",
+        options=("spring_constant", "sensitivity")),
 )
 
 

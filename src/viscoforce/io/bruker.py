@@ -1,0 +1,617 @@
+"""Bruker Nanoscope force curves: the UFF text form is read, the binary ``.spm`` is refused.
+
+Which library reads these files (surveyed for issue 21; licence from each package's metadata)
+---------------------------------------------------------------------------------------------
+* afmformats 0.18.7 (MIT; viscoforce's dependency): no Bruker format at all.
+* pyfmreader 0.1.3 (MIT): reads Nanoscope force curves and UFF, but has had no release since
+  July 2023, subtracts a baseline and drops points while reading a Nanoscope curve, and its own
+  UFF loader fails on the UFF file of its test data (``UnboundLocalError`` in ``getcurve``).
+* SciFiReaders 0.12.7 (MIT): its Bruker force-curve path returns the raw integers unscaled (no
+  volts, no metres), behind a heavy dependency stack (dask, numba, sidpy, ipython, gdown).
+* nanoscope 1.2.300 (Bruker's own): compiled for Windows only; no package for this platform.
+* pySPM (Apache-2.0): Nanoscope *images* only. AFMReader: GPL/LGPL (excluded), images only.
+
+So there is no maintained, permissively licensed reader of calibrated Nanoscope force curves, and
+viscoforce does not parse the Nanoscope binary itself: :func:`detect_nanoscope` recognises the
+file by its header and :func:`refuse_nanoscope` raises an
+:class:`~viscoforce.exceptions.InstrumentFormatError` that says what would read it.
+
+UFF text (``.uff``, "Universal Force File", read by :func:`read_uff`)
+--------------------------------------------------------------------
+A plain-text, self-describing form of one force curve: ``HE key: value`` header lines (units in
+the keys, e.g. ``Cantilever_springK_used(N/m)``), and per segment ``Recording_segment_<i>_*``
+fields (type, code, number of points, column titles and units, velocity) followed by its data
+lines ``<code> <segment number> <column 0> <column 1> …``; ``****`` ends the file. What goes where
+(SI; the file is opened read-only):
+
+* ``height`` [m]: the length column (``Displacement``, ``Height`` or ``Z``) as recorded, read as
+  growing away from the sample: for a Nanoscope curve it is the Z piezo displacement from the
+  turnaround (the most extended piezo, 0) — Nanoscope's force-plot axis, and viscoforce's (and
+  JPK's) height convention — so ``tip_position`` = −height − deflection.
+* ``deflection`` [m]: the ``Deflection`` column in volts × the inverse optical lever
+  sensitivity ``Recording_inv_optical_lever_sens_used(m/V)`` (or a length, as given);
+  ``force`` [N] = ``Cantilever_springK_used(N/m)`` × deflection, no baseline subtracted.
+  ``spring_constant`` / ``sensitivity`` recalibrate. Other columns are listed in
+  ``attrs["ignored_columns"]``.
+* Time order: Nanoscope lists each segment's rows from the turnaround outward (its plot order),
+  so each segment's rows are put in the order of the motion its type implies — an approach
+  moves toward the sample (height decreasing), a retract away from it — and
+  ``attrs["time_channel"]`` says which were reversed. The file records no time: ``time`` [s] is
+  derived from the ramp, sample interval = mean height step / the segment's ``velocity(m/s)``,
+  segment after segment. (``sampling_rate(Hz)`` is not used: in Nanoscope-made files it is the
+  ramp rate, velocity / (2 × z_displacement), not a sample rate.) A segment whose times cannot
+  be derived so (a pause, a non-monotonic height, no velocity) is refused.
+* Segment columns written as ``?`` (no title, no unit) take the columns of the previous segment
+  with the same number of columns (``attrs["column_note"]`` says so).
+* ``segment``: the file's ``Recording_segment_<i>_type`` (``Approach`` → approach, ``Retract``
+  → retract, …), the label kept in ``segment_type``.
+* ``attrs``: every header field as ``meta_<key>`` (lower case, non-alphanumerics → ``_``), as
+  the file gives it (UFF writes -1 or ``?`` for "not recorded"); the tip as
+  :meth:`viscoforce.physics.tips.Tip.as_attrs` writes it (``tip_shape``, ``tip_half_angle``
+  [degree] for a cone or pyramid, ``tip_radius`` [m] for a sphere, paraboloid or flat punch) when
+  ``Tip_geometry`` names a shape and its size is plausible (a radius in (0, 1 mm)); otherwise
+  ``attrs["tip_note"]`` says what was not used and why.
+
+Only single-curve UFF files (``Entry_tot_nb_curve`` = 1) are read.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, NoReturn
+
+import numpy as np
+import xarray as xr
+
+from viscoforce._validation import require_path
+from viscoforce.exceptions import InstrumentFormatError, ParameterError, UnitError
+from viscoforce.io.csv_formats import segment_label
+from viscoforce.schema import make_curves
+from viscoforce.units import parse_quantity, unit_factor
+
+__all__ = ["detect_nanoscope", "detect_uff", "read_uff", "refuse_nanoscope"]
+
+_HEAD = 4096
+_NANOSCOPE_MAGIC = (b"\\*Force file list", b"\\*File list", b"\\*EC File list")
+_VOLTS = ("v", "volt", "volts")
+_UNKNOWN = ("", "?")
+_END = re.compile(r"^\*+$")
+#: largest plausible tip radius [m] (colloid probes reach tens of µm)
+_MAX_TIP_RADIUS = 1e-3
+_TIP_WORDS = (("pyramid", "pyramid"), ("cone", "cone"), ("conical", "cone"),
+              ("sphere", "sphere"), ("spheric", "sphere"), ("colloid", "sphere"),
+              ("bead", "sphere"), ("parabol", "paraboloid"), ("flat", "flat"),
+              ("cylind", "flat"), ("punch", "flat"))
+_K_FIELDS = ("Cantilever_springK_used(N/m)", "Cantilever_springK_read(N/m)")
+_S_FIELDS = ("Recording_inv_optical_lever_sens_used(m/V)",
+             "Recording_inv_optical_lever_sens_read(m/V)")
+_CLI_HINT = "pass {name} (CLI: {flag})"
+
+
+def _head(path: Path, size: int = _HEAD) -> bytes:
+    try:
+        with path.open("rb") as fh:
+            return fh.read(size)
+    except OSError:
+        return b""
+
+
+# ── Nanoscope binary: recognised, refused ──────────────────────────────────────────────────────
+
+
+def detect_nanoscope(path: str | Path) -> bool:
+    r"""True if ``path`` starts like a Bruker Nanoscope file (``\*Force file list``, ``\*File list``).
+
+    Never raises (an unreadable file gives False).
+    """
+    head = _head(Path(path), 64).removeprefix(b"\xef\xbb\xbf")
+    return head.startswith(_NANOSCOPE_MAGIC)
+
+
+def _nanoscope_header(path: Path) -> dict[str, str]:
+    """The few header values the refusal quotes (version, mode, spring constant, sensitivity)."""
+    wanted = {"\\Version:": "version", "\\Operating mode:": "mode",
+              "\\Spring Constant:": "spring_constant", "\\@Sens. DeflSens:": "deflection_sens"}
+    found: dict[str, str] = {}
+    try:
+        with path.open("rb") as fh:
+            for _ in range(5000):
+                raw = fh.readline()
+                if not raw:
+                    break
+                line = raw.decode("latin-1").strip()
+                if line.startswith("\\*File list end"):
+                    break
+                for prefix, key in wanted.items():
+                    if line.startswith(prefix) and key not in found:
+                        found[key] = line[len(prefix):].strip()
+    except OSError:
+        pass
+    return found
+
+
+def _number(text: str) -> float | None:
+    match = re.search(r"[-+]?(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?", text)
+    return float(match.group(0)) if match else None
+
+
+def refuse_nanoscope(path: str | Path, *, spring_constant: Any = None,
+                     sensitivity: Any = None) -> NoReturn:
+    """Raise: viscoforce does not read Nanoscope binary files; the message says what would.
+
+    Parameters
+    ----------
+    path : str or Path
+        A Bruker Nanoscope file (``.spm``, ``.000`` …); only its text header is read.
+    spring_constant, sensitivity : optional
+        Accepted (so that ``load --spring-constant …`` reaches this message) and not used.
+
+    Raises
+    ------
+    InstrumentFormatError
+        Always: names the file, what it is (header version, operating mode), why it is not read
+        and how to load the curve (a text export, or a UFF text file).
+    """
+    del spring_constant, sensitivity  # the refusal does not depend on them
+    path = require_path("path", path)
+    header = _nanoscope_header(path)
+    first = _head(path, 64).removeprefix(b"\xef\xbb\xbf").split(b"\r")[0].split(b"\n")[0]
+    what = [f"'{first.decode('latin-1')}'"]
+    if "version" in header:
+        what.append(f"version {header['version']}")
+    if "mode" in header:
+        what.append(f"operating mode {header['mode']}")
+    calibration = []
+    k = _number(header.get("spring_constant", ""))
+    if k is not None:
+        calibration.append(f"--spring-constant {k:g}N/m")
+    s = _number(header.get("deflection_sens", ""))
+    if s is not None:
+        calibration.append(f"--sensitivity {s:g}nm/V")
+    flags = (f" with the header's calibration, {' '.join(calibration)}" if calibration
+             else " with --spring-constant and --sensitivity")
+    raise InstrumentFormatError(
+        f"{path}: Bruker Nanoscope binary file ({', '.join(what)}): viscoforce does not read "
+        "Nanoscope binary data, because no maintained, permissively licensed Python package "
+        "reads calibrated Nanoscope force curves (afmformats, MIT, has no Bruker format; "
+        "pyfmreader 0.1.3, MIT, reads them but has had no release since July 2023 and subtracts "
+        "a baseline while reading; Bruker's own 'nanoscope' package runs on Windows only). To load "
+        "the curve, export it from NanoScope Analysis as ASCII text with 'name (unit)' column "
+        "headers, e.g. 'time (s),height (nm),deflection (V)', and load that as format csv-curves"
+        f"{flags}; or load a UFF text export (.uff) of the curve (format uff)")
+
+
+# ── UFF text ───────────────────────────────────────────────────────────────────────────────────
+
+
+def detect_uff(path: str | Path) -> bool:
+    """True if ``path`` is a UFF text file: ``HE `` header lines naming ``UFF_code`` / ``Entry_UFF_version``.
+
+    Never raises (an unreadable or binary file gives False).
+    """
+    head = _head(Path(path))
+    if not head or b"\x00" in head:
+        return False
+    text = head.decode("latin-1").removeprefix("\xef\xbb\xbf")
+    first = next((ln.strip() for ln in text.splitlines() if ln.strip()), "")
+    return first.startswith("HE ") and ("HE UFF_code:" in text or "HE Entry_UFF_version:" in text)
+
+
+@dataclass
+class _Column:
+    title: str
+    unit: str
+
+
+@dataclass
+class _Segment:
+    index: int
+    code: str
+    kind: str  # the file's type label
+    number: str  # Recording_segment_<i>_nb as written
+    n_points: int
+    columns: list[_Column]
+    rows: list[list[float]] = field(default_factory=list)
+
+
+@dataclass
+class _Uff:
+    path: Path
+    fields: dict[str, str]
+    segments: list[_Segment]
+    notes: dict[str, str] = field(default_factory=dict)
+
+
+def _read_text(path: Path) -> str:
+    try:
+        data = path.read_bytes()
+    except OSError as exc:
+        raise InstrumentFormatError(f"{path}: cannot read ({exc.strerror or exc})") from None
+    try:
+        return data.decode("utf-8-sig")
+    except UnicodeDecodeError:
+        return data.decode("latin-1")
+
+
+def _parse_lines(path: Path, text: str) -> tuple[dict[str, str], list[tuple[int, list[str]]]]:
+    """Header fields (key → value text) and the data lines (line number, tokens)."""
+    fields: dict[str, str] = {}
+    data: list[tuple[int, list[str]]] = []
+    ended = False
+    for lineno, raw in enumerate(text.splitlines(), start=1):
+        line = raw.strip()
+        if not line:
+            continue
+        if ended:
+            raise InstrumentFormatError(f"{path}: line {lineno}: content after the '****' end "
+                                        "marker")
+        if _END.match(line):
+            ended = True
+        elif line.startswith("HE "):
+            key, sep, value = line[3:].partition(":")
+            key = key.strip()
+            if not sep or not key:
+                raise InstrumentFormatError(f"{path}: line {lineno}: header line without "
+                                            f"'key: value' ({line[:60]!r})")
+            if key in fields:
+                raise InstrumentFormatError(f"{path}: line {lineno}: header field {key!r} given "
+                                            "twice")
+            fields[key] = value.strip().strip('"').strip()
+        else:
+            data.append((lineno, line.split()))
+    return fields, data
+
+
+def _field(uff_path: Path, fields: dict[str, str], key: str) -> str:
+    if key not in fields:
+        raise InstrumentFormatError(f"{uff_path}: the UFF header lacks {key!r}")
+    return fields[key]
+
+
+def _int_field(uff_path: Path, fields: dict[str, str], key: str, minimum: int) -> int:
+    text = _field(uff_path, fields, key)
+    try:
+        value = float(text)
+    except ValueError:
+        value = math.nan
+    if not (math.isfinite(value) and value == int(value) and value >= minimum):
+        raise InstrumentFormatError(f"{uff_path}: header field {key!r} must be an integer >= "
+                                    f"{minimum}, got {text!r}")
+    return int(value)
+
+
+def _float_field(fields: dict[str, str], key: str) -> float:
+    """The field as a finite float, NaN if absent, unrecorded (``?``) or not a number."""
+    try:
+        value = float(fields.get(key, "nan"))
+    except ValueError:
+        return math.nan
+    return value if math.isfinite(value) else math.nan
+
+
+def _parse(path: Path) -> _Uff:
+    fields, data = _parse_lines(path, _read_text(path))
+    n_curves = _int_field(path, fields, "Entry_tot_nb_curve", 1)
+    if n_curves != 1:
+        raise InstrumentFormatError(f"{path}: the UFF file holds {n_curves} curves "
+                                    "(Entry_tot_nb_curve); this reader reads single-curve files")
+    segments: list[_Segment] = []
+    for i in range(_int_field(path, fields, "Recording_number_segment", 1)):
+        pre = f"Recording_segment_{i}_"
+        n_cols = _int_field(path, fields, pre + "nb_col", 1)
+        columns = [_Column(_field(path, fields, f"{pre}col_{j}_title"),
+                           _field(path, fields, f"{pre}col_{j}_unit")) for j in range(n_cols)]
+        segments.append(_Segment(index=i, code=_field(path, fields, pre + "code"),
+                                 kind=_field(path, fields, pre + "type"),
+                                 number=fields.get(pre + "nb", str(i)),
+                                 n_points=_int_field(path, fields, pre + "nb_point", 1),
+                                 columns=columns))
+    by_code = {s.code: s for s in segments}
+    if len(by_code) != len(segments):
+        raise InstrumentFormatError(f"{path}: segment codes {[s.code for s in segments]} are not "
+                                    "unique")
+    for lineno, tokens in data:
+        seg = by_code.get(tokens[0])
+        if seg is None:
+            raise InstrumentFormatError(
+                f"{path}: line {lineno}: {tokens[0][:20]!r} is neither a header ('HE ') nor a "
+                f"data line of a declared segment (codes {', '.join(by_code)})")
+        if len(tokens) != len(seg.columns) + 2 or tokens[1] != seg.number:
+            raise InstrumentFormatError(
+                f"{path}: line {lineno}: a data line of segment {seg.index} ({seg.code}) needs "
+                f"'{seg.code} {seg.number}' and {len(seg.columns)} numbers, got "
+                f"{' '.join(tokens)[:80]!r}")
+        try:
+            values = [float(t) for t in tokens[2:]]
+        except ValueError:
+            values = [math.nan]
+        if not all(math.isfinite(v) for v in values):
+            raise InstrumentFormatError(f"{path}: line {lineno}: not finite numbers "
+                                        f"({' '.join(tokens[2:])[:80]!r})")
+        seg.rows.append(values)
+    for seg in segments:
+        if len(seg.rows) != seg.n_points:
+            raise InstrumentFormatError(
+                f"{path}: segment {seg.index} ({seg.code}) declares {seg.n_points} points "
+                f"(Recording_segment_{seg.index}_nb_point), the file has {len(seg.rows)}")
+    return _Uff(path=path, fields=fields, segments=segments)
+
+
+def _described_columns(uff: _Uff) -> None:
+    """Give ``?`` columns the previous segment's columns (noted), else refuse."""
+    notes = []
+    for k, seg in enumerate(uff.segments):
+        unknown = [c.title.strip() in _UNKNOWN and c.unit.strip() in _UNKNOWN
+                   for c in seg.columns]
+        if not any(unknown):
+            continue
+        previous = next((p for p in reversed(uff.segments[:k])
+                         if len(p.columns) == len(seg.columns)), None)
+        if not all(unknown) or previous is None:
+            raise InstrumentFormatError(
+                f"{uff.path}: segment {seg.index} ({seg.code}) does not describe its columns "
+                f"(titles/units {[(c.title, c.unit) for c in seg.columns]}), and no earlier "
+                "segment has as many columns to take them from")
+        seg.columns = list(previous.columns)
+        notes.append(f"segment {seg.index} ({seg.code}) columns are '?' in the file: taken as "
+                     f"segment {previous.index}'s ("
+                     + ", ".join(f"{c.title} [{c.unit}]" for c in previous.columns) + ")")
+    if notes:
+        uff.notes["column_note"] = "; ".join(notes)
+
+
+def _role(title: str) -> str | None:
+    text = title.strip().lower()
+    if "deflection" in text:
+        return "deflection"
+    if "displacement" in text or "height" in text or text in ("z", "zpiezo", "z piezo"):
+        return "height"
+    return None
+
+
+@dataclass
+class _Channel:
+    values: np.ndarray  # SI, or volts for a deflection in V
+    unit: str  # as written ("V" for volts)
+    title: str  # as written
+
+
+def _columns(uff: _Uff, seg: _Segment) -> dict[str, _Channel]:
+    """Role (height, deflection) → channel of one segment; other columns are noted, unused."""
+    table = np.asarray(seg.rows, dtype=float).reshape(len(seg.rows), len(seg.columns))
+    out: dict[str, _Channel] = {}
+    for j, col in enumerate(seg.columns):
+        role, unit, title = _role(col.title), col.unit.strip(), col.title.strip()
+        if role is None:
+            ignored = uff.notes.get("ignored_columns", "")
+            uff.notes["ignored_columns"] = (ignored + ", " if ignored else "") + (
+                f"segment {seg.index} {title} [{unit}]")
+            continue
+        if role in out:
+            raise InstrumentFormatError(f"{uff.path}: segment {seg.index} ({seg.code}) has two "
+                                        f"{role} columns; keep one")
+        if role == "deflection" and unit.lower() in _VOLTS:
+            out[role] = _Channel(table[:, j], "V", title)
+            continue
+        try:
+            factor = unit_factor("length", unit)
+        except (UnitError, ParameterError):
+            allowed = "a length or volts" if role == "deflection" else "a length"
+            raise InstrumentFormatError(
+                f"{uff.path}: segment {seg.index} ({seg.code}) column {title!r}: unit {unit!r} "
+                f"is not {allowed}") from None
+        out[role] = _Channel(table[:, j] * factor, unit, title)
+    missing = [name for role, name in (("height", "height (Displacement, Height or Z)"),
+                                       ("deflection", "Deflection")) if role not in out]
+    if missing:
+        raise InstrumentFormatError(
+            f"{uff.path}: segment {seg.index} ({seg.code}) lacks a {' and a '.join(missing)} "
+            f"column (it has {', '.join(c.title.strip() for c in seg.columns)})")
+    return out
+
+
+def _order_and_time(uff: _Uff, seg: _Segment, height: np.ndarray, name: str
+                    ) -> tuple[np.ndarray, np.ndarray, str]:
+    """(row order in time, time from the segment start [s], how) from the ramp."""
+    n = len(seg.rows)
+    where = f"{uff.path}: segment {seg.index} ({seg.code}, {seg.kind})"
+    steps = np.diff(height)
+    if name not in ("approach", "retract") or n < 2 or not (
+            np.all(steps > 0) or np.all(steps < 0)):
+        raise InstrumentFormatError(
+            f"{where}: the file records no time, and this segment's sample times cannot be "
+            "derived from the ramp (only an approach or retract whose height changes "
+            "monotonically, with a velocity); this reader does not guess them")
+    key = f"Recording_segment_{seg.index}_velocity(m/s)"
+    velocity = _float_field(uff.fields, key)
+    if not velocity > 0:
+        raise InstrumentFormatError(f"{where}: no positive {key} ({uff.fields.get(key)!r}): the "
+                                    "sample times are unknown (the file records no time)")
+    dt = abs(float(height[-1] - height[0])) / (n - 1) / velocity
+    reverse = bool(steps[0] < 0) != (name == "approach")  # approach: height decreasing in time
+    order = np.arange(n)[::-1] if reverse else np.arange(n)
+    how = f"dt = mean height step / velocity = {dt:.6g} s" + (", rows reversed" if reverse
+                                                             else "")
+    return order, np.arange(n) * dt, how
+
+
+def _deflection(uff: _Uff, channel: _Channel, s: tuple[float, str], notes: dict[str, str]
+                ) -> np.ndarray:
+    """Deflection [m] of one segment (volts × sensitivity, or a length as recorded)."""
+    if channel.unit != "V":
+        notes["deflection_channel"] = f"{channel.title} [{channel.unit}] as recorded"
+        return channel.values
+    value, source = s
+    if not value > 0:
+        raise InstrumentFormatError(
+            f"{uff.path}: the deflection is in volts and the header gives no inverse optical "
+            "lever sensitivity (Recording_inv_optical_lever_sens_used(m/V)); "
+            + _CLI_HINT.format(name="sensitivity", flag="--sensitivity 50nm/V"))
+    notes["deflection_channel"] = f"{channel.title} [V] x sensitivity {value:g} m/V ({source})"
+    return channel.values * value
+
+
+def _tip_attrs(fields: dict[str, str]) -> tuple[dict[str, Any], str]:
+    """Tip attrs (Tip.as_attrs keys) from the header, and a note on what was not used."""
+    geometry = fields.get("Tip_geometry", "").strip().lower()
+    shape = next((s for word, s in _TIP_WORDS if word in geometry), None)
+    angle = _float_field(fields, "Tip_half_angle(deg)")
+    radius = _float_field(fields, "Tip_radius(m)")
+    notes = []
+    radius_ok = 0 < radius < _MAX_TIP_RADIUS
+    if not math.isnan(radius) and radius != -1 and not radius_ok:
+        notes.append(f"Tip_radius(m) = {fields.get('Tip_radius(m)')} is not a plausible tip "
+                     f"radius in metres (0 to {_MAX_TIP_RADIUS:g} m); not used")
+    if shape is None:
+        if geometry not in _UNKNOWN:
+            notes.append(f"Tip_geometry {fields.get('Tip_geometry')!r} names no known tip shape")
+        return {}, "; ".join(notes)
+    if shape in ("cone", "pyramid"):
+        if 0 < angle < 90:
+            return {"tip_shape": shape, "tip_half_angle": angle}, "; ".join(notes)
+        notes.append(f"{geometry} tip without a half angle in (0, 90) degrees "
+                     f"(Tip_half_angle(deg) = {fields.get('Tip_half_angle(deg)')!r}); not used")
+        return {}, "; ".join(notes)
+    if radius_ok:
+        return {"tip_shape": shape, "tip_radius": radius}, "; ".join(notes)
+    notes.append(f"{geometry} tip without a plausible radius; not used")
+    return {}, "; ".join(notes)
+
+
+def _meta_key(key: str) -> str:
+    return "meta_" + re.sub(r"[^0-9A-Za-z]+", "_", key).strip("_").lower()
+
+
+def _meta(fields: dict[str, str]) -> dict[str, Any]:
+    """Every header field as ``meta_<key>``: a finite number as a float, else the text."""
+    out: dict[str, Any] = {}
+    for key, text in fields.items():
+        try:
+            value = float(text)
+        except ValueError:
+            value = math.nan
+        out[_meta_key(key)] = value if math.isfinite(value) else text
+    return out
+
+
+def _option(name: str, value: Any, dimension: str) -> float | None:
+    if value is None:
+        return None
+    if isinstance(value, bool) or not isinstance(value, str | int | float):
+        raise ParameterError(f"{name} must be a number [SI] or a quantity string, got {value!r}")
+    out = parse_quantity(value, dimension, name=name) if isinstance(value, str) else float(value)
+    if not (math.isfinite(out) and out > 0):
+        raise ParameterError(f"{name} must be finite and > 0, got {value!r}")
+    return out
+
+
+def _calibration(uff: _Uff, keys: tuple[str, ...], user: float | None, name: str
+                 ) -> tuple[float, str]:
+    """(value, where it came from): the caller's, else the first positive header field."""
+    if user is not None:
+        return user, name
+    for key in keys:
+        value = _float_field(uff.fields, key)
+        if value > 0:
+            return value, key
+    return math.nan, ""
+
+
+def read_uff(path: str | Path, *, spring_constant: float | str | None = None,
+             sensitivity: float | str | None = None) -> xr.Dataset:
+    """Read a single-curve UFF text file (``.uff``) into a curves dataset (SI).
+
+    Parameters
+    ----------
+    path : str or Path
+        The file (opened read-only, never modified).
+    spring_constant : float or str, optional
+        Cantilever spring constant [N/m] (or a quantity, ``"0.1N/m"``); default the header's
+        ``Cantilever_springK_used(N/m)``. Given, it recalibrates: force = k × deflection.
+    sensitivity : float or str, optional
+        Inverse optical lever sensitivity [m/V] (or ``"27nm/V"``) for a deflection in volts;
+        default the header's ``Recording_inv_optical_lever_sens_used(m/V)``.
+
+    Returns
+    -------
+    xarray.Dataset
+        Curves dataset (:func:`viscoforce.schema.make_curves`), one curve; ``attrs["source"]``
+        ``"uff"``; see the module docstring for what goes where.
+
+    Raises
+    ------
+    InstrumentFormatError
+        If the file is missing, not UFF, malformed (a count, a column, a line that does not fit
+        the header; the message gives the line), holds several curves, lacks the calibration a
+        deflection in volts needs, or a segment's sample times cannot be known.
+    ParameterError, UnitError
+        If ``spring_constant`` / ``sensitivity`` is not a positive quantity.
+    """
+    path = require_path("path", path)
+    k_user = _option("spring_constant", spring_constant, "stiffness")
+    s_user = _option("sensitivity", sensitivity, "sensitivity")
+    if not path.is_file():
+        raise InstrumentFormatError(f"{path}: no such file")
+    if not detect_uff(path):
+        raise InstrumentFormatError(f"{path}: not a UFF text file (the first line must be an "
+                                    "'HE ' header line, with 'HE UFF_code:' or "
+                                    "'HE Entry_UFF_version:')")
+    uff = _parse(path)
+    _described_columns(uff)
+    k, k_from = _calibration(uff, _K_FIELDS, k_user, "spring_constant")
+    if not k > 0:
+        raise InstrumentFormatError(
+            f"{path}: the header gives no spring constant (Cantilever_springK_used(N/m)); "
+            + _CLI_HINT.format(name="spring_constant", flag="--spring-constant 0.1N/m"))
+    s = _calibration(uff, _S_FIELDS, s_user, "sensitivity")
+    parts: dict[str, list[np.ndarray]] = {key: [] for key in (
+        "time", "height", "deflection", "segment")}
+    table: list[tuple[str, str]] = []
+    hows: list[str] = []
+    notes = {"force_channel": f"spring constant {k:g} N/m ({k_from}) x deflection"}
+    for seg in uff.segments:
+        cols = _columns(uff, seg)
+        name = segment_label(seg.kind)
+        order, t, how = _order_and_time(uff, seg, cols["height"].values, name)
+        if parts["time"]:  # a segment starts one sample interval after the previous one ended
+            t = t + parts["time"][-1][-1] + t[1]
+        if (name, seg.kind) not in table:
+            table.append((name, seg.kind))
+        parts["time"].append(t)
+        parts["height"].append(cols["height"].values[order])
+        parts["deflection"].append(_deflection(uff, cols["deflection"], s, notes)[order])
+        parts["segment"].append(np.full(len(order), table.index((name, seg.kind)), np.int32))
+        hows.append(f"segment {seg.index} ({seg.kind}): {how}")
+        notes["height_channel"] = (f"{cols['height'].title} [{cols['height'].unit}] as recorded, "
+                                   "read as growing away from the sample (Nanoscope: Z piezo "
+                                   "displacement from the turnaround)")
+    return _assemble(uff, parts, table, hows, notes, k, s[0])
+
+
+def _assemble(uff: _Uff, parts: dict[str, list[np.ndarray]], table: list[tuple[str, str]],
+              hows: list[str], notes: dict[str, str], k: float, s: float) -> xr.Dataset:
+    tip, tip_note = _tip_attrs(uff.fields)
+    attrs: dict[str, Any] = {
+        "file": str(uff.path), "n_curves": 1, "force_baseline_subtracted": 0,
+        "time_channel": "derived from the ramp (the file records no time): " + "; ".join(hows),
+        "sample_order": "rows in time order per segment: an approach moves toward the sample "
+                        "(height decreasing), a retract away from it; segments in file order",
+        **notes, **uff.notes, **tip}
+    if tip_note:
+        attrs["tip_note"] = tip_note
+    attrs.update(_meta(uff.fields))
+    per_curve: dict[str, Any] = {"spring_constant": [k], "sensitivity": [s]}
+    x = _float_field(uff.fields, "Recording_xposition(m)")
+    y = _float_field(uff.fields, "Recording_yposition(m)")
+    if math.isfinite(x) and math.isfinite(y):
+        per_curve["x"], per_curve["y"] = [x], [y]
+    deflection = np.concatenate(parts["deflection"])
+    ds = make_curves(np.concatenate(parts["time"]), k * deflection,
+                     np.concatenate(parts["height"]), deflection,
+                     segment=np.concatenate(parts["segment"]),
+                     segment_names=[r[0] for r in table], segment_types=[r[1] for r in table],
+                     per_curve=per_curve, attrs=attrs, source="uff")
+    return ds.assign_coords(curve=np.arange(1, dtype=np.int32))
