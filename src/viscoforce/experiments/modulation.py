@@ -118,17 +118,38 @@ the fitted range; creep of the sample between the approach and the modulation is
 ``mean_indentation`` is NaN and ``attrs["contact_point"]`` says so; when none is found on any
 curve the variable is left out.
 
+Which lag is in the phase: δ is built from the height channel, the calibrated sensor
+(``measuredHeight``, ``strainGaugeHeight``, ``capacitiveSensorHeight``) where the file has one.
+The sensor measures where the scanner is, so the piezo's lag behind its drive signal is not in
+the phase and must not be subtracted again: on the real JPK map of a cell the sensor lags the
+piezo ``height`` by 1.1, 1.4, 1.2, 2.1, 5.2 and 14.2° at 1, 3, 10, 30, 100 and 300 Hz (the same
+on every curve, ``benchmarks/phase_lag_real.py``), and that lag is already absent from the
+sensor-based phase. What can remain is named in the ``quality`` comment
+(:data:`viscoforce.io.quality.PHASE_REMAINS`): the sensor's own bandwidth, the deflection
+detection chain, the cantilever's inertia and hydrodynamics; ``attrs["phase_reference"]`` says
+which height signal the phase refers to (:func:`viscoforce.io.quality.phase_basis`).
+
 Phase reference: ``phase_reference`` = a spectrum measured on a hard (elastic) surface, where the
 true phase is 0: its median phase per frequency (over all its other dims, non-finite values
 ignored; taken circularly, about the circular mean) plus the ``phase_lag`` it already had
 subtracted (its ``phase_lag`` variable, when present) is the instrument lag λ(f), subtracted as
 ``phase_lag``. Every modulation frequency must be in the reference (relative tolerance 1e-6;
 extra reference frequencies are ignored), and ``phase_lag`` and ``phase_reference`` are
-exclusive.
+exclusive. Measured with the same cantilever, liquid, drive and height channel, it removes
+everything the ``quality`` comment lists except the sample itself.
 
-Quality (kept, never dropped): 1 ``phase_outside_passive_range`` where the corrected phase is
-outside (0°, 90°) (:func:`viscoforce.schema.phase_quality`), else 2 ``low_signal`` where
-|F̂| < 3·σ_F̂ (the residual-spectrum σ_F̂), else 0.
+Quality (kept, never dropped; :func:`viscoforce.io.quality.spectrum_quality`, the function
+the spectrum CSV reader uses too): 1 ``phase_outside_passive_range`` where the phase after the
+corrections is outside (0°, 90°), else 2 ``low_signal`` where ``stiffness`` < 3·
+``stiffness_stderr``, else 0. The comment says what was corrected (the lag per frequency, the
+drag) and what can remain; ``attrs["quality_summary"]`` lists the flagged frequencies, how many
+points and their median phase. A flag left after a correction is information, not a defect:
+on the real map the 300 Hz points sit at 104.5–109.8° as measured and at 90.5–95.8° after
+subtracting 14° (the sensor-vs-piezo lag, which a sensor-based phase does not contain), so they
+stay flagged until a hard-surface reference says what the instrument adds there.
+
+:func:`correct_spectrum` applies the same corrections and flags to a spectrum already made (a
+spectrum CSV, a netCDF written by ``load``).
 """
 
 from __future__ import annotations
@@ -147,10 +168,17 @@ from scipy.optimize import minimize_scalar
 from viscoforce.exceptions import ParameterError
 from viscoforce.io.curves import _read_block
 from viscoforce.io.jpk import JPKArchive, read_jpk
+from viscoforce.io.quality import SENSOR_CHANNELS, phase_basis, quality_notes, spectrum_quality
 from viscoforce.lockin import harmonics
-from viscoforce.schema import clean_attrs, make_spectrum, phase_quality, validate_curves
+from viscoforce.schema import (
+    QUALITY_FLAGS,
+    clean_attrs,
+    make_spectrum,
+    validate_curves,
+    validate_spectrum,
+)
 
-__all__ = ["demodulate_segment", "find_contact_point", "modulation_spectrum"]
+__all__ = ["correct_spectrum", "demodulate_segment", "find_contact_point", "modulation_spectrum"]
 
 #: ``attrs["stderr_method"]`` of every modulation spectrum: how the standard errors are made.
 STDERR_METHOD = (
@@ -558,6 +586,191 @@ def _reference_lags(reference: Any, fr: np.ndarray) -> np.ndarray:
     return lags
 
 
+def _check_corrections(phase_lag: Any, drag: Any, phase_reference: Any) -> None:
+    """Validate the correction options of :func:`modulation_spectrum` / :func:`correct_spectrum`."""
+    if drag is not None and (isinstance(drag, bool) or not isinstance(drag, int | float)
+                             or not math.isfinite(drag)):
+        raise ParameterError(f"drag must be a finite number [N·s/m], got {drag!r}")
+    if phase_lag is not None and not isinstance(phase_lag, Mapping):
+        if isinstance(phase_lag, bool) or not (isinstance(phase_lag, int | float)
+                                               and math.isfinite(phase_lag)):
+            raise ParameterError(f"phase_lag must be degrees or a mapping Hz → degrees, got "
+                                 f"{phase_lag!r}")
+    if phase_reference is not None and phase_lag is not None:
+        raise ParameterError("give phase_lag or phase_reference, not both")
+
+
+def _lags(fr: np.ndarray, phase_lag: Any, phase_reference: Any) -> np.ndarray:
+    """Instrument lag [degree] to subtract at each frequency ``fr`` [Hz] (0 when none given)."""
+    if phase_reference is not None:
+        return _reference_lags(phase_reference, fr)
+    return np.asarray([_lag_for(phase_lag, float(f)) for f in fr], dtype=float)
+
+
+def _corrected(k: np.ndarray, omega: np.ndarray, lags: np.ndarray, drag: float | None
+               ) -> np.ndarray:
+    """k* ← k*·e^{−iλ} − iωB, ``omega`` [rad/s] and λ [degree] along the last axis."""
+    out = k * np.exp(-1j * np.radians(lags))
+    if drag is not None:
+        out = out - 1j * omega * float(drag)
+    return out
+
+
+def _corrections_text(fr: np.ndarray, lags: np.ndarray, drag: float, *, reference: bool) -> str:
+    """What was corrected, for the ``quality`` comment: the lag per frequency and the drag."""
+    what = "instrument lag from a hard-surface reference" if reference else "phase lag"
+    if not np.any(lags != 0):
+        lag_text = "no phase lag subtracted"
+    elif np.all(lags == lags[0]):
+        lag_text = f"{what} of {lags[0]:g} degree subtracted at every frequency"
+    else:
+        shown = [f"{lag:g} degree at {f:g} Hz" for f, lag in zip(fr, lags, strict=True)
+                 if lag != 0]
+        lag_text = (f"{what} subtracted: " + ", ".join(shown)
+                    + (" (0 at the others)" if np.any(lags == 0) else ""))
+    drag_text = (f"drag {drag:g} N*s/m subtracted as i*omega*B" if drag
+                 else "no drag subtracted")
+    return f"{lag_text}; {drag_text}"
+
+
+def _lag_mode(phase_lag: Any, phase_reference: Any) -> str:
+    """``attrs["phase_lag"]``: how the lag was given."""
+    if phase_reference is not None:
+        return "reference"
+    if phase_lag is None:
+        return "none"
+    return "per-frequency" if isinstance(phase_lag, Mapping) else "scalar"
+
+
+def _reference_attrs(basis: str, height_channel: Any, phase_lag: Any,
+                     phase_reference: Any) -> dict[str, str]:
+    """``phase_reference`` (and ``phase_reference_file``) attrs: what the phase refers to."""
+    text = basis
+    if phase_reference is not None:
+        text += ("; instrument lag = median phase per frequency of a hard-surface reference "
+                 "spectrum (plus its own phase_lag)")
+    elif phase_lag is not None and height_channel in SENSOR_CHANNELS:
+        text += "; the phase_lag given is taken as measured against this sensor (hard surface)"
+    out = {"phase_reference": text}
+    if phase_reference is not None and "file" in phase_reference.attrs:
+        out["phase_reference_file"] = str(phase_reference.attrs["file"])
+    return out
+
+
+#: Variables computed from an uncorrected k* that :func:`correct_spectrum` cannot update.
+_DERIVED = ("E_storage", "E_loss", "G_storage", "G_loss")
+
+
+def correct_spectrum(spectrum: xr.Dataset, *,
+                     phase_lag: float | Mapping[float, float] | None = None,
+                     drag: float | None = None,
+                     phase_reference: xr.Dataset | None = None) -> xr.Dataset:
+    """The instrument corrections of :func:`modulation_spectrum`, on a spectrum already made.
+
+    For a spectrum CSV (:func:`viscoforce.io.csv_formats.read_spectrum_csv`) or a netCDF that
+    ``load`` wrote: k* ← k*·e^{−iλ} − iωB as in the module docstring, then the ``quality``
+    flags, their comment and the attrs are made again by the functions the JPK path uses, so a
+    spectrum gets the same flags whichever reader made it.
+
+    Parameters
+    ----------
+    spectrum : xarray.Dataset
+        A valid spectrum (``stiffness``, ``phase`` over ``omega``, any extra dims).
+    phase_lag : float or mapping of float to float, optional
+        Instrument phase lag [degree] to subtract: one value, or frequency [Hz] → lag for every
+        frequency of the spectrum.
+    drag : float, optional
+        Hydrodynamic drag B [N·s/m], subtracted as iωB.
+    phase_reference : xarray.Dataset, optional
+        A hard-surface spectrum at the same frequencies (as for :func:`modulation_spectrum`).
+
+    Returns
+    -------
+    xarray.Dataset
+        The spectrum with ``stiffness``, ``phase``, ``force_amplitude`` and ``amplitude``
+        (where present) corrected; ``phase_stderr`` (and ``phase_stderr_white``) scaled by
+        |k*_before|/|k*_after| (the error of k* is unchanged, as in the JPK path); ``phase_lag``
+        [degree] over ``omega`` = all the lag subtracted so far; ``quality`` made again; attrs
+        ``phase_lag``, ``drag`` (the total), ``phase_reference``, ``quality_summary``.
+
+    Raises
+    ------
+    ParameterError
+        No correction given, bad options (as :func:`modulation_spectrum`), a lag or a drag the
+        spectrum already had subtracted, or moduli (``E_storage`` …) already computed from the
+        uncorrected k*.
+    SchemaError
+        ``spectrum`` is not a valid spectrum.
+    """
+    _check_corrections(phase_lag, drag, phase_reference)
+    if phase_lag is None and drag is None and phase_reference is None:
+        raise ParameterError("correct_spectrum needs phase_lag, drag or phase_reference")
+    ds = validate_spectrum(spectrum)
+    before = np.zeros(ds.sizes["omega"])
+    if "phase_lag" in ds.variables and ds["phase_lag"].dims == ("omega",):
+        before = np.asarray(ds["phase_lag"].values, dtype=float)
+    mode = str(ds.attrs.get("phase_lag", "none"))
+    lag_given = phase_lag is not None or phase_reference is not None
+    if lag_given and (mode != "none" or np.any(before != 0)):
+        raise ParameterError(f"this spectrum already had an instrument phase lag subtracted "
+                             f"(attrs phase_lag = {mode!r}); correct the uncorrected spectrum")
+    drag_before = float(ds.attrs.get("drag", 0.0) or 0.0)
+    if drag is not None and drag_before:
+        raise ParameterError(f"this spectrum already had a drag of {drag_before:g} N*s/m "
+                             "subtracted; do not subtract it again")
+    derived = [name for name in _DERIVED if name in ds.variables]
+    if derived:
+        raise ParameterError(f"the spectrum holds {derived}, computed from the uncorrected k*: "
+                             "correct the spectrum first, then compute the moduli")
+    omega = np.asarray(ds["omega"].values, dtype=float)
+    fr = omega / (2.0 * math.pi)
+    lags = _lags(fr, phase_lag, phase_reference)
+    stiffness, phase = xr.broadcast(ds["stiffness"], ds["phase"])
+    dims = stiffness.dims
+    k_old = stiffness.values * np.exp(1j * np.radians(phase.values))
+    k_new = _corrected(k_old, omega, lags, drag)
+    new_stiffness, new_phase = np.abs(k_new), np.degrees(np.angle(k_new))
+    out = ds.copy()
+    out["stiffness"] = (dims, new_stiffness, ds["stiffness"].attrs)
+    out["phase"] = (dims, new_phase, ds["phase"].attrs)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        ratio = xr.DataArray(np.abs(k_old) / new_stiffness, dims=dims)
+    for name in ("phase_stderr", "phase_stderr_white"):
+        if name in ds.variables:
+            out[name] = (ds[name] * ratio).assign_attrs(ds[name].attrs)
+    if "force_amplitude" in ds.variables and "drive_amplitude" in ds.variables:
+        out["force_amplitude"] = (out["stiffness"] * ds["drive_amplitude"]).transpose(
+            *dims).assign_attrs(ds["force_amplitude"].attrs)
+    if "amplitude" in ds.variables and "force_amplitude" in out.variables:
+        out["amplitude"] = (out["force_amplitude"] / ds["mean_force"]).transpose(
+            *dims).assign_attrs(ds["amplitude"].attrs)
+    err = ds["stiffness_stderr"].broadcast_like(stiffness).transpose(*dims).values \
+        if "stiffness_stderr" in ds.variables else None
+    quality = spectrum_quality(new_phase, new_stiffness, err)
+    height_channel = ds.attrs.get("height_channel")
+    basis = phase_basis(height_channel)
+    total_drag = drag_before + float(drag or 0.0)
+    total_lags = before + lags
+    notes = quality_notes(quality, new_phase, fr, basis=basis, corrections=_corrections_text(
+        fr, total_lags, total_drag, reference=phase_reference is not None
+        or mode == "reference"))
+    q_attrs = dict(ds["quality"].attrs) if "quality" in ds.variables else {}
+    q_attrs.update({"long_name": "quality flag", "comment": notes["comment"]})
+    if "quality" not in ds.variables:  # the CF flag attrs make_spectrum gives
+        q_attrs.update({"flag_values": np.array(list(QUALITY_FLAGS), dtype=np.int8),
+                        "flag_meanings": " ".join(QUALITY_FLAGS.values())})
+    out["quality"] = (dims, quality, q_attrs)
+    out["phase_lag"] = (("omega",), total_lags, {"units": "degree",
+                                                 "long_name": "instrument phase lag subtracted"})
+    out.attrs.update({"phase_lag": _lag_mode(phase_lag, phase_reference) if lag_given else mode,
+                      "drag": total_drag, "quality_summary": notes["summary"]})
+    if lag_given:
+        out.attrs.update(_reference_attrs(basis, height_channel, phase_lag, phase_reference))
+    else:
+        out.attrs.setdefault("phase_reference", basis)
+    return validate_spectrum(out)
+
+
 def _lag_for(phase_lag: float | Mapping[float, float] | None, frequency: float) -> float:
     if phase_lag is None:
         return 0.0
@@ -754,14 +967,7 @@ def modulation_spectrum(data: Any, *, curves: int | Iterable[int] | None = None,
         raise ParameterError(f"settle must be None or >= 0 seconds, got {settle!r}")
     if detrend not in ("linear", None):
         raise ParameterError(f"detrend must be 'linear' or None, got {detrend!r}")
-    if drag is not None and not (isinstance(drag, int | float) and math.isfinite(drag)):
-        raise ParameterError(f"drag must be a finite number [N·s/m], got {drag!r}")
-    if phase_lag is not None and not isinstance(phase_lag, Mapping):
-        if not (isinstance(phase_lag, int | float) and math.isfinite(phase_lag)):
-            raise ParameterError(f"phase_lag must be degrees or a mapping Hz → degrees, got "
-                                 f"{phase_lag!r}")
-    if phase_reference is not None and phase_lag is not None:
-        raise ParameterError("give phase_lag or phase_reference, not both")
+    _check_corrections(phase_lag, drag, phase_reference)
     if isinstance(contact_point, Mapping):
         contact_options: dict[str, Any] | None = dict(contact_point)
     elif isinstance(contact_point, bool):
@@ -806,7 +1012,7 @@ def modulation_spectrum(data: Any, *, curves: int | Iterable[int] | None = None,
     omega = 2.0 * math.pi * fr
     shape = (len(inp.rows), fr.size)
     k_raw = np.empty(shape, complex)
-    arrays = {k: np.empty(shape) for k in ("eta", "eta_se", "mean", "mean_se", "rho", "snr",
+    arrays = {k: np.empty(shape) for k in ("eta", "eta_se", "mean", "mean_se", "rho",
                                            "eta_se_white", "mean_se_white", "rho_white",
                                            "bins", "nominal", "height", "periods", "n",
                                            "settle", "indent")}
@@ -826,27 +1032,24 @@ def modulation_spectrum(data: Any, *, curves: int | Iterable[int] | None = None,
             arrays["rho"][i, j] = o["rho"]
             arrays["rho_white"][i, j] = o["rho_white"]
             arrays["bins"][i, j] = o["stderr_bins"]
-            arrays["snr"][i, j] = abs(o["F"]) / o["sigma_F_hat"]
             arrays["nominal"][i, j] = nominal[row]
             arrays["height"][i, j] = abs(o["h"])
             arrays["periods"][i, j] = o["periods"]
             arrays["n"][i, j] = o["n"]
             arrays["settle"][i, j] = o["settle"]
-    if phase_reference is not None:
-        lags = _reference_lags(phase_reference, fr)
-    else:
-        lags = np.asarray([_lag_for(phase_lag, float(f)) for f in fr])
-    k = k_raw * np.exp(-1j * np.radians(lags))
-    if drag is not None:
-        k = k - 1j * omega * float(drag)
+    lags = _lags(fr, phase_lag, phase_reference)
+    k = _corrected(k_raw, omega, lags, drag)
     sigma_c = arrays["rho"] * np.abs(k_raw)
     sigma_c_white = arrays["rho_white"] * np.abs(k_raw)
     with np.errstate(divide="ignore", invalid="ignore"):
         phase_se = np.degrees(sigma_c / np.abs(k))
         phase_se_white = np.degrees(sigma_c_white / np.abs(k))
     phase = np.degrees(np.angle(k))
-    quality = phase_quality(phase)
-    quality = np.where((quality == 0) & (arrays["snr"] < 3.0), 2, quality).astype(np.int8)
+    quality = spectrum_quality(phase, np.abs(k), sigma_c)
+    height_channel = inp.attrs.get("height_channel")
+    basis = phase_basis(height_channel)
+    notes = quality_notes(quality, phase, fr, basis=basis, corrections=_corrections_text(
+        fr, lags, float(drag or 0.0), reference=phase_reference is not None))
 
     x, y, index = inp.x, inp.y, inp.index
     attrs = {key: v for key, v in inp.attrs.items() if not key.startswith("segment_")}
@@ -856,18 +1059,13 @@ def modulation_spectrum(data: Any, *, curves: int | Iterable[int] | None = None,
                        "displacement into the sample",
         "settle_periods": float(settle_periods), "detrend": str(detrend),
         "settle": "per-point lockin_settle" if settle is None else float(settle),
-        "phase_lag": ("reference" if phase_reference is not None else "none"
-                      if phase_lag is None else "per-frequency"
-                      if isinstance(phase_lag, Mapping) else "scalar"),
-        "drag": float(drag) if drag is not None else 0.0,
         "mean_force_baseline_subtracted": int(bool(subtract_baseline)),
         "stderr_method": STDERR_METHOD, "stderr_method_white": STDERR_METHOD_WHITE,
     })
-    if phase_reference is not None:
-        attrs["phase_reference"] = ("instrument lag = median phase per frequency of a "
-                                    "hard-surface reference spectrum (plus its own phase_lag)")
-        if "file" in phase_reference.attrs:
-            attrs["phase_reference_file"] = str(phase_reference.attrs["file"])
+    attrs.update({"phase_lag": _lag_mode(phase_lag, phase_reference),
+                  "drag": float(drag) if drag is not None else 0.0,
+                  "quality_summary": notes["summary"]})
+    attrs.update(_reference_attrs(basis, height_channel, phase_lag, phase_reference))
     source = str(inp.attrs.get("source", "jpk"))
     n_contact = int(np.isfinite(z_contact).sum())
     keep_indent = n_contact > 0 and (n_contact == z_contact.size or source != "simulation")
@@ -894,7 +1092,7 @@ def modulation_spectrum(data: Any, *, curves: int | Iterable[int] | None = None,
                 "y": ("curve", np.asarray(y, float))},
         stderr={"stiffness": sigma_c, "phase": phase_se, "drive_amplitude": arrays["eta_se"],
                 "mean_force": arrays["mean_se"]},
-        quality=quality, amplitude=False, source=source,
+        quality=quality, quality_comment=notes["comment"], amplitude=False, source=source,
         mean_indentation=arrays["indent"] if keep_indent else None)
     w = ("curve", "omega")
     white = "white-noise formula (attrs stderr_method_white): too small for coloured noise"

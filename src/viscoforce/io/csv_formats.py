@@ -31,7 +31,18 @@ Spectra (:func:`read_spectrum_csv`, the SPEC's "Spectrum CSV"): ``frequency (Hz)
 column, stored as ``<name>_stderr``; a derived stiffness gets its stderr by error propagation
 when the inputs' stderrs are given), ``mean_force (N)`` (else NaN), ``drive_amplitude (m)``,
 ``mean_indentation (m)``, and a ``curve`` label column that adds a ``curve`` dim (every curve must
-have the same frequencies).
+have the same frequencies). A ``phase (rad)`` column whose values are evidently degrees is refused
+(:data:`RAD_PHASE_LIMIT`). The spectrum gets the ``quality`` flags, their comment and the
+``phase_lag``, ``drag``, ``phase_reference`` and ``quality_summary`` attrs that a JPK modulation
+spectrum gets (:mod:`viscoforce.io.quality`; one function for both readers):
+no correction is applied here (``viscoforce.experiments.modulation.correct_spectrum`` does it),
+and the height signal the file's phase was measured against is unknown.
+
+Quality of a measured spectrum (:func:`viscoforce.io.quality.spectrum_quality`, shared with
+:mod:`viscoforce.experiments.modulation`): 1 ``phase_outside_passive_range`` where the phase as
+stored (after whatever correction was applied) is outside (0°, 90°), which a passive viscoelastic
+sample cannot give; else 2 ``low_signal`` where ``stiffness`` < 3·``stiffness_stderr``; else 0.
+Points are flagged, never dropped.
 """
 
 from __future__ import annotations
@@ -51,11 +62,12 @@ import xarray as xr
 
 from viscoforce._validation import require_path
 from viscoforce.exceptions import InstrumentFormatError, ParameterError, UnitError
+from viscoforce.io.quality import phase_basis, quality_notes, spectrum_quality
 from viscoforce.schema import make_curves, make_spectrum, validate_spectrum
 from viscoforce.units import parse_quantity, unit_factor
 
-__all__ = ["CURVES_COLUMNS", "SPECTRUM_COLUMNS", "read_curves_csv", "read_spectrum_csv",
-           "segment_label", "sniff_header"]
+__all__ = ["CURVES_COLUMNS", "RAD_PHASE_LIMIT", "SPECTRUM_COLUMNS", "read_curves_csv",
+           "read_spectrum_csv", "segment_label", "sniff_header"]
 
 #: Dimension (for :func:`viscoforce.units.unit_factor`) of each time-series column.
 CURVES_COLUMNS: dict[str, str] = {
@@ -475,6 +487,36 @@ def _relative(pairs: list[tuple[np.ndarray, np.ndarray | None]]) -> np.ndarray |
         return np.sqrt(sum((e / np.abs(v)) ** 2 for v, e in known))
 
 
+# ── phase columns in radians ─────────────────────────────────────────────────────────────────────
+
+#: Largest |phase| a ``phase (rad)`` column may hold: 2π. Beyond it the values are degrees.
+RAD_PHASE_LIMIT = 2.0 * math.pi
+
+
+def _check_rad_phase(table: _Table, name: str) -> None:
+    """Refuse a ``<name> (rad)`` column whose values are evidently degrees."""
+    col = table.find(name)
+    if col is None or col.unit is None or _ANGLE.get(col.unit) == 1.0:
+        return
+    raw = table.numbers(col, 1.0, allow_missing=True)
+    finite = raw[np.isfinite(raw)]
+    if finite.size == 0:
+        return
+    worst = float(np.max(np.abs(finite)))
+    if worst > RAD_PHASE_LIMIT:
+        raise UnitError(
+            f"{table.path}: column '{col.header}' holds |values| up to {worst:g}, outside the "
+            f"range a phase in radians can take, [-2*pi, 2*pi] = [-{RAD_PHASE_LIMIT:.4f}, "
+            f"{RAD_PHASE_LIMIT:.4f}]: these are degrees; write the header '{name} (deg)'")
+    if name == "phase" and finite.size >= 3 and np.all(finite > math.pi / 2):
+        raise UnitError(
+            f"{table.path}: column '{col.header}': every value lies in (pi/2, 2*pi] = "
+            f"({math.pi / 2:.4f}, {RAD_PHASE_LIMIT:.4f}], which as radians puts every point "
+            "outside the passive range (0, pi/2) and as degrees inside (0, 90): these are "
+            f"degrees; write the header '{name} (deg)' (convert them first if they really are "
+            "radians)")
+
+
 def read_spectrum_csv(path: str | Path, *, drive_amplitude: float | str | None = None,
                       source: str = "csv-spectrum") -> xr.Dataset:
     """Read a spectrum CSV/TSV (see the module docstring) into a spectrum dataset.
@@ -494,12 +536,19 @@ def read_spectrum_csv(path: str | Path, *, drive_amplitude: float | str | None =
     xarray.Dataset
         Valid under :func:`viscoforce.schema.validate_spectrum`, over ``omega`` (sorted) or
         (``curve``, ``omega``). Without any drive amplitude, ``drive_amplitude`` and
-        ``force_amplitude`` are absent (unknown).
+        ``force_amplitude`` are absent (unknown). ``quality``
+        (:func:`viscoforce.io.quality.spectrum_quality`) with the comment of
+        :func:`~viscoforce.io.quality.quality_notes`, and attrs ``phase_lag`` = "none", ``drag``
+        = 0 (nothing corrected here), ``phase_reference``
+        (:func:`~viscoforce.io.quality.phase_basis`: unknown) and
+        ``quality_summary``, as a JPK modulation spectrum has them.
 
     Raises
     ------
     UnitError
-        A column without a unit, or with a unit unknown for its quantity.
+        A column without a unit, or with a unit unknown for its quantity; a ``phase (rad)`` or
+        ``phase_stderr (rad)`` column holding degrees (a |value| above 2π, or, for the phase,
+        three or more values all in (π/2, 2π]).
     ParameterError
         A missing or ambiguous column, a non-numeric cell, repeated frequencies, bad options.
     InstrumentFormatError
@@ -508,6 +557,8 @@ def read_spectrum_csv(path: str | Path, *, drive_amplitude: float | str | None =
     eta_option = _option("drive_amplitude", drive_amplitude, "length")
     table = _read_table(path, SPECTRUM_COLUMNS)
     p = table.path
+    for name in ("phase", "phase_stderr"):
+        _check_rad_phase(table, name)
     q = {name: _quantity(table, name, SPECTRUM_COLUMNS, allow_missing=name == "mean_force")
          for name in SPECTRUM_COLUMNS}
     if (q["frequency"] is None) == (q["omega"] is None):
@@ -615,8 +666,17 @@ def read_spectrum_csv(path: str | Path, *, drive_amplitude: float | str | None =
     stderr = {n: shape(v) for n, v in stderr_rows.items()}
     if eta is None:
         stderr.pop("force_amplitude", None)
+    # the flags and notes of a JPK modulation spectrum, by the same functions; nothing corrected
+    phase = np.degrees(np.angle(k))
+    quality = spectrum_quality(phase, np.abs(k), stderr.get("stiffness"))
+    basis = phase_basis(None)
+    notes = quality_notes(quality, phase, w_sorted / (2 * math.pi), corrections="none",
+                          basis=basis)
+    attrs.update({"phase_lag": "none", "drag": 0.0, "phase_reference": basis,
+                  "quality_summary": notes["summary"]})
     ds = make_spectrum(w_sorted, k, shape(mean), shape(eta) if eta is not None else 1.0,
                        attrs=attrs, dims=dims, coords=coords, stderr=stderr,
+                       quality=quality, quality_comment=notes["comment"],
                        mean_indentation=(shape(q["mean_indentation"])
                                          if q["mean_indentation"] is not None else None),
                        amplitude=magnitude == "amplitude", source=source)
