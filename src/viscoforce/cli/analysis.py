@@ -69,11 +69,51 @@ def add_load(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--phase-reference", default=None, metavar="FILE",
                         help="a hard-surface measurement (any file load reads) whose phase per "
                              "frequency is the instrument lag to subtract")
+    parser.add_argument("--drag-heights", type=_height_file_type, nargs="+", default=None,
+                        metavar="HEIGHT=FILE",
+                        help="spectra measured out of contact at several heights above the "
+                             "surface (e.g. 1um=free1.jpk-force 2um=free2.jpk-force "
+                             "4um=free4.jpk-force, at least 3): the drag b(h) = 6 pi eta "
+                             "a_eff^2/(h + h_eff) (Alcaraz et al. 2002) extrapolated to contact is "
+                             "subtracted (instead of --drag)")
     parser.add_argument("--raw", action="store_true",
                         help="write the curves, not the spectrum of the modulation segments")
     add_outputs(parser, [Output("--out", NETCDF, "FILE.nc", "write the dataset (netCDF)")])
     parser.add_argument("--json", action="store_true",
                         help="print one JSON object: format, kind, n_curves, dims, variables")
+
+
+def _height_file_type(text: str) -> tuple[float, str]:
+    """``--drag-heights`` item: HEIGHT=FILE (``2um=free.jpk-force``)."""
+    height, sep, path = text.partition("=")
+    if not sep or not path.strip():
+        raise argparse.ArgumentTypeError(f"expected HEIGHT=FILE (e.g. 2um=free2.jpk-force), got "
+                                         f"{text!r}")
+    return quantity_type("length")(height.strip()), path.strip()
+
+
+def _drag_from_heights(items: list[tuple[float, str]] | None, lag, reference):
+    """The DragFit of the out-of-contact spectra of ``--drag-heights`` (None without it)."""
+    if items is None:
+        return None
+    from viscoforce.experiments.drag import drag_from_heights
+    from viscoforce.experiments.modulation import correct_spectrum, modulation_spectrum
+    from viscoforce.io.instruments import load_instrument
+
+    spectra = []
+    for height, path in items:
+        data = load_instrument(path)
+        if "omega" in data.dims:
+            spectrum = data if lag is None and reference is None else correct_spectrum(
+                data, phase_lag=_phase_lag(lag, data), phase_reference=reference)
+        elif has_modulation(data):
+            spectrum = modulation_spectrum(data, phase_lag=_phase_lag(lag, data),
+                                           phase_reference=reference)
+        else:
+            raise UsageError(f"--drag-heights {height:g}m={path}: the file has no modulation "
+                             "segments (a spectrum measured out of contact is needed)")
+        spectra.append(spectrum)
+    return drag_from_heights(spectra, [h for h, _ in items])
 
 
 def _phase_lag(values: list | None, data) -> float | dict[float, float] | None:
@@ -89,7 +129,12 @@ def _phase_lag(values: list | None, data) -> float | dict[float, float] | None:
     import numpy as np
 
     lags = dict(values)
-    present = np.unique(data["segment_frequency"].values) if "segment_frequency" in data else []
+    if "omega" in data.dims:  # a spectrum already made (a CSV, a netCDF from load)
+        present = np.unique(np.asarray(data["omega"].values, dtype=float) / (2 * np.pi))
+    elif "segment_frequency" in data:
+        present = np.unique(data["segment_frequency"].values)
+    else:
+        present = []
     present = [float(f) for f in present if np.isfinite(f)]
     for f in lags:
         if not any(abs(f - p) <= 1e-9 * p for p in present):
@@ -126,28 +171,38 @@ def has_modulation(ds) -> bool:
 
 def run_load(args: argparse.Namespace) -> int:
     """Read an instrument file; modulation segments become a spectrum unless ``--raw``."""
-    from viscoforce.experiments.modulation import modulation_spectrum
+    from viscoforce.experiments.modulation import correct_spectrum, modulation_spectrum
     from viscoforce.io.instruments import load_instrument
 
     options = {k: v for k, v in (("spring_constant", args.spring_constant),
                                  ("sensitivity", args.sensitivity)) if v is not None}
     data = load_instrument(args.file, format=args.format, **options)
     fmt = str(data.attrs.get("source", args.format or ""))
+    if args.drag is not None and args.drag_heights is not None:
+        raise UsageError("give --drag or --drag-heights, not both")
     corrections = (args.drag is not None or args.phase_lag is not None
-                   or args.phase_reference is not None)
-    if "omega" in data.dims or args.raw or not has_modulation(data):
-        if corrections and "omega" not in data.dims:
-            raise UsageError("--drag, --phase-lag and --phase-reference correct a spectrum; this "
-                             "file gives curves (no modulation segments, or --raw)")
+                   or args.phase_reference is not None or args.drag_heights is not None)
+    if corrections and "omega" not in data.dims and (args.raw or not has_modulation(data)):
+        raise UsageError("--drag, --drag-heights, --phase-lag and --phase-reference correct a "
+                         "spectrum; this file gives curves (no modulation segments, or --raw)")
+    reference = None
+    if args.phase_reference is not None:
+        reference = load_instrument(args.phase_reference)
+        if "omega" not in reference.dims:
+            reference = modulation_spectrum(reference)
+    drag_fit = _drag_from_heights(args.drag_heights, args.phase_lag, reference)
+    drag = args.drag if drag_fit is None else drag_fit.drag_at_contact
+    if "omega" in data.dims:  # a spectrum CSV or netCDF: the same corrections and flags
+        ds = data if not corrections else correct_spectrum(
+            data, phase_lag=_phase_lag(args.phase_lag, data), drag=drag,
+            phase_reference=reference)
+    elif args.raw or not has_modulation(data):
         ds = data
     else:
-        reference = None
-        if args.phase_reference is not None:
-            reference = load_instrument(args.phase_reference)
-            if "omega" not in reference.dims:
-                reference = modulation_spectrum(reference)
-        ds = modulation_spectrum(data, phase_lag=_phase_lag(args.phase_lag, data), drag=args.drag,
+        ds = modulation_spectrum(data, phase_lag=_phase_lag(args.phase_lag, data), drag=drag,
                                  phase_reference=reference)
+    if drag_fit is not None:
+        ds.attrs.update(drag_fit.as_attrs())
     if args.tip is not None or args.poisson is not None:
         ds = _with_moduli(ds, args)
     if args.out:
@@ -157,12 +212,19 @@ def run_load(args: argparse.Namespace) -> int:
               "n_curves": int(ds.sizes.get("curve", 1)),
               "dims": {str(k): int(v) for k, v in ds.sizes.items()},
               "variables": sorted(str(v) for v in ds.data_vars)}
+    if drag_fit is not None:
+        result.update(drag_at_contact=drag_fit.drag_at_contact,
+                      drag_at_contact_stderr=drag_fit.drag_at_contact_stderr)
     if args.json:
         print_json(result)
         return 0
     print(f"{args.file}: format {fmt}, {kind} of {result['n_curves']} curve(s); dims "
           + ", ".join(f"{k}={v}" for k, v in result["dims"].items()))
     print("variables: " + ", ".join(result["variables"]))
+    if drag_fit is not None:
+        print(f"drag at contact b(0) = {drag_fit.drag_at_contact:.4g} ± "
+              f"{drag_fit.drag_at_contact_stderr:.2g} N s/m from {len(args.drag_heights)} "
+              "heights (subtracted as i omega b)")
     print_written(args.out)
     return 0
 
