@@ -564,6 +564,13 @@ def _print_map(info: dict[str, Any]) -> None:
             unit = parameter_units(name)
             print(f"    {name:<8} median {show_value(p['median'], unit)}, IQR "
                   f"{show_value(p['q25'], unit, 3)} .. {show_value(p['q75'], unit, 3)}")
+    if info.get("derived"):
+        print(f"  Young's and shear moduli (Poisson's ratio {info['poisson']:g}), the pixels of "
+              f"{info['modes']} mode(s):")
+        for name, p in info["derived"].items():
+            unit = parameter_units(name.rsplit("_", 1)[0])
+            print(f"    {name:<12} median {show_value(p['median'], unit)}, IQR "
+                  f"{show_value(p['q25'], unit, 3)} .. {show_value(p['q75'], unit, 3)}")
 
 
 def _fit_recording(run, *args: Any, **kwargs: Any):

@@ -469,7 +469,9 @@ def map_summary(result: xr.Dataset) -> dict[str, Any]:
         ``"1"``, ``"2"``, …) ``n`` (its good pixels) and ``params`` (each of that model's
         parameters → ``median``, ``q25``, ``q75`` over those good pixels, in the parameter's
         units); ``params``: the same for the number of modes most common among the good pixels
-        (the fewer on a tie), which ``modes`` names. Values are None where no good pixel
+        (the fewer on a tie), which ``modes`` names; ``derived`` (with ``poisson``): the same
+        quartiles of the Young's and shear moduli ``<name>_young``, ``<name>_shear`` over those
+        pixels, where the map has them. Values are None where no good pixel
         gives one (and ``modes`` is None when no pixel is good). Only str, int, float and None
         appear, so the dict serialises with :func:`json.dumps` as it is.
 
@@ -503,9 +505,16 @@ def map_summary(result: xr.Dataset) -> dict[str, Any]:
               {x: _quartiles(np.empty(0)) for x in names})
     left_out = {reason: int((quality == code).sum()) for code, reason in MAP_QUALITY.items()
                 if code != 0}
-    return {"model": str(result.attrs.get("model", "")), "n_fits": int(quality.size),
-            "n_good": int(good.sum()), "left_out": left_out, "by_modes": by_modes,
-            "modes": None if common is None else int(common), "params": params}
+    out = {"model": str(result.attrs.get("model", "")), "n_fits": int(quality.size),
+           "n_good": int(good.sum()), "left_out": left_out, "by_modes": by_modes,
+           "modes": None if common is None else int(common), "params": params}
+    derived = [str(x) for x in result.data_vars if str(x).endswith(("_young", "_shear"))]
+    if derived:  # Young's and shear moduli over the same pixels as params
+        chosen = good & (modes == int(common)) if common is not None else np.zeros_like(good)
+        out["derived"] = {x: _quartiles(np.asarray(result[x].values, dtype=float).reshape(-1)[
+            chosen]) for x in derived}
+        out["poisson"] = float(result.attrs.get("poisson", 0.5))
+    return out
 
 
 def _quartiles(v: np.ndarray) -> dict[str, float | None]:
