@@ -55,7 +55,8 @@ def fmt(value: float, decimal_comma: bool = False) -> str:
 
 
 def test_registry_names_and_kinds():
-    assert [f.name for f in FORMATS] == ['jpk', 'csv-curves', 'csv-spectrum', 'afmformats', 'uff', 'nanoscope']
+    assert [f.name for f in FORMATS] == ["jpk", "csv-curves", "csv-spectrum", "afmformats", "uff",
+                                         "nanoscope"]
     assert {f.name: f.kind for f in FORMATS} == {"jpk": "curves", "csv-curves": "curves",
                                                  "csv-spectrum": "spectrum",
                                                  "afmformats": "curves", "uff": "curves",
