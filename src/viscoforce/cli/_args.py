@@ -26,6 +26,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, NamedTuple
 
+from viscoforce._files import same_file
 from viscoforce import _limits
 from viscoforce.exceptions import EffortError, ParameterError, UnitError, ViscoforceError
 from viscoforce.physics.paper import PAPER
@@ -590,3 +591,23 @@ def check_outputs(args: argparse.Namespace) -> None:
     """
     outputs: Sequence[Output] = getattr(args, "outputs_", ())
     check_output_paths((o.flag, getattr(args, _dest(o.flag)), o.kind) for o in outputs)
+    written = {_dest(o.flag) for o in outputs}
+    inputs = [text for key, value in vars(args).items() if key not in written
+              for text in _strings(value)]
+    for o in outputs:
+        target = getattr(args, _dest(o.flag))
+        if target is None or o.kind == DIRECTORY or not Path(target).exists():
+            continue
+        for source in inputs:
+            if same_file(target, source):
+                raise UsageError(f"{o.flag} {target} is an input of this command ({source}): "
+                                 "writing it would destroy the data; give another file name")
+
+
+def _strings(value: object) -> list[str]:
+    """The strings in an argument value (a path, a list of paths, HEIGHT=FILE pairs)."""
+    if isinstance(value, str):
+        return [value]
+    if isinstance(value, list | tuple):
+        return [s for v in value for s in _strings(v)]
+    return []

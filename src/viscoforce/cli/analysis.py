@@ -19,6 +19,7 @@ from viscoforce.cli._args import (
     add_outputs,
     quantity_type,
 )
+from viscoforce._files import write_netcdf
 from viscoforce.cli._output import print_json, print_written
 
 __all__ = ["SUBCOMMANDS", "phase_lag_type"]
@@ -206,7 +207,7 @@ def run_load(args: argparse.Namespace) -> int:
     if args.tip is not None or args.poisson is not None:
         ds = _with_moduli(ds, args)
     if args.out:
-        ds.to_netcdf(args.out, engine="h5netcdf")
+        write_netcdf(ds, args.out)
     kind = "spectrum" if "omega" in ds.dims else "curves"
     result = {"format": fmt, "kind": kind,
               "n_curves": int(ds.sizes.get("curve", 1)),

@@ -17,6 +17,7 @@ import time
 from pathlib import Path
 from typing import Any
 
+from viscoforce._files import write_text
 from viscoforce.cli._args import DIRECTORY, Output, UsageError, add_outputs
 
 __all__ = ["SUBCOMMANDS", "find_examples"]
@@ -212,7 +213,7 @@ def run_demo(args: argparse.Namespace) -> int:
     fit, problem, _ = _synthetic(folder, out, report)
     _loop(fit, problem, out, report)
     _real(folder, out, report)
-    (out / "demo.json").write_text(json.dumps(report, indent=2) + "\n")
+    write_text(out / "demo.json", json.dumps(report, indent=2) + "\n")
     print(f"wrote {out}/bode_synthetic.png, loop.png, bode_real.png, demo.json")
     return 0
 

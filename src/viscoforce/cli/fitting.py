@@ -24,6 +24,7 @@ from viscoforce.cli._args import (
     integer_type,
     real_type,
 )
+from viscoforce._files import write_netcdf, write_text
 from viscoforce.cli._output import print_json, print_written
 from viscoforce.physics.paper import PAPER
 
@@ -477,7 +478,9 @@ def _single_json(result) -> dict[str, Any]:
         if key in result.attrs:
             value = result.attrs[key]
             out[key] = value if isinstance(value, str) else float(value)
-    for key in ("material", "candidate", "residual_lag1", "effective_samples", "validity"):
+    for key in ("material", "candidate", "residual_lag1", "effective_samples", "validity",
+                "depth_check", "depth_check_E", "depth_check_shift", "precontact_rise",
+                "creep_force", "segment_type"):
         if key in result.attrs:
             value = result.attrs[key]
             out[key] = value if isinstance(value, str) else float(value)
@@ -548,6 +551,8 @@ def _print_single(info: dict[str, Any]) -> None:
         print(f"  note: {info['selection_note']}")
     if "explanation" in info:
         print(f"  model choice: {info['explanation']}")
+    if "depth_check" in info:
+        print(f"  depth check: {info['depth_check']}")
     if "validity" in info:
         print(f"  validity: {info['validity']}")
 
@@ -667,7 +672,7 @@ def run_fit(args: argparse.Namespace) -> int:
     if args.out and args.out.lower().endswith(".csv"):
         write_table(result, args.out)
     elif args.out:
-        result.to_netcdf(args.out, engine="h5netcdf")
+        write_netcdf(result, args.out)
     if args.plot:
         _plot(ds, kind, result, args)
     if args.json:
@@ -717,15 +722,17 @@ def table_rows(result) -> tuple[list[str], list[list[Any]]]:
 
 def _write_csv(path: str, headers: list[str], rows: list[list[Any]]) -> None:
     import csv
+    import io
 
     import numpy as np
 
-    with open(path, "w", newline="") as handle:
-        writer = csv.writer(handle)
-        writer.writerow(headers)
-        for row in rows:
-            writer.writerow(["" if v is None else f"{v:.10g}" if isinstance(
-                v, float | np.floating) else v for v in row])
+    handle = io.StringIO(newline="")
+    writer = csv.writer(handle)
+    writer.writerow(headers)
+    for row in rows:
+        writer.writerow(["" if v is None else f"{v:.10g}" if isinstance(
+            v, float | np.floating) else v for v in row])
+    write_text(path, handle.getvalue())
 
 
 def write_table(result, path: str) -> None:
@@ -809,7 +816,7 @@ def run_batch(args: argparse.Namespace, paths: list[str]) -> int:
     if args.out and args.out.lower().endswith(".csv"):
         _write_csv(args.out, headers, table)
     elif args.out:
-        _table_dataset(headers, table, args.model).to_netcdf(args.out, engine="h5netcdf")
+        write_netcdf(_table_dataset(headers, table, args.model), args.out)
     fitted = [r for r in rows if int(r.get("success") or 0)]
     params: dict[str, dict[str, float]] = {}
     for h in headers:

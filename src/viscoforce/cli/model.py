@@ -11,8 +11,10 @@ from __future__ import annotations
 import argparse
 import sys
 import warnings
+from pathlib import Path
 from typing import TYPE_CHECKING
 
+from viscoforce._files import write_netcdf
 from viscoforce._limits import MAX_SAMPLES
 from viscoforce.cli._args import (
     FIGURE,
@@ -90,8 +92,12 @@ def problem_from_args(args: argparse.Namespace, material: ViscoelasticMaterial,
 def _save_figure(handle, path: str) -> None:
     import matplotlib.pyplot as plt
 
+    from viscoforce._files import atomic_output
+
     try:
-        handle.figure.savefig(path, dpi=120, bbox_inches="tight")
+        with atomic_output(path) as tmp:
+            handle.figure.savefig(tmp, dpi=120, bbox_inches="tight",
+                                  format=Path(path).suffix.lstrip(".").lower() or None)
     finally:
         plt.close(handle.figure)
 
@@ -124,7 +130,7 @@ def run_static(args: argparse.Namespace) -> int:
     problem = problem_from_args(args, Elastic(args.E), args.h0)
     ds = static_equilibrium(problem, args.h0, contact_threshold=args.contact_threshold)
     if args.out:
-        ds.to_netcdf(args.out, engine="scipy")
+        write_netcdf(ds, args.out, engine="scipy")
     result = {
         "h0": float(ds.position),
         "force": float(ds.force),
@@ -270,7 +276,7 @@ def run_simulate(args: argparse.Namespace) -> int:
                   tol=args.tol, profiles=args.profiles, progress=args.progress,
                   accuracy=args.accuracy)
     if args.out:
-        ds.to_netcdf(args.out, engine="scipy")
+        write_netcdf(ds, args.out, engine="scipy")
     if args.plot:
         from viscoforce.plotting import hysteresis_plot
 
@@ -383,7 +389,7 @@ def run_spectrum(args: argparse.Namespace) -> int:
             warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
     note = "; ".join(notes)
     if args.out:
-        ds.to_netcdf(args.out, engine="scipy")
+        write_netcdf(ds, args.out, engine="scipy")
     if args.plot:
         from viscoforce.plotting import bode_plot
 

@@ -47,6 +47,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike
 
+from viscoforce._files import write_bytes
 from viscoforce._typing import FloatArray
 from viscoforce._validation import (
     describe_value,
@@ -451,5 +452,5 @@ def write_jpk_force(path: str | os.PathLike[str], segments: Sequence[ForceSegmen
             info.compress_type = zipfile.ZIP_DEFLATED
             info.external_attr = 0o644 << 16
             zf.writestr(info, content, compresslevel=9)
-    path.write_bytes(buffer.getvalue())
+    write_bytes(path, buffer.getvalue())
     return path

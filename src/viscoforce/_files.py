@@ -1,0 +1,131 @@
+"""Atomic file outputs: write beside the target, rename into place only when complete.
+
+Every file viscoforce writes (netCDF, CSV, figures, JPK archives, the demo's JSON) goes through
+:func:`atomic_output`: the data go to a temporary file in the target's own folder (same file
+system, so the final :func:`os.replace` is atomic), which is flushed to disk and renamed over the
+target only when the writer returned. A writer that fails (disk full, a file-size limit, an
+exception) leaves the temporary file deleted and any previous file at the target untouched; two
+processes writing one target each rename a complete file, so the survivor is whole (the last
+rename wins), never a mixture or a truncated file.
+
+netCDF files are made in memory first (:func:`write_netcdf`) and written with plain file I/O, so
+that an I/O error is an ordinary :class:`OSError` and never reaches the HDF5 library mid-write.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import os
+import tempfile
+from collections.abc import Iterable, Iterator
+from pathlib import Path
+from typing import Any
+
+from viscoforce.exceptions import ParameterError
+
+#: Largest netCDF image built in memory before writing [bytes]; beyond it the engine writes the
+#: temporary file itself (still renamed into place only when complete).
+NETCDF_IN_MEMORY = 1 << 30
+
+
+def _umask() -> int:
+    current = os.umask(0)
+    os.umask(current)
+    return current
+
+
+def same_file(a: str | os.PathLike[str], b: str | os.PathLike[str]) -> bool:
+    """Whether two existing paths are one file (same device and inode); False if either is absent."""
+    try:
+        return os.path.samefile(a, b)
+    except OSError:
+        return False
+
+
+def refuse_overwriting_inputs(output: str | os.PathLike[str],
+                              inputs: Iterable[str | os.PathLike[str]], *,
+                              name: str = "output") -> None:
+    """Raise :class:`ParameterError` if ``output`` is one of ``inputs`` (same inode).
+
+    Parameters
+    ----------
+    output : path
+        The file about to be written.
+    inputs : iterable of path
+        Files the computation reads.
+    name : str
+        How the output is named in the message (e.g. ``"--out"``).
+    """
+    for source in inputs:
+        if same_file(output, source):
+            raise ParameterError(f"{name} {os.fspath(output)} is an input of this run "
+                                 f"({os.fspath(source)}): writing it would destroy the data; "
+                                 "give another file name")
+
+
+@contextlib.contextmanager
+def atomic_output(path: str | os.PathLike[str]) -> Iterator[Path]:
+    """Yield a temporary path beside ``path``; on success rename it to ``path``.
+
+    The temporary file keeps ``path``'s suffix (writers that pick a format from it still do) and
+    gets the permissions a new file would (the umask). Whatever the writer raises propagates,
+    after the temporary file is removed; ``path`` is then exactly as before.
+
+    Parameters
+    ----------
+    path : path
+        The final file.
+
+    Yields
+    ------
+    pathlib.Path
+        Where to write (an empty file that exists).
+    """
+    target = Path(path)
+    folder = target.parent if str(target.parent) else Path(".")
+    fd, tmp_name = tempfile.mkstemp(prefix=f".{target.name}.", suffix=f".part{target.suffix}",
+                                    dir=folder)
+    os.close(fd)
+    tmp = Path(tmp_name)
+    try:
+        os.chmod(tmp, 0o666 & ~_umask())
+        yield tmp
+        with open(tmp, "rb+") as handle:  # on disk before the rename makes it visible
+            os.fsync(handle.fileno())
+        os.replace(tmp, target)
+    except BaseException:
+        with contextlib.suppress(OSError):
+            tmp.unlink()
+        raise
+
+
+def write_bytes(path: str | os.PathLike[str], data: bytes | memoryview) -> None:
+    """Write ``data`` to ``path`` atomically (:func:`atomic_output`)."""
+    with atomic_output(path) as tmp, open(tmp, "wb") as handle:
+        handle.write(data)
+
+
+def write_text(path: str | os.PathLike[str], text: str) -> None:
+    """Write ``text`` (UTF-8) to ``path`` atomically (:func:`atomic_output`)."""
+    write_bytes(path, text.encode("utf-8"))
+
+
+def write_netcdf(ds: Any, path: str | os.PathLike[str], *, engine: str = "h5netcdf") -> None:
+    """``ds.to_netcdf`` to ``path`` atomically; small datasets are built in memory first.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        What to write.
+    path : path
+        The netCDF file.
+    engine : {"h5netcdf", "scipy"}
+        netCDF4 (HDF5) or netCDF3.
+    """
+    if engine not in ("h5netcdf", "scipy"):
+        raise ParameterError(f"engine must be 'h5netcdf' or 'scipy', got {engine!r}")
+    if int(getattr(ds, "nbytes", 0)) <= NETCDF_IN_MEMORY:
+        write_bytes(path, ds.to_netcdf(engine=engine))
+        return
+    with atomic_output(path) as tmp:
+        ds.to_netcdf(tmp, engine=engine)
