@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 from tests.conftest import REAL_DATA_DIR
-from viscoforce.exceptions import ParameterError
+from viscoforce.exceptions import DataWarning, GoodnessOfFitWarning, ParameterError
 from viscoforce.fitting.curves import creep_data, curve_data, fit_curve
 from viscoforce.fitting.fit import FitData, fit_data
 from viscoforce.physics.tips import parse_tip, young_from_paper
@@ -90,6 +90,48 @@ def test_hertz_fit_curve_reports_young_and_shear(rng):
     assert ds.attrs["tip_shape"] == "cone" and ds.attrs["poisson"] == 0.3
     with pytest.raises(ParameterError, match="needs the tip"):
         fit_curve(curves, "hertz")
+
+
+def _curves(z, f):
+    return make_curves(np.linspace(0, 1, z.size), f, -z, np.zeros_like(z), tip_position=z,
+                       segment=0, segment_names=("approach",), source="synthetic")
+
+
+def _fit_recorded(curves, **kw):
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        ds = fit_curve(curves, "hertz", **kw)
+    return ds, [(w.category, str(w.message)) for w in caught]
+
+
+def test_hertz_depth_check_passes_when_the_law_holds(rng):
+    """Over replicas the shift is a standard normal score: |z| < 2 on ~95 %."""
+    shifts = []
+    for _ in range(12):
+        z, f = _approach(TEXTBOOK["paraboloid:5um"], rng, n=600, slope=2e-5)
+        ds, caught = _fit_recorded(_curves(z, f), tip="paraboloid:5um")
+        shifts.append(ds.attrs["depth_check_shift"])
+        assert ds.attrs["precontact_rise"] < 0.05
+        assert not any(c is DataWarning for c, _ in caught)
+    assert np.sum(np.abs(shifts) < 2) >= 9, shifts  # binomial(12, 0.95): P(< 9) ~ 0.2 %
+    assert 0.4 < np.std(shifts) < 1.8, shifts
+
+
+def test_hertz_depth_check_warns_when_the_tip_law_is_wrong(rng):
+    """A cone's δ² curve fitted with a paraboloid's δ^1.5: E drifts with depth, and says so."""
+    z, f = _approach(TEXTBOOK["cone:20"], rng, noise=0.002)
+    ds, caught = _fit_recorded(_curves(z, f), tip="paraboloid:5um")
+    assert abs(ds.attrs["depth_check_shift"]) > 2
+    assert any(c is GoodnessOfFitWarning and "E depends on the indentation depth" in m
+               for c, m in caught)
+
+
+def test_hertz_warns_when_the_approach_is_not_free_before_contact(rng):
+    z, f = _approach(TEXTBOOK["paraboloid:5um"], rng, noise=0.002, slope=0.0)
+    f = f + 0.4 * np.ptp(f) * (z - z.min()) / np.ptp(z)  # a steady rise over the whole approach
+    ds, caught = _fit_recorded(_curves(z, f), tip="paraboloid:5um")
+    assert ds.attrs["precontact_rise"] > 0.2
+    assert any(c is DataWarning and "not a free cantilever" in m for c, m in caught)
 
 
 # ── creep ───────────────────────────────────────────────────────────────────────────────────────
