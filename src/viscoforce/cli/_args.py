@@ -26,8 +26,8 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, NamedTuple
 
-from viscoforce._files import same_file
 from viscoforce import _limits
+from viscoforce._files import same_file
 from viscoforce.exceptions import EffortError, ParameterError, UnitError, ViscoforceError
 from viscoforce.physics.paper import PAPER
 from viscoforce.units import accepted_units, format_quantity, parse_quantity

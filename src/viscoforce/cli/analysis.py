@@ -9,6 +9,7 @@ from __future__ import annotations
 import argparse
 import re
 
+from viscoforce._files import write_netcdf
 from viscoforce.cli._args import (
     NETCDF,
     Flag,
@@ -19,7 +20,6 @@ from viscoforce.cli._args import (
     add_outputs,
     quantity_type,
 )
-from viscoforce._files import write_netcdf
 from viscoforce.cli._output import print_json, print_written
 
 __all__ = ["SUBCOMMANDS", "phase_lag_type"]

@@ -10,6 +10,7 @@ import argparse
 import sys
 from typing import Any
 
+from viscoforce._files import write_netcdf, write_text
 from viscoforce.cli._args import (
     FIGURE,
     NETCDF_OR_CSV,
@@ -24,7 +25,6 @@ from viscoforce.cli._args import (
     integer_type,
     real_type,
 )
-from viscoforce._files import write_netcdf, write_text
 from viscoforce.cli._output import print_json, print_written
 from viscoforce.physics.paper import PAPER
 

@@ -341,7 +341,7 @@ PRECONTACT_RISE_WARN = 0.2
 
 
 def hertz_checks(ds: xr.Dataset, data: FitData, tip: Any) -> xr.Dataset:
-    """Check a Hertz fit against its own data: does E depend on the depth, is the baseline free?
+    """Check a Hertz fit against its own data: E against the depth, the baseline before contact.
 
     * **Depth**: the approach refitted up to :data:`DEPTH_CHECK_FRACTION` of the maximum
       contact force; the shift of E in units of the standard error of the difference,
