@@ -228,6 +228,28 @@ def test_real_hertz_fit_finds_the_contact_inside_the_approach():
     assert ds.attrs["stderr_correction"] >= 1.0
 
 
+CHIARO = REAL_DATA_DIR / "afmformats" / "fmt-chiaro-txt_AEBP1_Indentation_002.zip"
+
+
+@pytest.mark.skipif(not CHIARO.is_file(), reason="shared real data absent")
+def test_chiaro_header_tip_and_the_instruments_own_hertz_value():
+    """The Chiaro header records its probe (R = 27.5 µm) and its own Hertz fit (117.007 Pa).
+
+    The instrument fits its own window and baseline, so agreement within 15 % is the check.
+    """
+    from viscoforce.io.instruments import load_instrument
+
+    curves = load_instrument(CHIARO)
+    assert curves.attrs["tip_shape"] == "sphere"
+    assert curves.attrs["tip_radius"] == pytest.approx(27.5e-6, rel=1e-12)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        ds = fit_curve(curves, "hertz", poisson=0.5)
+    assert ds.attrs["tip_radius"] == pytest.approx(27.5e-6, rel=1e-12)
+    assert float(ds["E_young"]) == pytest.approx(117.007, rel=0.15)
+    assert abs(ds.attrs["depth_check_shift"]) < 2  # with the right tip, Hertz holds here
+
+
 def _cli(capsys, *argv):
     from viscoforce.cli import main
 

@@ -1,8 +1,8 @@
 """Every real file in ../shared/data/real is analysed by at least one model, or refused with a reason.
 
 One CLI run per file (the route a user takes), with the model that file's segments call for; the
-files do not record tips (except the .uff, a 20° pyramid), so the Hertz runs assume a 5 µm
-sphere. Skips cleanly when the shared data are absent.
+files do not record tips (except the .uff, a 20° pyramid, and the Chiaro header, a 27.5 µm
+sphere), so the other Hertz runs assume a 5 µm sphere. Skips cleanly when the shared data are absent.
 """
 
 from __future__ import annotations
@@ -32,8 +32,7 @@ CASES = {
         ["--model", "hertz", "--tip", "sphere:5um"], "E"),
     "afmformats/fmt-igor-fd_SiN_FD_plot.ibw": (["--model", "hertz", "--tip", "cone:20"], "E"),
     "afmformats/fmt-igor-fd_U3_3_p10004.ibw": (["--model", "hertz", "--tip", "sphere:5um"], "E"),
-    "afmformats/fmt-chiaro-txt_AEBP1_Indentation_002.zip": (
-        ["--model", "hertz", "--tip", "sphere:5um"], "E"),
+    "afmformats/fmt-chiaro-txt_AEBP1_Indentation_002.zip": (["--model", "hertz"], "E"),
     "afmformats/fmt-afm-workshop-fd_single_2021-10-22_14.16.csv": (
         None, "no tip position"),
     "afmformats/fmt-ntmdt-txt-fd_2015_01_17_gel4-0_1_mQ_adh_6B_Curve_DFL_Height_51.txt": (

@@ -529,6 +529,8 @@ def read_afmformats(path: str | Path, *, spring_constant: float | None = None,
     for key, value in curves[0].notes.items():
         attrs[key] = value
     attrs.update(_meta_attrs(curves))
+    if fmt.startswith("chiaro") or "chiaro" in str(attrs.get("meta_instrument", "")).lower():
+        attrs.update(_chiaro_tip(path))
     ds = make_curves(np.concatenate([c.time for c in curves]),
                      np.concatenate([c.force for c in curves]),
                      np.concatenate([c.height for c in curves]),
@@ -538,3 +540,35 @@ def read_afmformats(path: str | Path, *, spring_constant: float | None = None,
                      sample_count=[c.time.size for c in curves], per_curve=per_curve,
                      attrs=attrs, source=f"afmformats:{fmt}")
     return ds.assign_coords(curve=np.arange(len(curves), dtype=np.int32))
+
+
+_CHIARO_TIP = re.compile(rb"Tip radius \(um\)\s+([0-9]+(?:\.[0-9]*)?(?:[eE][+-]?[0-9]+)?)")
+
+
+def _chiaro_tip(path: Path) -> dict[str, Any]:
+    """The spherical probe an Optics11 Chiaro header records (``Tip radius (um)``), as tip attrs.
+
+    afmformats does not read it; the header is the first few kB of the text (or of the zip's one
+    text member). Nothing when the line is absent or not a positive number.
+    """
+    try:
+        if path.suffix.lower() == ".zip":
+            with zipfile.ZipFile(path) as zf:
+                members = [i for i in zf.infolist() if i.filename.lower().endswith(".txt")]
+                if not members:
+                    return {}
+                with zf.open(members[0]) as handle:
+                    head = handle.read(8192)
+        else:
+            with open(path, "rb") as handle:
+                head = handle.read(8192)
+    except (OSError, zipfile.BadZipFile):
+        return {}
+    match = _CHIARO_TIP.search(head)
+    if match is None:
+        return {}
+    radius = float(match.group(1)) * 1e-6
+    if not (math.isfinite(radius) and radius > 0):
+        return {}
+    return {"tip_shape": "sphere", "tip_radius": radius,
+            "tip_note": "the Chiaro header's 'Tip radius (um)' (a spherical probe)"}
