@@ -46,6 +46,13 @@ class StabilityError(ViscoforceError, RuntimeError):
     """A time stepper became unstable (the message names the step and the fix)."""
 
 
+class ClusterError(ViscoforceError, RuntimeError):
+    """The dask cluster of a map fit failed (a worker died, the scheduler went away).
+
+    The message names what failed and which pixels were lost; no partial result is returned.
+    """
+
+
 class SchemaError(ViscoforceError, ValueError):
     """A dataset misses a variable or carries a wrong unit."""
 

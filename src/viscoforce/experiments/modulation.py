@@ -586,16 +586,26 @@ def _reference_lags(reference: Any, fr: np.ndarray) -> np.ndarray:
     return lags
 
 
+#: Largest instrument phase lag accepted [degree] (an angle; beyond it is a unit mistake).
+MAX_PHASE_LAG = 180.0
+
+
 def _check_corrections(phase_lag: Any, drag: Any, phase_reference: Any) -> None:
     """Validate the correction options of :func:`modulation_spectrum` / :func:`correct_spectrum`."""
     if drag is not None and (isinstance(drag, bool) or not isinstance(drag, int | float)
-                             or not math.isfinite(drag)):
-        raise ParameterError(f"drag must be a finite number [N·s/m], got {drag!r}")
-    if phase_lag is not None and not isinstance(phase_lag, Mapping):
-        if isinstance(phase_lag, bool) or not (isinstance(phase_lag, int | float)
-                                               and math.isfinite(phase_lag)):
-            raise ParameterError(f"phase_lag must be degrees or a mapping Hz → degrees, got "
-                                 f"{phase_lag!r}")
+                             or not math.isfinite(drag) or drag < 0):
+        raise ParameterError(f"drag must be a finite number >= 0 [N·s/m] (a viscous drag "
+                             f"dissipates), got {drag!r}")
+    if phase_lag is not None:
+        values = list(phase_lag.values()) if isinstance(phase_lag, Mapping) else [phase_lag]
+        for lag in values:
+            if isinstance(lag, bool) or not (isinstance(lag, int | float | np.floating)
+                                             and math.isfinite(lag)):
+                raise ParameterError(f"phase_lag must be degrees or a mapping Hz → degrees, "
+                                     f"got {phase_lag!r}")
+            if abs(lag) > MAX_PHASE_LAG:
+                raise ParameterError(f"phase_lag must be within ±{MAX_PHASE_LAG:g} degrees (an "
+                                     f"instrument lag is an angle), got {lag!r}")
     if phase_reference is not None and phase_lag is not None:
         raise ParameterError("give phase_lag or phase_reference, not both")
 
@@ -968,6 +978,9 @@ def modulation_spectrum(data: Any, *, curves: int | Iterable[int] | None = None,
     if detrend not in ("linear", None):
         raise ParameterError(f"detrend must be 'linear' or None, got {detrend!r}")
     _check_corrections(phase_lag, drag, phase_reference)
+    if not isinstance(subtract_baseline, bool | np.bool_):
+        raise ParameterError(f"subtract_baseline must be True or False, got "
+                             f"{subtract_baseline!r}")
     if isinstance(contact_point, Mapping):
         contact_options: dict[str, Any] | None = dict(contact_point)
     elif isinstance(contact_point, bool):

@@ -23,13 +23,14 @@ from __future__ import annotations
 
 import contextlib
 import math
+import os
 from collections.abc import Callable, Iterator, Sequence
 from typing import Any
 
 import numpy as np
 import xarray as xr
 
-from viscoforce.exceptions import ParameterError, ViscoforceError
+from viscoforce.exceptions import ClusterError, ParameterError, ViscoforceError
 from viscoforce.fitting.curves import curve_data
 from viscoforce.fitting.fit import (
     PVALUE_WARN,
@@ -192,12 +193,25 @@ def fit_block(items: Sequence[FitData | str], model: str, modes: int | str, crit
     return out
 
 
+def max_workers() -> int:
+    """Most worker processes of a local cluster: the machine's cores (at least 1)."""
+    return max(1, os.cpu_count() or 1)
+
+
+def check_workers(workers: Any) -> None:
+    """Raise :class:`ParameterError` unless ``workers`` is None or an integer in [1, cores]."""
+    limit = max_workers()
+    if workers is not None and (isinstance(workers, bool) or not isinstance(
+            workers, int | np.integer) or not 1 <= workers <= limit):
+        raise ParameterError(f"workers must be an integer in [1, {limit}] (the machine's "
+                             f"{os.cpu_count() or 1} cores: one fit process per core; more "
+                             f"only compete for them), got {workers!r}")
+
+
 @contextlib.contextmanager
 def cluster(scheduler: str | None = None, workers: int | None = None) -> Iterator[Any]:
     """A dask.distributed Client: a local cluster, or the running scheduler at ``scheduler``."""
-    if workers is not None and (isinstance(workers, bool) or not isinstance(workers, int)
-                                or workers < 1):
-        raise ParameterError(f"workers must be an integer >= 1, got {workers!r}")
+    check_workers(workers)
     from distributed import Client, LocalCluster
 
     if scheduler is None:
@@ -245,7 +259,8 @@ def fit_map(ds: xr.Dataset, model: str, *, modes: int | str = 1, criterion: str 
         Where to fit (module docstring): None (a local cluster, or this process for a small
         map), ``"synchronous"`` or a scheduler address.
     workers : int, optional
-        Worker processes of a local cluster (default 2).
+        Worker processes of a local cluster, in [1, the machine's cores] (default 2; never more
+        than the pixels).
     progress : bool
         Show a progress bar (distributed fits only).
     segment : int, optional
@@ -294,6 +309,7 @@ def fit_map(ds: xr.Dataset, model: str, *, modes: int | str = 1, criterion: str 
                              f"{', '.join(map(repr, IDENTIFIABILITY_METHODS))}, got "
                              f"{identifiability!r}")
     profile = identifiability == "profile"
+    check_workers(workers)
     fixed = check_fixed(model, fixed)
     items, dims, layout = pixel_data(ds, model, segment=segment)
     n = len(items)
@@ -316,6 +332,8 @@ def _distributed(items: list[FitData | str], model: str, modes: int | str, crite
     from tqdm.auto import tqdm
 
     n = len(items)
+    if scheduler is None and workers is not None:
+        workers = min(workers, max(1, n))  # a worker per pixel at most: the rest would idle
     with cluster(scheduler, workers) as client:
         n_workers = max(1, len(client.scheduler_info().get("workers", {})) or (workers or 2))
         size = max(1, min(MAX_BLOCK, math.ceil(n / (n_workers * 8))))
@@ -327,10 +345,29 @@ def _distributed(items: list[FitData | str], model: str, modes: int | str, crite
         with tqdm(total=n, unit="fit", disable=not progress, desc=f"fit {model}") as bar:
             for future in as_completed(futures):
                 start = futures[future]
-                block = future.result()
+                try:
+                    block = future.result()
+                except ViscoforceError:
+                    raise
+                except Exception as exc:  # the cluster, not a fit (fit_block catches those)
+                    for other in futures:
+                        other.cancel()
+                    where = "the scheduler" if scheduler else "the local cluster"
+                    raise ClusterError(
+                        f"the map fit lost pixels {start} to "
+                        f"{start + len(items[start:start + size]) - 1} of {n}: {where} failed "
+                        f"({type(exc).__name__}: {_first_line(exc)}); "
+                        "no partial result is returned — check the workers (memory, a killed "
+                        "process) and run again, or fit in this process with "
+                        "scheduler='synchronous'") from None
                 results[start:start + len(block)] = block
                 bar.update(len(block))
     return [r if r is not None else {"success": False, "message": "lost"} for r in results]
+
+
+def _first_line(exc: BaseException) -> str:
+    text = str(exc).strip()
+    return text.splitlines()[0] if text else "no message"
 
 
 def _fit_block_shared(items: Sequence[FitData | str], model: str, modes: int | str,
