@@ -59,3 +59,21 @@ def test_impossible_correction_options_are_refused(options, match):
                          segment=0, segment_names=("modulation",), source="synthetic")
     with pytest.raises(ParameterError, match=match):
         modulation_spectrum(curves, **options)
+
+
+def test_a_single_curve_jpk_file_is_one_spectrum_not_a_map(capsys, tmp_path):
+    from pathlib import Path
+
+    from viscoforce.cli import main
+
+    example = Path(__file__).resolve().parents[1] / "data_examples" / "sls_modulation.jpk-force"
+    code = main(["bode", str(example), "--out", str(tmp_path / "b.png")])
+    _, err = capsys.readouterr()
+    assert code == 0, err
+    code = main(["fit", str(example), "--model", "prony", "--json"])
+    out, err = capsys.readouterr()
+    assert code == 0, err
+    import json
+
+    info = json.loads(out)
+    assert "value" in info["params"]["k_inf"]  # a single fit, not a map summary

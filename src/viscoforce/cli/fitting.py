@@ -178,15 +178,22 @@ def read_data(path: str, fmt: str | None = None):
             raise UsageError(f"DATA {path}: no such file")
         try:
             with xr.open_dataset(path) as ds:
-                return ds.load()
+                return one_curve_squeezed(ds.load())
         except (OSError, ValueError) as exc:
             raise UsageError(f"DATA {path}: not a readable netCDF file ({exc})") from None
     data = load_instrument(path, format=fmt)
     if "omega" not in data.dims and has_modulation(data):
         from viscoforce.experiments.modulation import modulation_spectrum
 
-        return modulation_spectrum(data)
-    return data
+        data = modulation_spectrum(data)
+    return one_curve_squeezed(data)
+
+
+def one_curve_squeezed(ds):
+    """A spectrum of a single curve (``curve`` of size 1) as one spectrum, not a 1-pixel map."""
+    if "omega" in ds.dims and ds.sizes.get("curve") == 1:
+        return ds.isel(curve=0)
+    return ds
 
 
 def _kind(ds) -> str:
