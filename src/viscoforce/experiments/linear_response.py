@@ -530,6 +530,65 @@ def _pressure_derivatives(problem: ContactProblem, gap: np.ndarray
     return d0, (up - down) / (2.0 * step), (up - 2.0 * d0 + down) / (step * step)
 
 
+@dataclass(frozen=True, eq=False)
+class _BiasModes:
+    """The static E_inf state of :func:`amplitude_bias` and the modes of M = A·diag(s), s = −p′.
+
+    With D = W s and the balanced M' = |D|^½ (A W⁻¹) |D|^½ sign(D) = V Λ V⁻¹ on the nodes where
+    s ≠ 0 (as :class:`LinearizedState`), (I + cM)⁻¹ b has active part P (1 + cΛ)⁻¹ Q b_a with
+    P = |D|^-½ V, Q = V⁻¹ |D|^½, and inactive part b_i − c A_ia s_a x_a: every solve of the
+    harmonic balance, at every frequency, is two matrix products (module docstring).
+    """
+
+    d1: FloatArray
+    d2: FloatArray
+    d3: FloatArray
+    influence: FloatArray
+    active: NDArray[np.intp]
+    inactive: NDArray[np.intp]
+    lam: NDArray[np.complex128]
+    left: NDArray[np.complex128]
+    right: NDArray[np.complex128]
+    coupling: FloatArray
+    load_weights: FloatArray
+
+    @classmethod
+    def build(cls, problem: ContactProblem, position: float, e_inf: float) -> _BiasModes:
+        gap = equilibrium_gap(problem, position, e_inf).gap
+        d1, d2, d3 = _pressure_derivatives(problem, gap)
+        area = problem.grid.area_weights
+        stiff = -d1
+        active = np.flatnonzero(stiff != 0.0)
+        inactive = np.flatnonzero(stiff == 0.0)
+        d = area[active] * stiff[active]
+        q = np.sqrt(np.abs(d))
+        kernel = problem.influence[np.ix_(active, active)] / area[active][None, :]
+        lam, vec = np.linalg.eig(q[:, None] * kernel * np.copysign(q, d)[None, :])
+        left = vec / q[:, None]
+        right = np.linalg.solve(vec, np.diag(q).astype(vec.dtype))
+        coupling = problem.influence[np.ix_(inactive, active)] * stiff[active][None, :]
+        return cls(d1=d1, d2=d2, d3=d3, influence=problem.influence, active=active,
+                   inactive=inactive, lam=np.asarray(lam, dtype=complex),
+                   left=np.asarray(left, dtype=complex), right=np.asarray(right, dtype=complex),
+                   coupling=coupling, load_weights=2.0 * np.pi * np.asarray(area, dtype=float))
+
+    def solve(self, c: np.ndarray, rhs: np.ndarray) -> np.ndarray:
+        """(I + c_f M)⁻¹ rhs[:, f] for every column f (c: one compliance value 2C* per column)."""
+        a, i = self.active, self.inactive
+        x = np.empty_like(rhs, dtype=complex)
+        x[a] = self.left @ ((self.right @ rhs[a]) / (1.0 + self.lam[:, None] * c[None, :]))
+        if i.size:
+            x[i] = rhs[i] - c[None, :] * (self.coupling @ x[a])
+        return x
+
+
+_BIAS_MODES = _StateCache(STATE_CACHE_SIZE)
+#: Most finite-amplitude results kept, by (state, material, frequencies).
+BIAS_CACHE_SIZE = 256
+_BIAS_RESULTS: OrderedDict[tuple, np.ndarray] = OrderedDict()
+_BIAS_LOCK = threading.Lock()
+
+
 def amplitude_bias(problem: ContactProblem, position: float, omega: ArrayLike) -> np.ndarray:
     """Leading finite-amplitude correction of the first-harmonic stiffness: k1(η) = k*(1 + b η²).
 
@@ -540,7 +599,12 @@ def amplitude_bias(problem: ContactProblem, position: float, omega: ArrayLike) -
     relaxed compliance, is the rectified mean state); the third order at ω,
     q̂3 = p″(ĥ1 ĥ2(0) + ĥ1* ĥ2(2ω)/2) + p‴|ĥ1|²ĥ1/8 and M(ω) ĥ3 = 2C*(ω) A q̂3. Then
     b = L(p′ĥ3 + q̂3)/L(p′ĥ1), L the load integral. For a rigid exponential force b = κ²/8.
-    Exact in the limit of small η (error O(η⁴)); one complex solve per ν and frequency.
+    Exact in the limit of small η (error O(η⁴)).
+
+    Modal: the state and one eigen-decomposition of its linearisation are cached (like
+    :func:`linearized_state`, keyed on sphere, law, grid, E_inf and position), and every
+    frequency is a column of the same matrix products; the results are cached per (state,
+    material, frequencies).
 
     Returns
     -------
@@ -549,30 +613,34 @@ def amplitude_bias(problem: ContactProblem, position: float, omega: ArrayLike) -
     """
     material = problem.material
     e_inf = material.relaxed_modulus
-    gap = equilibrium_gap(problem, position, e_inf).gap
-    d1, d2, d3 = _pressure_derivatives(problem, gap)
-    a = problem.influence
-    n = gap.size
-    one = np.ones(n)
-    grid = problem.grid
-
-    def load(values: np.ndarray) -> complex:
-        return complex(grid.integrate_area(values.real) + 1j * grid.integrate_area(values.imag))
-
-    def solve(compliance: complex, rhs_pressure: np.ndarray | None, rhs: np.ndarray | None = None
-              ) -> np.ndarray:
-        m = np.eye(n) - 2.0 * compliance * (a * d1[None, :])
-        b = rhs if rhs is not None else 2.0 * compliance * (a @ rhs_pressure)
-        return np.linalg.solve(m, b)
-
-    out = np.empty(np.size(omega), dtype=complex)
-    c_zero = 1.0 / e_inf
-    for i, w in enumerate(np.atleast_1d(np.asarray(omega, dtype=float))):
-        c_w, c_2w = (complex(c) for c in material.complex_compliance(np.array([w, 2.0 * w])))
-        h1 = solve(c_w, None, one.astype(complex))
-        h2_0 = solve(c_zero, d2 * np.abs(h1) ** 2 / 4.0)
-        h2_2 = solve(c_2w, d2 * h1 ** 2 / 4.0)
-        q3 = d2 * (h1 * h2_0 + np.conj(h1) * h2_2 / 2.0) + d3 * np.abs(h1) ** 2 * h1 / 8.0
-        h3 = solve(c_w, q3)
-        out[i] = load(d1 * h3 + q3) / load(d1 * h1)
+    w = np.atleast_1d(np.asarray(omega, dtype=float))
+    key = (problem.sphere, problem.surface_force, problem.grid, float(e_inf), float(position))
+    try:
+        result_key: tuple | None = (*key, material, w.tobytes())
+        hash(result_key)
+    except TypeError:
+        result_key = None
+    if result_key is not None:
+        with _BIAS_LOCK:
+            if result_key in _BIAS_RESULTS:
+                _BIAS_RESULTS.move_to_end(result_key)
+                return _BIAS_RESULTS[result_key].copy()
+    modes = _BIAS_MODES.get(key, lambda: _BiasModes.build(problem, position, e_inf))
+    n, f = modes.d1.size, w.size
+    compliance = np.asarray(material.complex_compliance(np.concatenate([w, 2.0 * w])),
+                            dtype=complex)
+    c_w, c_2w = 2.0 * compliance[:f], 2.0 * compliance[f:]
+    c_0 = np.full(f, 2.0 / e_inf, dtype=complex)
+    a, d1, d2, d3 = modes.influence, modes.d1[:, None], modes.d2[:, None], modes.d3[:, None]
+    h1 = modes.solve(c_w, np.ones((n, f), dtype=complex))
+    h2_0 = modes.solve(c_0, c_0[None, :] * (a @ (d2 * np.abs(h1) ** 2 / 4.0)))
+    h2_2 = modes.solve(c_2w, c_2w[None, :] * (a @ (d2 * h1 ** 2 / 4.0)))
+    q3 = d2 * (h1 * h2_0 + np.conj(h1) * h2_2 / 2.0) + d3 * np.abs(h1) ** 2 * h1 / 8.0
+    h3 = modes.solve(c_w, c_w[None, :] * (a @ q3))
+    out = (modes.load_weights @ (d1 * h3 + q3)) / (modes.load_weights @ (d1 * h1))
+    if result_key is not None:
+        with _BIAS_LOCK:
+            _BIAS_RESULTS[result_key] = out.copy()
+            while len(_BIAS_RESULTS) > BIAS_CACHE_SIZE:
+                _BIAS_RESULTS.popitem(last=False)
     return out
