@@ -17,6 +17,29 @@ MAX_SAMPLES = 10_000_000
 #: Most memory one result or one working array may take [bytes].
 MAX_MEMORY_BYTES = 2 * 1024**3
 
+# Archives and instrument files (zip bombs, lying headers): each member's size is checked against
+# the zip's declared size before it is decompressed, and decompression stops at that size.
+#: Largest decompressed size of one archive member [bytes]: a JPK channel, a zip member read by
+#: afmformats, or a JPK archive inside a zip of archives (which is held in memory whole).
+MAX_MEMBER_BYTES = 1024**3
+#: Largest decompressed size of one JPK properties header [bytes] (real ones: 3-60 kB).
+MAX_HEADER_BYTES = 16 * 1024**2
+#: Largest sum of the decompressed sizes of one archive's members [bytes]. JPK maps are decoded
+#: one curve at a time, so this bounds the reading work, not the memory.
+MAX_ARCHIVE_BYTES = 16 * 1024**3
+#: Largest file or zip member parsed whole by afmformats [bytes]: its text readers take about
+#: 16x the text in memory (a Chiaro .txt: 0.84 MB of text, 13 MB peak).
+MAX_PARSED_BYTES = 128 * 1024**2
+#: Largest sum of the members of one zip read through afmformats [bytes] (all its curves are
+#: held in memory at once).
+MAX_PARSED_TOTAL_BYTES = 1024**3
+
+# Plausible ranges of the calibrations an instrument file states (outside: refused as corrupt).
+#: Cantilever spring constant [N/m].
+SPRING_CONSTANT_RANGE = (1e-5, 1e3)
+#: Deflection sensitivity [m/V].
+SENSITIVITY_RANGE = (1e-12, 1e-3)
+
 
 def check_effort(what: str, estimate: float, limit: float, *, unit: str = "",
                  hint: str = "") -> None:

@@ -12,7 +12,7 @@ Formats (detected by content, :func:`detect_afmformats`; read by :func:`read_afm
   calibration in the file, so ``spring_constant`` and ``sensitivity`` must be given.
 
 What goes where (SI; the file is opened read-only and never modified; zip members are copied to a
-temporary directory because afmformats reads paths):
+temporary directory because afmformats reads paths, one at a time, each removed once read):
 
 * per sample: ``time`` [s] (the file's where it has one; Igor: sample / ``NumPtsPerSec``;
   AFM Workshop and NT-MDT record none: the sample index is used, 1 s per sample, and
@@ -37,6 +37,16 @@ AFM Workshop uses them where its columns are volts and for the deflection of for
 Igor they *recalibrate* (deflection × sensitivity/file sensitivity, force = k × deflection), for
 Chiaro ``spring_constant`` recalibrates the force and ``sensitivity`` does not apply.
 
+Bounded reading: a file, and each zip member, is refused (:class:`~viscoforce.exceptions.EffortError`)
+beyond :data:`~viscoforce._limits.MAX_PARSED_BYTES`, a zip whose members sum to more than
+:data:`~viscoforce._limits.MAX_PARSED_TOTAL_BYTES`, both on the sizes the zip declares and before
+anything is decompressed; the copy to the temporary directory counts the bytes and stops at the
+declared size (zipfile stops there and checks the CRC: a header that lies is refused as corrupt).
+Calibrations in the file or given by the caller are refused outside
+:data:`~viscoforce._limits.SPRING_CONSTANT_RANGE` / :data:`~viscoforce._limits.SENSITIVITY_RANGE`,
+and a non-finite time, force or height sample names the file (and member), the curve, the segment
+and the channel.
+
 afmformats' exceptions derive from ``BaseException``; they are caught by name
 (``afmformats.errors.AFMFileFormatError`` and its subclasses, ``MissingMetaDataError``) together
 with the ordinary errors its parsers raise on broken input, and re-raised as
@@ -48,9 +58,9 @@ from __future__ import annotations
 import logging
 import math
 import re
-import shutil
 import struct
 import tempfile
+import warnings
 import zipfile
 import zlib
 from collections.abc import Iterator, Sequence
@@ -62,6 +72,8 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
+from viscoforce import _limits
+from viscoforce._limits import check_effort
 from viscoforce._validation import require_positive
 from viscoforce.exceptions import InstrumentFormatError, ParameterError, ViscoforceError
 from viscoforce.schema import make_curves
@@ -72,8 +84,11 @@ __all__ = ["AFMFORMATS_EXTENSIONS", "detect_afmformats", "read_afmformats"]
 AFMFORMATS_EXTENSIONS = (".ibw", ".csv", ".txt", ".zip")
 _MEMBER_EXTENSIONS = (".ibw", ".csv", ".txt")
 _HEAD = 65536
-#: uncompressed bytes of zip members copied out at most (a zip bomb is refused up front)
-_MAX_UNZIPPED = 2 * 1024**3
+#: bytes copied per step from a zip member to the temporary directory
+_COPY_CHUNK = 1024**2
+#: zip compressions read: zipfile decompresses a bzip2 read whole, without an output limit (a few
+#: kB of bzip2 can expand to gigabytes), so bzip2 members are refused
+_SAFE_COMPRESSIONS = (zipfile.ZIP_STORED, zipfile.ZIP_DEFLATED, zipfile.ZIP_LZMA)
 _IGOR_VERSIONS = (1, 2, 3, 5)
 _NUMBER = re.compile(r"^[+-]?(\d+([.,]\d*)?|[.,]\d+)([eE][+-]?\d+)?$")
 _MAKER_NTMDT = "NT-MDT Spectrum Instruments"
@@ -124,6 +139,8 @@ def _zip_members(zf: zipfile.ZipFile) -> list[zipfile.ZipInfo]:
 
 
 def _read_head(zf: zipfile.ZipFile, info: zipfile.ZipInfo) -> bytes:
+    if info.compress_type not in _SAFE_COMPRESSIONS:
+        return b""
     with zf.open(info) as fh:
         return fh.read(_HEAD)
 
@@ -276,20 +293,56 @@ def _finite_or_nan(value: Any) -> float:
     return x if math.isfinite(x) else math.nan
 
 
+_CALIBRATIONS = {"spring constant": ("spring_constant", "N/m", "SPRING_CONSTANT_RANGE"),
+                 "sensitivity": ("sensitivity", "m/V", "SENSITIVITY_RANGE")}
+
+
+def _file_calibration(meta: dict[str, Any], key: str, where: str, check: bool) -> float:
+    """The file's calibration ``key`` (NaN when absent); refused outside its plausible range."""
+    value = meta.get(key)
+    if value is None or not check:
+        return _finite_or_nan(value)
+    name, unit, limits = _CALIBRATIONS[key]
+    low, high = getattr(_limits, limits)
+    try:
+        number = float(value)
+    except (TypeError, ValueError):
+        number = math.nan
+    if not low <= number <= high:  # also NaN and text
+        raise InstrumentFormatError(
+            f"{where}: the file's {key} is {value!r} {unit}, outside the plausible range "
+            f"[{low:g}, {high:g}] {unit} ({name}): a corrupt header")
+    return number
+
+
+def _require_finite_samples(values: np.ndarray, channel: str, where: str, index: int,
+                            table: list[tuple[str, str]], local: np.ndarray) -> None:
+    """Refuse NaN / inf samples, naming the file (and member), curve, segment and channel."""
+    finite = np.isfinite(values)
+    if finite.all():
+        return
+    bad = np.flatnonzero(~finite)
+    segment = table[int(local[bad[0]])][0]
+    raise InstrumentFormatError(
+        f"{where}: curve {index}, segment {segment!r}, channel '{channel}': {bad.size} of "
+        f"{values.size} samples are not finite (first: sample {bad[0]} = {float(values[bad[0]])})")
+
+
 def _convert(kind: str, fmt: str, path: Path, afm: Any, k_user: float | None,
-             s_user: float | None) -> _Curve:
+             s_user: float | None, where: str, index: int, dropped: str) -> _Curve:
+    """Curve ``index`` of the file (``where`` names it in errors; ``dropped``: afmformats' notes)."""
     meta = dict(afm.metadata)
     columns = list(afm.columns)
     n = len(afm)
     notes: dict[str, str] = {}
     if "force" not in columns:
-        raise InstrumentFormatError(f"{path}: afmformats gives no force column ({columns})")
+        raise InstrumentFormatError(f"{where}: afmformats gives no force column ({columns}){dropped}")
     force = np.asarray(afm["force"], dtype=float)
     height_order = (("height (piezo)", "height (measured)") if kind == "chiaro"
                     else ("height (measured)", "height (piezo)"))
     hname = next((c for c in height_order if c in columns), None)
     if hname is None:
-        raise InstrumentFormatError(f"{path}: afmformats gives no height column ({columns})")
+        raise InstrumentFormatError(f"{where}: afmformats gives no height column ({columns}){dropped}")
     height = np.asarray(afm[hname], dtype=float)
     notes["height_channel"] = hname
     if kind == "chiaro":
@@ -301,7 +354,8 @@ def _convert(kind: str, fmt: str, path: Path, afm: Any, k_user: float | None,
         time = np.asarray(afm["time"], dtype=float)
         notes["time_channel"] = "time (from the file)"
         if time.size > 1 and np.any(np.diff(time) <= 0):
-            raise InstrumentFormatError(f"{path}: the file's time column does not increase")
+            raise InstrumentFormatError(f"{where}: curve {index}: the file's time column does not "
+                                        "increase")
     elif kind == "igor" and _finite_or_nan(meta.get("rate approach")) > 0:
         rate = float(meta["rate approach"])
         time = np.arange(n) / rate
@@ -310,8 +364,8 @@ def _convert(kind: str, fmt: str, path: Path, afm: Any, k_user: float | None,
         time = np.arange(n, dtype=float)
         notes["time_channel"] = "sample index (the file records no time; 1 s per sample placeholder)"
 
-    k_file = _finite_or_nan(meta.get("spring constant"))
-    s_file = _finite_or_nan(meta.get("sensitivity"))
+    k_file = _file_calibration(meta, "spring constant", where, kind != "ntmdt")
+    s_file = _file_calibration(meta, "sensitivity", where, kind != "ntmdt")
     k, s = k_file, s_file
     if kind == "ntmdt":
         s = float(s_user)  # afmformats holds it in m/A (x1e9); keep the user's value
@@ -329,7 +383,7 @@ def _convert(kind: str, fmt: str, path: Path, afm: Any, k_user: float | None,
     if kind in ("igor", "chiaro"):  # afmformats does not take overrides here: recalibrate
         if s_user is not None:
             if not math.isfinite(s_file):
-                raise ParameterError(f"{path}: {fmt} has no deflection sensitivity to override "
+                raise ParameterError(f"{where}: {fmt} has no deflection sensitivity to override "
                                      "(its deflection is measured directly); drop sensitivity")
             deflection = deflection * (s_user / s_file)
             s = s_user
@@ -341,6 +395,8 @@ def _convert(kind: str, fmt: str, path: Path, afm: Any, k_user: float | None,
         elif s_user is not None:
             force = k * deflection
     table, local = _segments(kind, path, afm, n, height, notes)
+    for channel, values in (("time", time), ("force", force), ("height", height)):
+        _require_finite_samples(values, channel, where, index, table, local)
     x = _finite_or_nan(meta.get("position x"))
     y = _finite_or_nan(meta.get("position y"))
     return _Curve(time=time, force=force, height=height, deflection=deflection, segments=table,
@@ -378,13 +434,50 @@ def _load_file(path: Path, where: str, k_user: float | None, s_user: float | Non
         elif recipe.maker not in (_MAKER_IGOR, _MAKER_CHIARO):
             raise InstrumentFormatError(f"{where}: afmformats reads it as {fmt}, which this reader "
                                         "does not handle (use viscoforce.io.read_jpk for JPK)")
-        loaded = afmformats.load_data(path, meta_override=override, modality="force-distance")
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            loaded = afmformats.load_data(path, meta_override=override, modality="force-distance")
+        for warning in caught:  # passed on; kept to explain a column afmformats dropped
+            warnings.warn_explicit(warning.message, warning.category, warning.filename,
+                                   warning.lineno)
+        dropped = "".join(f"; afmformats: {str(w.message).replace(str(path), where)}"
+                          for w in caught if "column" in str(w.message).lower())
         if not loaded:
             raise InstrumentFormatError(f"{where}: no force-distance curve in the file")
-        curves = [_convert(kind, fmt, path, afm, k_user, s_user) for afm in loaded]
+        curves = [_convert(kind, fmt, path, afm, k_user, s_user, where, i, dropped)
+                  for i, afm in enumerate(loaded)]
     for curve in curves:
         curve.metadata["path"] = str(display)
     return fmt, curves
+
+
+def _check_sizes(path: Path, infos: Sequence[zipfile.ZipInfo]) -> None:
+    """Refuse members (and their sum) beyond the parsing limits, from the sizes the zip declares."""
+    hint = ("the size the zip's directory declares; afmformats parses a member whole (about 16x "
+            "its size in memory); a damaged or hostile zip, or raise viscoforce._limits.{}")
+    for info in infos:
+        if info.compress_type not in _SAFE_COMPRESSIONS:
+            raise InstrumentFormatError(
+                f"{path}!{info.filename}: zip compression method {info.compress_type} is not "
+                "read (only stored, deflate and LZMA: zipfile decompresses bzip2 without an "
+                "output limit, a zip-bomb risk); re-zip the files with deflate")
+        check_effort(f"{path}!{info.filename}: decompressing this member", info.file_size,
+                     _limits.MAX_PARSED_BYTES, unit="bytes", hint=hint.format("MAX_PARSED_BYTES"))
+    check_effort(f"{path}: decompressing the zip's {len(infos)} member(s)",
+                 sum(info.file_size for info in infos), _limits.MAX_PARSED_TOTAL_BYTES,
+                 unit="bytes", hint=hint.format("MAX_PARSED_TOTAL_BYTES"))
+
+
+def _copy_member(zf: zipfile.ZipFile, info: zipfile.ZipInfo, target: Path, where: str) -> None:
+    """Copy ``info`` to ``target``, counting: never more than its declared size is written."""
+    written = 0
+    with zf.open(info) as src, target.open("wb") as dst:
+        while chunk := src.read(min(_COPY_CHUNK, info.file_size - written + 1)):
+            written += len(chunk)
+            if written > info.file_size:  # zipfile stops at the declared size; in case not
+                raise InstrumentFormatError(f"{where}: decompresses to more than the "
+                                            f"{info.file_size} bytes the zip declares: corrupt zip")
+            dst.write(chunk)
 
 
 def _load_zip(path: Path, k_user: float | None, s_user: float | None) -> tuple[str, list[_Curve]]:
@@ -394,27 +487,37 @@ def _load_zip(path: Path, k_user: float | None, s_user: float | None) -> tuple[s
             if not members:
                 raise InstrumentFormatError(f"{path}: zip holds no .ibw, .csv or .txt member")
             if all(Path(m.filename).suffix.lower() == ".csv" for m in members):
+                _check_sizes(path, [i for i in zf.infolist() if not i.is_dir()])  # it reads all
                 return _load_file(path, str(path), k_user, s_user, path)  # AFM Workshop map
-            total = sum(m.file_size for m in members)
-            if total > _MAX_UNZIPPED:
-                raise InstrumentFormatError(f"{path}: members unpack to {total} bytes, more than "
-                                            f"the {_MAX_UNZIPPED} allowed")
+            _check_sizes(path, members)
             fmts: list[str] = []
             curves: list[_Curve] = []
             with tempfile.TemporaryDirectory(prefix="viscoforce-afm-") as tmp:
-                for i, info in enumerate(members):
+                for i, info in enumerate(members):  # one member in the folder at a time
                     where = f"{path}!{info.filename}"
                     target = Path(tmp) / f"{i:05d}{Path(info.filename).suffix.lower()}"
-                    with zf.open(info) as src, target.open("wb") as dst:
-                        shutil.copyfileobj(src, dst)
-                    fmt, got = _load_file(target, where, k_user, s_user,
-                                          Path(f"{path}!{info.filename}"))
+                    try:
+                        _copy_member(zf, info, target, where)
+                        fmt, got = _load_file(target, where, k_user, s_user, Path(where))
+                    except (zipfile.BadZipFile, zlib.error, EOFError) as exc:
+                        raise InstrumentFormatError(
+                            f"{where}: cannot be decompressed ({type(exc).__name__}: {exc}): the "
+                            "zip is damaged (truncated, or the member is not the "
+                            f"{info.file_size} bytes its header declares)") from None
+                    finally:
+                        target.unlink(missing_ok=True)
                     fmts.append(fmt)
                     curves += got
     except (zipfile.BadZipFile, zipfile.LargeZipFile, zlib.error, EOFError,
             NotImplementedError, RuntimeError) as exc:
+        with path.open("rb") as handle:
+            starts_as_zip = handle.read(4) == b"PK\x03\x04"
+        cut = (": it starts as a zip but its central directory (the member list at its end) is "
+               "missing or damaged, so the file is truncated"
+               if starts_as_zip and isinstance(exc, zipfile.BadZipFile)
+               and "not a zip file" in str(exc) else "")
         raise InstrumentFormatError(f"{path}: corrupt or unreadable zip "
-                                    f"({type(exc).__name__}: {exc})") from None
+                                    f"({type(exc).__name__}: {exc}){cut}") from None
     if len(set(fmts)) != 1:
         raise InstrumentFormatError(f"{path}: zip mixes formats {sorted(set(fmts))}; read the "
                                     "members one by one")
@@ -459,8 +562,17 @@ def _meta_attrs(curves: Sequence[_Curve]) -> dict[str, Any]:
     return out
 
 
-def _optional_positive(name: str, value: Any) -> float | None:
-    return None if value is None else require_positive(name, value)
+def _optional_calibration(name: str, value: Any, unit: str, limits: tuple[float, float]
+                          ) -> float | None:
+    """None, or ``value`` when positive and within ``limits`` (else ParameterError)."""
+    if value is None:
+        return None
+    value = require_positive(name, value)
+    low, high = limits
+    if not low <= value <= high:
+        raise ParameterError(f"{name} must be within the plausible range [{low:g}, {high:g}] "
+                             f"{unit}, got {value!r} {unit}")
+    return value
 
 
 def read_afmformats(path: str | Path, *, spring_constant: float | None = None,
@@ -491,11 +603,17 @@ def read_afmformats(path: str | Path, *, spring_constant: float | None = None,
         calibration it needs (NT-MDT without ``spring_constant`` / ``sensitivity``); the message
         names the file (and zip member).
     ParameterError
-        If ``spring_constant`` / ``sensitivity`` is not a positive number, or ``sensitivity`` is
-        given for a file that measures deflection directly (Chiaro).
+        If ``spring_constant`` / ``sensitivity`` is not a positive number within
+        :data:`~viscoforce._limits.SPRING_CONSTANT_RANGE` / :data:`~viscoforce._limits.SENSITIVITY_RANGE`,
+        or ``sensitivity`` is given for a file that measures deflection directly (Chiaro).
+    EffortError
+        If the file, a zip member or a zip's members together are larger than
+        :data:`~viscoforce._limits.MAX_PARSED_BYTES` / ``MAX_PARSED_TOTAL_BYTES`` (checked before
+        reading).
     """
-    k_user = _optional_positive("spring_constant", spring_constant)
-    s_user = _optional_positive("sensitivity", sensitivity)
+    k_user = _optional_calibration("spring_constant", spring_constant, "N/m",
+                                   _limits.SPRING_CONSTANT_RANGE)
+    s_user = _optional_calibration("sensitivity", sensitivity, "m/V", _limits.SENSITIVITY_RANGE)
     path = Path(path)
     if not path.is_file():
         raise InstrumentFormatError(f"{path}: no such file")
@@ -503,8 +621,13 @@ def read_afmformats(path: str | Path, *, spring_constant: float | None = None,
     if suffix not in AFMFORMATS_EXTENSIONS:
         raise InstrumentFormatError(f"{path}: extension {path.suffix!r} is not one of "
                                     f"{AFMFORMATS_EXTENSIONS}")
-    if path.stat().st_size == 0:
+    size = path.stat().st_size
+    if size == 0:
         raise InstrumentFormatError(f"{path}: the file is empty")
+    if suffix != ".zip":
+        check_effort(f"{path}: parsing the file", size, _limits.MAX_PARSED_BYTES, unit="bytes",
+                     hint="afmformats parses it whole, about 16x its size in memory; raise "
+                          "viscoforce._limits.MAX_PARSED_BYTES")
     fmt, curves = (_load_zip(path, k_user, s_user) if suffix == ".zip"
                    else _load_file(path, str(path), k_user, s_user, path))
     table: list[tuple[str, str]] = []
@@ -554,7 +677,8 @@ def _chiaro_tip(path: Path) -> dict[str, Any]:
     try:
         if path.suffix.lower() == ".zip":
             with zipfile.ZipFile(path) as zf:
-                members = [i for i in zf.infolist() if i.filename.lower().endswith(".txt")]
+                members = [i for i in zf.infolist() if i.filename.lower().endswith(".txt")
+                           and i.compress_type in _SAFE_COMPRESSIONS]
                 if not members:
                     return {}
                 with zf.open(members[0]) as handle:

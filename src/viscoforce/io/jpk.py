@@ -24,15 +24,34 @@ is not pickled, the index is) and in a forked child, the next read reopens the f
 parsing the directory again. Reads of one archive are serialised by a lock, so threads may share
 it. The reader keeps, per segment-header text, its parsed and checked plan (the resolved
 properties, the dtype, encoder and calibration steps of every channel, the drive, the baseline;
-at most 256, then it starts again): a header repeated from curve to curve (a synthetic map's;
-real files differ by time stamp and position) is neither parsed nor resolved again, and
-:attr:`JPKSegment.settings` is a fresh copy each time.
+at most 64, about 3 MB for real headers, then it starts again): a header repeated from curve to
+curve (a synthetic map's; real files differ by time stamp and position) is neither parsed nor
+resolved again, and :attr:`JPKSegment.settings` is a fresh copy each time.
+
+Bounded reading (hostile or damaged files): every member's decompressed size, as the zip's
+central directory declares it, is checked before the member is read — a properties header
+against :data:`~viscoforce._limits.MAX_HEADER_BYTES`, anything else against
+:data:`~viscoforce._limits.MAX_MEMBER_BYTES`, the sum over the archive against
+:data:`~viscoforce._limits.MAX_ARCHIVE_BYTES` (an :class:`~viscoforce.exceptions.EffortError`
+with the size and the limit) — and decompression stops one byte past the declared size, so a
+header that lies about it is refused (InstrumentFormatError) with at most that much in memory.
+A segment's ``num-points`` is checked against the declared size of each channel member before
+any array is allocated, and the segment's float arrays against
+:data:`~viscoforce._limits.MAX_MEMORY_BYTES`. Calibrations are refused when not finite (every
+encoder and slot multiplier and offset, durations, drives, the baseline) or outside the
+plausible ranges :data:`~viscoforce._limits.SPRING_CONSTANT_RANGE` and
+:data:`~viscoforce._limits.SENSITIVITY_RANGE`; a non-finite sample of a calibrated channel
+(overflow, a NaN in float data) is refused naming the file, curve, segment and channel.
+Reading all the curves of a file peaks at 1.0-1.5x the arrays it returns (tracemalloc on the
+real files and on a synthetic 16x16 map of 410 MB); curve by curve, at the curve plus the plans
+kept (1-3 MB on the real maps).
 """
 
 from __future__ import annotations
 
 import bisect
 import io
+import math
 import operator
 import os
 import re
@@ -49,6 +68,8 @@ from typing import BinaryIO
 import numpy as np
 from numpy.typing import NDArray
 
+from viscoforce import _limits
+from viscoforce._limits import check_effort
 from viscoforce._typing import FloatArray
 from viscoforce.exceptions import InstrumentFormatError
 from viscoforce.io._properties import (
@@ -96,8 +117,14 @@ _HEADER = re.compile(r"^((?:index/\d+/)?)(?:segments/(\d+)/segment-)?header\.pro
 _LOCAL_HEADER = struct.Struct("<4s22xHH")
 _LOCAL_SIGNATURE = b"PK\x03\x04"
 #: segment plans an archive reader keeps at most (then it forgets them all and starts again)
-_PLAN_CACHE = 256
+_PLAN_CACHE = 64
 _ZIP_ERRORS = (zipfile.BadZipFile, zipfile.LargeZipFile, zlib.error, EOFError, NotImplementedError)
+#: compressed bytes zipfile reads (and decompresses whole) per step for bzip2 / LZMA members: its
+#: bzip2 reader has no output limit, and 4 kB of bzip2 can expand to gigabytes (64 bytes: at most
+#: two or three bzip2 blocks, < 150 MB)
+_FALLBACK_READ = 64
+_HINT = ("the size the zip's directory declares; a damaged or hostile archive, or raise "
+         "viscoforce._limits.{}")
 
 
 @dataclass(frozen=True)
@@ -233,9 +260,13 @@ class _Where:
     def at(self, member: str) -> _Where:
         return _Where(self.label, member)
 
+    @property
+    def place(self) -> str:
+        """``file: member`` (or the file)."""
+        return f"{self.label}: {self.member}" if self.member else self.label
+
     def error(self, what: str) -> InstrumentFormatError:
-        place = f"{self.label}: {self.member}" if self.member else self.label
-        return InstrumentFormatError(f"{place}: {what}")
+        return InstrumentFormatError(f"{self.place}: {what}")
 
 
 @dataclass(frozen=True)
@@ -299,12 +330,25 @@ class _IndexedZip:
         #: segment header bytes -> its plan (headers repeat from curve to curve in a map)
         self.plans: dict[bytes, _SegmentPlan] = {}
 
+    def namelist(self) -> list[str]:
+        """The member names (each once)."""
+        return list(self.index.rows)
+
+    def size(self, name: str) -> int:
+        """Decompressed size of member ``name`` as the central directory declares it; KeyError."""
+        return int(self.index.size[self.index.rows[name]])
+
     def read(self, name: str) -> bytes:
-        """Content of member ``name``; KeyError if absent, zipfile.BadZipFile if damaged."""
+        """Content of member ``name``; KeyError if absent, zipfile.BadZipFile if damaged.
+
+        Never more than the declared size (+ 1 byte to see a lie) is decompressed: callers check
+        that size against the limits first (:func:`_read_member`).
+        """
         row = self.index.rows[name]
         method, flags = int(self.index.method[row]), int(self.index.flags[row])
+        declared = int(self.index.size[row])
         if flags & 0x1 or method not in (zipfile.ZIP_STORED, zipfile.ZIP_DEFLATED):
-            return self._zipfile().read(name)
+            return self._read_through_zipfile(name, declared)
         fp = self._file()
         fp.seek(int(self.index.offset[row]))
         head = fp.read(_LOCAL_HEADER.size)
@@ -315,13 +359,41 @@ class _IndexedZip:
             raise zipfile.BadZipFile(f"bad magic number for the local header of {name!r}")
         fp.seek(name_length + extra_length, io.SEEK_CUR)
         compressed = int(self.index.compressed[row])
+        # deflate expands incompressible data by < 0.1 % (12.5 % with fixed Huffman codes);
+        # stored data are exactly the declared size
+        bound = declared if method == zipfile.ZIP_STORED else declared + declared // 8 + 1024
+        if compressed > bound:
+            raise zipfile.BadZipFile(f"{name!r}: {compressed} compressed bytes declared for "
+                                     f"{declared} decompressed ones, impossible")
         raw = fp.read(compressed)
         if len(raw) != compressed:
             raise zipfile.BadZipFile(f"truncated data of {name!r}")
-        data = zlib.decompress(raw, -zlib.MAX_WBITS) if method == zipfile.ZIP_DEFLATED else raw
-        if len(data) != int(self.index.size[row]) or zlib.crc32(data) != int(self.index.crc[row]):
-            raise zipfile.BadZipFile(f"bad CRC-32 or size for {name!r}")
+        if method == zipfile.ZIP_DEFLATED:
+            inflater = zlib.decompressobj(-zlib.MAX_WBITS)
+            data = inflater.decompress(raw, declared + 1)   # output stops one byte past the size
+            del raw
+            if len(data) > declared:
+                raise zipfile.BadZipFile(f"{name!r} decompresses to more than the {declared} "
+                                         "bytes the zip declares")
+            complete = inflater.eof
+        else:
+            data, complete = raw, True
+        if not complete or len(data) != declared or zlib.crc32(data) != int(self.index.crc[row]):
+            raise zipfile.BadZipFile(f"bad CRC-32 or size for {name!r} ({len(data)} bytes "
+                                     f"decompressed, {declared} declared)")
         return data
+
+    def _read_through_zipfile(self, name: str, declared: int) -> bytes:
+        """An encrypted, bzip2 or LZMA member, through zipfile, in small bounded steps."""
+        out = bytearray()
+        with self._zipfile().open(name) as handle:
+            handle.MIN_READ_SIZE = _FALLBACK_READ  # each step decompresses this much input whole
+            while piece := handle.read(_FALLBACK_READ):
+                out += piece
+                if len(out) > declared:  # zipfile stops at the declared size; in case it did not
+                    raise zipfile.BadZipFile(f"{name!r} decompresses to more than the {declared} "
+                                             "bytes the zip declares")
+        return bytes(out)
 
     def _file(self) -> BinaryIO:
         if self._fp is None:
@@ -352,8 +424,8 @@ class _IndexedZip:
         self.close()
 
 
-#: What member reads go through: the scan's ZipFile, or an archive's indexed reader.
-_Members = zipfile.ZipFile | _IndexedZip
+#: What member reads go through (the scan's and the archive's readers alike).
+_Members = _IndexedZip
 
 
 class _Handles:
@@ -528,7 +600,7 @@ class JPKArchive:
             if handles.inner is not None:
                 handles.inner[1].close()
                 handles.inner = None
-            data = _read_member(handles.outer, layout.member, where)
+            data = _read_member(handles.outer, layout.member, where, "MAX_MEMBER_BYTES")
             with _open_zip(io.BytesIO(data), layout.where) as zf:
                 handles.inner = (layout.member, _IndexedZip(data, _MemberIndex.of(zf), layout.where))
         return handles.inner[1]
@@ -557,17 +629,25 @@ def read_jpk(path: str | Path) -> JPKArchive:
     InstrumentFormatError
         If the file is missing, empty, truncated or corrupt, is not a JPK force archive, or is a
         zip without a JPK member; the message names the file, the member and what is wrong.
+    EffortError
+        If a member or the whole archive would decompress to more than the limits of
+        :mod:`viscoforce._limits` (checked on the sizes the zip declares, before reading).
     """
     path = Path(path)
     where = _Where(str(path))
     if not path.is_file():
         raise where.error("no such file")
     with _open_zip(path, where) as zf:
-        if "header.properties" in zf.namelist():
-            layouts = (_scan(zf, where, None),)
-        else:
-            layouts = _scan_zip(zf, where)
         index = _MemberIndex.of(zf)
+    reader = _IndexedZip(path, index, where)
+    try:
+        if "header.properties" in index.rows:
+            _check_archive(where, int(index.size.sum()))
+            layouts = (_scan(reader, where, None),)
+        else:
+            layouts = _scan_zip(reader, where)
+    finally:
+        reader.close()
     if len(layouts) == 1 and layouts[0].member is None:
         kind, metadata = layouts[0].kind, layouts[0].header
         with _located(where.at("header.properties")):
@@ -587,23 +667,65 @@ def _open_zip(source: Path | io.BytesIO, where: _Where) -> zipfile.ZipFile:
         return zipfile.ZipFile(source, mode="r")
     except (*_ZIP_ERRORS, ValueError) as exc:
         size = source.stat().st_size if isinstance(source, Path) else len(source.getbuffer())
-        what = "is empty (0 bytes)" if size == 0 else f"is not a readable zip archive ({exc})"
-        raise where.error(f"{what}; a JPK archive is a zip file — is it truncated or corrupt?") from None
+        if size == 0:
+            raise where.error("is empty (0 bytes); a JPK archive is a zip file — is it truncated "
+                              "or corrupt?") from None
+        first = _first_member(source)
+        if first is None:
+            raise where.error(f"is not a readable zip archive ({exc}); a JPK archive is a zip "
+                              "file — is it truncated or corrupt?") from None
+        raise where.error(
+            f"is not a readable zip archive ({exc}): it starts as one (first member {first!r}) but "
+            f"its central directory, the member list at the end of a zip, is missing or damaged: "
+            f"the {size}-byte file is truncated or corrupt") from None
 
 
-def _read_member(zf: _Members, name: str, where: _Where) -> bytes:
+def _first_member(source: Path | io.BytesIO) -> str | None:
+    """Name in the first local header of a zip-like file, or None when it does not start as a zip."""
     try:
-        return zf.read(name)
+        if isinstance(source, Path):
+            with open(source, "rb") as handle:
+                head = handle.read(_LOCAL_HEADER.size + 256)
+        else:
+            head = bytes(source.getbuffer()[:_LOCAL_HEADER.size + 256])
+    except OSError:
+        return None
+    if len(head) < _LOCAL_HEADER.size or head[:4] != _LOCAL_SIGNATURE:
+        return None
+    _, name_length, _ = _LOCAL_HEADER.unpack(head[:_LOCAL_HEADER.size])
+    return head[_LOCAL_HEADER.size:_LOCAL_HEADER.size + name_length].decode("cp437")
+
+
+def _read_member(zf: _Members, name: str, where: _Where, limit: str) -> bytes:
+    """Member ``name``, refused before reading when its declared size exceeds the named limit.
+
+    ``limit`` is ``"MAX_HEADER_BYTES"`` or ``"MAX_MEMBER_BYTES"`` (of :mod:`viscoforce._limits`).
+    """
+    try:
+        declared = zf.size(name)
     except KeyError:
         raise where.at(name).error("missing from the archive") from None
+    check_effort(f"{where.at(name).place}: decompressing this member", declared,
+                 getattr(_limits, limit), unit="bytes", hint=_HINT.format(limit))
+    try:
+        return zf.read(name)
+    except RuntimeError as exc:  # zipfile: an encrypted member and no password
+        raise where.at(name).error(f"cannot be read ({exc}); encrypted archives are not "
+                                   "supported") from None
     except (*_ZIP_ERRORS, OSError) as exc:
         raise where.at(name).error(f"cannot be read ({exc}); the archive is truncated or corrupt") from None
+
+
+def _check_archive(where: _Where, total: int) -> None:
+    """Refuse an archive whose members decompress to more than MAX_ARCHIVE_BYTES in all."""
+    check_effort(f"{where.place}: decompressing the archive's members", total,
+                 _limits.MAX_ARCHIVE_BYTES, unit="bytes", hint=_HINT.format("MAX_ARCHIVE_BYTES"))
 
 
 def _read_props(zf: _Members, name: str, where: _Where,
                 blocks: dict[str, dict[str, str]] | None = None) -> dict[str, str]:
     """Parse header ``name``, resolving its shared-data references when ``blocks`` is given."""
-    return _parse_props(_read_member(zf, name, where), where.at(name), blocks)
+    return _parse_props(_read_member(zf, name, where, "MAX_HEADER_BYTES"), where.at(name), blocks)
 
 
 def _parse_props(data: bytes, where: _Where,
@@ -616,7 +738,7 @@ def _parse_props(data: bytes, where: _Where,
         raise where.error(str(exc)) from None
 
 
-def _scan(zf: zipfile.ZipFile, where: _Where, member: str | None) -> _Layout:
+def _scan(zf: _Members, where: _Where, member: str | None) -> _Layout:
     """Kind, headers and curve/segment directories of one archive (nothing is decoded)."""
     header = _read_props(zf, "header.properties", where)
     kind = _KINDS.get(header.get("type", ""))
@@ -645,19 +767,40 @@ def _contiguous(numbers: set[int], where: _Where) -> tuple[int, ...]:
     return ordered
 
 
-def _scan_zip(zf: zipfile.ZipFile, where: _Where) -> tuple[_Layout, ...]:
-    members = [n for n in zf.namelist()
+#: members of a JPK archive (without its header.properties, the sign of a damaged one)
+_JPK_PARTS = re.compile(r"^(?:index/\d+/)?(?:segments/\d+/|shared-data/header\.properties$)")
+
+
+def _scan_zip(zf: _Members, where: _Where) -> tuple[_Layout, ...]:
+    names = zf.namelist()
+    members = [n for n in names
                if n.lower().endswith(_JPK_SUFFIXES) and not n.startswith("__MACOSX/")]
     if not members:
+        parts = [n for n in names if _JPK_PARTS.match(n)]
+        if parts:
+            raise where.at("header.properties").error(
+                f"missing from the archive: it holds {len(parts)} of a JPK archive's members "
+                f"({', '.join(parts[:3])}{', ...' if len(parts) > 3 else ''}) but not the header "
+                "that says what it is (type, segment count); the archive is damaged or incomplete")
         raise where.error("neither a JPK archive (no header.properties) nor a zip of "
                           ".jpk-force / .jpk-force-map archives (no such member)")
+    total = sum(zf.size(m) for m in members)
+    _check_archive(where, total)
     layouts = []
     for member in members:
         inner_where = _Where(f"{where.label}!{member}")
-        with _open_zip(io.BytesIO(_read_member(zf, member, where)), inner_where) as inner:
-            if "header.properties" not in inner.namelist():
-                raise inner_where.error("not a JPK archive (no header.properties)")
+        data = _read_member(zf, member, where, "MAX_MEMBER_BYTES")
+        with _open_zip(io.BytesIO(data), inner_where) as inner_zip:
+            index = _MemberIndex.of(inner_zip)
+        if "header.properties" not in index.rows:
+            raise inner_where.error("not a JPK archive (no header.properties)")
+        total += int(index.size.sum())
+        _check_archive(where, total)
+        inner = _IndexedZip(data, index, inner_where)
+        try:
             layouts.append(_scan(inner, inner_where, member))
+        finally:
+            inner.close()
     return tuple(layouts)
 
 
@@ -681,13 +824,16 @@ def _read_curve(zf: _Members, layout: _Layout, local: int, index: int,
     with _located(where := layout.where.at(f"{curve_dir}header.properties")):
         count = number(header, _COUNT, int, default=str(len(numbers)))
         x, y = (number(header, _POSITION + axis, default="nan") for axis in "xy")
+        for axis, value in zip("xy", (x, y), strict=True):
+            if math.isinf(value):
+                raise HeaderError(f"'{_POSITION}{axis}' = {value} is not finite")
     if count != len(numbers):
         raise where.error(f"{_COUNT}={count} but the archive holds {len(numbers)} segment(s): "
                           "truncated or incomplete archive")
     segments: list[JPKSegment] = []
     start = 0.0
     for s in numbers:
-        segments.append(_read_segment(zf, layout, f"{curve_dir}segments/{s}/", s, start, only))
+        segments.append(_read_segment(zf, layout, f"{curve_dir}segments/{s}/", s, start, only, index))
         start += segments[-1].duration
     with_deflection = [seg for seg in segments if "vDeflection" in seg.channels]
     if not with_deflection:
@@ -725,7 +871,6 @@ class _SegmentPlan:
     channels: tuple[_ChannelPlan, ...]
     modulation: JPKModulation | None
     baseline: float | None
-    offsets: FloatArray                            # i * duration / num_points [s]
 
 
 def _segment_plan(props: dict[str, str]) -> _SegmentPlan:
@@ -734,13 +879,19 @@ def _segment_plan(props: dict[str, str]) -> _SegmentPlan:
     duration = number(props, _SEG + "duration")
     if n < 0 or not duration >= 0:
         raise HeaderError(f"num-points={n}, duration={duration}: must be >= 0")
+    if not math.isfinite(duration):
+        raise HeaderError(f"'{_SEG}duration' = {duration} s is not finite")
+    names = get(props, "channels.list").split()
+    if "vDeflection" in names:
+        _calibration_values(props)  # first: a bad spring constant is named as one
     channels = []
-    for name in get(props, "channels.list").split():
+    for name in names:
         dtype, scaling = _encoding(props, name)
         pre = f"channel.{name}."
         outputs = []
         for out, slot, unit in _outputs(props, name):
             steps = tuple(conversion_steps(props, name, slot))
+            _require_finite_steps(props, name, slot, steps)
             found = slot_unit(props, name, slot)
             if unit is not None and found != unit:
                 raise HeaderError(f"channel '{name}' slot '{slot}' is in {found!r}, "
@@ -749,18 +900,42 @@ def _segment_plan(props: dict[str, str]) -> _SegmentPlan:
         channels.append(_ChannelPlan(name=name, dtype=dtype, file=get(props, pre + "data.file.name"),
                                      declared=props.get(pre + "data.num-points"), scaling=scaling,
                                      outputs=tuple(outputs)))
+    if "vDeflection" in names:
+        _calibration(props)  # the chain force <- distance <- base
     return _SegmentPlan(props=props, num_points=n, duration=duration,
                         style=get(props, _SEG + "settings.style"), type=get(props, _SETTINGS + "type"),
                         channels=tuple(channels), modulation=_modulation(props),
-                        baseline=_baseline(props),
-                        offsets=np.arange(n) * (duration / max(n, 1)))
+                        baseline=_baseline(props))
+
+
+def _require_finite_steps(props: dict[str, str], name: str, slot: str,
+                          steps: tuple[tuple[float, float], ...]) -> None:
+    """Refuse a non-finite or zero multiplier, or a non-finite offset, on ``slot``'s chain."""
+    if all(math.isfinite(m) and m != 0 and math.isfinite(o) for m, o in steps):
+        return
+    conv = f"channel.{name}.conversion-set."
+    chain, current = [], slot  # the slots in the order conversion_steps returns their steps
+    while current != props[conv + "conversions.base"]:
+        chain.append(current)
+        current = props[f"{conv}conversion.{current}.base-calibration-slot"]
+    for current, (multiplier, offset) in zip(reversed(chain), steps, strict=True):
+        key = f"{conv}conversion.{current}.scaling."
+        _require_scaling(key, multiplier, offset)
+
+
+def _require_scaling(key: str, multiplier: float, offset: float) -> None:
+    """Refuse ``<key>multiplier`` when not finite or zero and ``<key>offset`` when not finite."""
+    if not (math.isfinite(multiplier) and multiplier != 0):
+        raise HeaderError(f"'{key}multiplier' = {multiplier!r} must be finite and non-zero")
+    if not math.isfinite(offset):
+        raise HeaderError(f"'{key}offset' = {offset!r} must be finite")
 
 
 def _plan_of(zf: _Members, layout: _Layout, seg_dir: str) -> _SegmentPlan:
     """The plan of segment ``seg_dir``'s header (kept by the reader, see the module docstring)."""
     name = f"{seg_dir}segment-header.properties"
-    data = _read_member(zf, name, layout.where)
-    plans = zf.plans if isinstance(zf, _IndexedZip) else {}
+    data = _read_member(zf, name, layout.where, "MAX_HEADER_BYTES")
+    plans = zf.plans
     plan = plans.get(data)
     if plan is None:
         props = _parse_props(data, layout.where.at(name), layout.blocks)
@@ -773,26 +948,75 @@ def _plan_of(zf: _Members, layout: _Layout, seg_dir: str) -> _SegmentPlan:
 
 
 def _read_segment(zf: _Members, layout: _Layout, seg_dir: str, seg_index: int,
-                  start_time: float, only: frozenset[str] | None = None) -> JPKSegment:
-    """Decode a segment: every channel, or the file channels named in ``only``."""
+                  start_time: float, only: frozenset[str] | None = None, curve: int = 0
+                  ) -> JPKSegment:
+    """Decode a segment: every channel, or the file channels named in ``only``.
+
+    ``num-points`` is checked against each channel's declared member size, and the arrays it
+    implies against MAX_MEMORY_BYTES, before anything is allocated or decompressed.
+    """
     plan = _plan_of(zf, layout, seg_dir)
     n = plan.num_points
+    wanted = [c for c in plan.channels if only is None or c.name in only]
+    for channel in wanted:
+        _check_declared(zf, channel, seg_dir, n, layout.where)
+    arrays = 2 + sum(len(channel.outputs) for channel in wanted)  # + time and the raw base
+    check_effort(f"{layout.where.at(seg_dir + 'segment-header.properties').place}: decoding "
+                 f"segment {seg_index} (num-points={n}, {arrays} arrays of float64)",
+                 8.0 * n * arrays, _limits.MAX_MEMORY_BYTES, unit="bytes",
+                 hint="the segment is larger than one read may hold; raise "
+                      "viscoforce._limits.MAX_MEMORY_BYTES")
     channels: dict[str, FloatArray] = {}
     units: dict[str, str] = {}
-    for channel in plan.channels:
-        if only is not None and channel.name not in only:
-            continue
-        base = _decode_raw(zf, channel, seg_dir, n, layout.where)
-        for out, steps, unit in channel.outputs:
-            values = base
-            for multiplier, offset in steps:  # as _properties.convert, step by step
-                values = values * multiplier + offset
-            channels[out] = values
-            units[out] = unit
+    with np.errstate(over="ignore", invalid="ignore"):  # non-finite results are refused below
+        for channel in wanted:
+            _decode_channel(zf, layout.where, channel, seg_dir, n, curve, seg_index, channels,
+                            units)
+    time = np.arange(n, dtype=np.float64)  # start + i * duration / n, made after the checks above
+    time *= plan.duration / max(n, 1)
+    time += start_time
     return JPKSegment(index=seg_index, style=plan.style, type=plan.type, start_time=start_time,
                       duration=plan.duration, num_points=n, channels=channels, units=units,
-                      time=start_time + plan.offsets, modulation=plan.modulation,
+                      time=time, modulation=plan.modulation,
                       baseline=plan.baseline, settings=dict(plan.props))
+
+
+def _decode_channel(zf: _Members, where: _Where, channel: _ChannelPlan, seg_dir: str, n: int,
+                    curve: int, seg_index: int, channels: dict[str, FloatArray],
+                    units: dict[str, str]) -> None:
+    """Decode ``channel`` into ``channels`` / ``units``, one entry per output slot."""
+    base = _decode_raw(zf, channel, seg_dir, n, where)
+    aliased = False  # an output that is the base itself: later outputs must not scale it in place
+    for k, (out, steps, unit) in enumerate(channel.outputs):
+        if not steps:
+            values, aliased = base, True
+        else:  # as _properties.convert, step by step; in place where nothing else needs it
+            multiplier, offset = steps[0]
+            last = k == len(channel.outputs) - 1 and not aliased
+            values = base if last else base * multiplier
+            if last:
+                values *= multiplier
+            values += offset
+            for multiplier, offset in steps[1:]:
+                values *= multiplier
+                values += offset
+        if channel.name in _SI_SLOTS:
+            _require_finite_samples(values, where.at(seg_dir + channel.file), curve,
+                                    seg_index, out)
+        channels[out] = values
+        units[out] = unit
+
+
+def _require_finite_samples(values: FloatArray, where: _Where, curve: int, segment: int,
+                            channel: str) -> None:
+    """Refuse NaN / inf samples of a calibrated channel, naming curve, segment and channel."""
+    if np.isfinite(values).all():
+        return
+    bad = np.flatnonzero(~np.isfinite(values))
+    raise where.error(
+        f"curve {curve}, segment {segment}, channel '{channel}': {bad.size} of {values.size} "
+        f"samples are not finite (first: sample {bad[0]} = {float(values[bad[0]])}); the raw data or "
+        "the header's calibration (encoder and slot multipliers) is corrupt")
 
 
 def _encoding(props: dict[str, str], name: str) -> tuple[str, tuple[float, float] | None]:
@@ -807,8 +1031,9 @@ def _encoding(props: dict[str, str], name: str) -> tuple[str, tuple[float, float
             raise HeaderError(f"{enc}type={props[enc + 'type']!r} is an unknown encoder "
                               f"(known: {', '.join(_ENCODERS)})")
         require_linear(props, enc + "scaling.")
-        return dtype, (number(props, enc + "scaling.multiplier"),
-                       number(props, enc + "scaling.offset"))
+        scaling = (number(props, enc + "scaling.multiplier"), number(props, enc + "scaling.offset"))
+        _require_scaling(enc + "scaling.", *scaling)
+        return dtype, scaling
     data_type = props.get(pre + "type", props.get(pre + "data.type", ""))
     dtype = _UNENCODED.get(data_type)
     if dtype is None:
@@ -817,23 +1042,41 @@ def _encoding(props: dict[str, str], name: str) -> tuple[str, tuple[float, float
     return dtype, None
 
 
+def _check_declared(zf: _Members, channel: _ChannelPlan, seg_dir: str, n: int,
+                    where: _Where) -> None:
+    """Refuse a channel member whose declared size is not ``n`` samples, before reading it."""
+    member = seg_dir + channel.file
+    try:
+        size = zf.size(member)
+    except KeyError:
+        raise where.at(member).error("missing from the archive") from None
+    _require_samples(size, channel, n, where.at(member))
+
+
+def _require_samples(size: int, channel: _ChannelPlan, n: int, where: _Where) -> None:
+    """Refuse ``size`` bytes of ``channel`` when they are not ``n`` samples (or disagree)."""
+    itemsize = np.dtype(channel.dtype).itemsize
+    declared = channel.declared
+    if size != n * itemsize or (declared is not None and declared.strip() != str(n)):
+        raise where.error(
+            f"holds {size} bytes = {size / itemsize:g} samples of {channel.dtype}, but the "
+            f"segment header says num-points={n} (channel num-points={declared}), i.e. "
+            f"{n * itemsize} bytes: truncated or inconsistent")
+
+
 def _decode_raw(zf: _Members, channel: _ChannelPlan, seg_dir: str, n: int,
                 where: _Where) -> FloatArray:
     """Samples of ``channel`` in its base slot (raw * encoder multiplier + offset)."""
     member = seg_dir + channel.file
-    data = _read_member(zf, member, where)
-    size = np.dtype(channel.dtype).itemsize
-    declared = channel.declared
-    if len(data) != n * size or (declared is not None and declared.strip() != str(n)):
-        raise where.at(member).error(
-            f"holds {len(data)} bytes = {len(data) / size:g} samples of {channel.dtype}, but the "
-            f"segment header says num-points={n} (channel num-points={declared}): truncated or "
-            "inconsistent")
+    data = _read_member(zf, member, where, "MAX_MEMBER_BYTES")
+    _require_samples(len(data), channel, n, where.at(member))
     values = np.frombuffer(data, dtype=channel.dtype).astype(np.float64)
-    if channel.scaling is None:
-        return values
-    multiplier, offset = channel.scaling
-    return values * multiplier + offset
+    del data
+    if channel.scaling is not None:
+        multiplier, offset = channel.scaling
+        values *= multiplier
+        values += offset
+    return values
 
 
 def _outputs(props: dict[str, str], name: str) -> tuple[tuple[str, str, str | None], ...]:
@@ -854,8 +1097,15 @@ def _modulation(props: dict[str, str]) -> JPKModulation | None:
             raise HeaderError(f"modulation segment ({seg_type}) without {_SETTINGS}frequency")
         return None
     phase = None if _SETTINGS + "start-phase" not in props else number(props, _SETTINGS + "start-phase")
-    return JPKModulation(frequency=number(props, _SETTINGS + "frequency"),
-                         amplitude=number(props, _SETTINGS + "amplitude"), start_phase=phase)
+    frequency = number(props, _SETTINGS + "frequency")
+    amplitude = number(props, _SETTINGS + "amplitude")
+    if not (math.isfinite(frequency) and frequency > 0):
+        raise HeaderError(f"'{_SETTINGS}frequency' = {frequency!r} Hz must be finite and > 0")
+    if not (math.isfinite(amplitude) and amplitude >= 0):
+        raise HeaderError(f"'{_SETTINGS}amplitude' = {amplitude!r} m must be finite and >= 0")
+    if phase is not None and not math.isfinite(phase):
+        raise HeaderError(f"'{_SETTINGS}start-phase' = {phase!r} is not finite")
+    return JPKModulation(frequency=frequency, amplitude=amplitude, start_phase=phase)
 
 
 def _baseline(props: dict[str, str]) -> float | None:
@@ -864,11 +1114,19 @@ def _baseline(props: dict[str, str]) -> float | None:
     if (key not in props or props.get(_SEG + "baseline.measured") == "false"
             or "vDeflection" not in props.get("channels.list", "").split()):
         return None
-    return float(convert(props, "vDeflection", "force", np.array([number(props, key)]))[0])
+    volts = number(props, key)
+    force = float(convert(props, "vDeflection", "force", np.array([volts]))[0])
+    if not math.isfinite(force):
+        raise HeaderError(f"'{key}' = {volts!r} V gives a non-finite force ({force!r} N)")
+    return force
 
 
 def _calibration(props: dict[str, str]) -> tuple[float, float]:
-    """Spring constant [N/m] and sensitivity [m/V] of a segment header with vDeflection."""
+    """Spring constant [N/m] and sensitivity [m/V] of a segment header with vDeflection.
+
+    Each is refused (HeaderError naming the key, the value and the range) outside
+    :data:`~viscoforce._limits.SPRING_CONSTANT_RANGE` / :data:`~viscoforce._limits.SENSITIVITY_RANGE`.
+    """
     conv = "channel.vDeflection.conversion-set."
     base = get(props, conv + "conversions.base")
     chain = (props.get(conv + "conversion.force.base-calibration-slot"),
@@ -876,8 +1134,28 @@ def _calibration(props: dict[str, str]) -> tuple[float, float]:
     if chain != ("distance", base):
         raise HeaderError(f"vDeflection slots force <- {chain[0]}, distance <- {chain[1]}: "
                           f"expected force <- distance <- {base}")
-    return (number(props, conv + "conversion.force.scaling.multiplier"),
-            number(props, conv + "conversion.distance.scaling.multiplier"))
+    values = _calibration_values(props)
+    return values["force"], values["distance"]
+
+
+def _calibration_values(props: dict[str, str]) -> dict[str, float]:
+    """The vDeflection ``force`` and ``distance`` multipliers the header gives, each checked.
+
+    HeaderError naming the key, the value and the plausible range when one is outside it.
+    """
+    values = {}
+    for what, slot, unit, (low, high) in (
+            ("spring constant", "force", "N/m", _limits.SPRING_CONSTANT_RANGE),
+            ("deflection sensitivity", "distance", "m/V", _limits.SENSITIVITY_RANGE)):
+        key = f"channel.vDeflection.conversion-set.conversion.{slot}.scaling.multiplier"
+        if key not in props:
+            continue  # the calibration chain says what is missing
+        value = number(props, key)
+        if not low <= value <= high:  # also refuses NaN
+            raise HeaderError(f"{what} '{key}' = {value!r} {unit} is outside the plausible range "
+                              f"[{low:g}, {high:g}] {unit}: a corrupt header")
+        values[slot] = value
+    return values
 
 
 def _grid(header: dict[str, str]) -> JPKGrid | None:
@@ -886,5 +1164,8 @@ def _grid(header: dict[str, str]) -> JPKGrid | None:
     if (unit := header.get(_GRID + "unit.unit", "m")) != "m":
         raise HeaderError(f"{_GRID}unit.unit={unit!r}, expected 'm'")
     lengths = {key: number(header, _GRID + key) for key in ("ulength", "vlength", "xcenter", "ycenter")}
+    for key, value in lengths.items():
+        if not math.isfinite(value):
+            raise HeaderError(f"'{_GRID}{key}' = {value!r} m is not finite")
     return JPKGrid(ilength=number(header, _GRID + "ilength", int),
                    jlength=number(header, _GRID + "jlength", int), **lengths)
