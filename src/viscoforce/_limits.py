@@ -70,3 +70,14 @@ def check_effort(what: str, estimate: float, limit: float, *, unit: str = "",
         if hint:
             message += f" ({hint})"
         raise EffortError(message, estimate=float(estimate), limit=float(limit))
+
+
+# Text tables (CSV/TSV: curves, spectra, drive traces, Prony tables): the size is checked before
+# reading, the rows while reading (numeric columns parse straight to float64).
+#: Largest text table read [bytes]: a 1e7-row curves table (MAX_CSV_ROWS) of time, force and
+#: height at 9 significant digits is ~0.3 GB; a 1e6-row one (a long measurement) ~30 MB.
+MAX_CSV_BYTES = 1_000_000_000
+#: Most data rows of one text table (the samples one result may hold, MAX_SAMPLES).
+MAX_CSV_ROWS = MAX_SAMPLES
+#: Most rows of a measured drive trace: each sample is at least one time step of simulate.
+MAX_TRACE_ROWS = MAX_STEPS

@@ -43,6 +43,7 @@ import xarray as xr
 
 from viscoforce.exceptions import InstrumentFormatError, ParameterError
 from viscoforce.io.jpk import JPKArchive, JPKCurve, JPKSegment
+from viscoforce.io.quality import PHYSICAL_RANGES, first_beyond, range_text
 from viscoforce.schema import make_curves, validate_curves
 
 __all__ = ["HEIGHT_CHANNELS", "jpk_to_curves", "segment_name"]
@@ -114,7 +115,8 @@ def _default_height(units: list[list[dict[str, str]]]) -> str:
         f"{', '.join(HEIGHT_CHANNELS)})")
 
 
-def _require(seg: JPKSegment, curve: JPKCurve, name: str, unit: str) -> np.ndarray:
+def _require(seg: JPKSegment, curve: JPKCurve, name: str, unit: str, path: Any = None
+             ) -> np.ndarray:
     if name not in seg.channels:
         raise InstrumentFormatError(
             f"curve {curve.index} segment {seg.index} has no {name!r} channel "
@@ -123,7 +125,30 @@ def _require(seg: JPKSegment, curve: JPKCurve, name: str, unit: str) -> np.ndarr
         raise InstrumentFormatError(
             f"curve {curve.index} segment {seg.index}: {name!r} is in {seg.units[name]!r}, not "
             f"{unit!r}: the file lacks its calibration")
-    return np.asarray(seg.channels[name], dtype=float)
+    values = np.asarray(seg.channels[name], dtype=float)
+    _refuse_bad_samples(values, seg, curve, name, path)
+    return values
+
+
+def _refuse_bad_samples(values: np.ndarray, seg: JPKSegment, curve: JPKCurve, name: str,
+                        path: Any) -> None:
+    """Refuse NaN, inf or physically impossible samples, naming file, curve, segment, channel."""
+    where = (f"{path}: " if path is not None else "") + (
+        f"curve {curve.index}" + (f" ({curve.source.rstrip('/')})" if curve.source else "")
+        + f" segment {seg.index} ({seg.style or seg.type or 'unnamed'}) channel {name!r}")
+    bad = ~np.isfinite(values)
+    if np.any(bad):
+        i = int(np.flatnonzero(bad)[0])
+        raise InstrumentFormatError(
+            f"{where}: sample {i} of {values.size} is {float(values[i])!r} ({int(bad.sum())} "
+            "non-finite samples); the file's data are damaged")
+    key = "deflection" if name == "vDeflection" else "height" if name in HEIGHT_CHANNELS else name
+    i = first_beyond(key, values) if key in PHYSICAL_RANGES else None
+    if i is not None:
+        raise InstrumentFormatError(
+            f"{where}: sample {i} of {values.size} is {float(values[i]):g} "
+            f"{PHYSICAL_RANGES[key][2]}, beyond the physical range {range_text(key)}; the file's "
+            "calibration (spring constant, sensitivity, scaling) or its data are damaged")
 
 
 def _nan(value: float | None) -> float:
@@ -207,9 +232,9 @@ def _read_block(archive: JPKArchive, curves: int | Iterable[int] | None,
         n_curve = 0
         for seg in curve.segments:
             n = int(seg.num_points)
-            force = _require(seg, curve, "force", "N")
-            defl = _require(seg, curve, "vDeflection", "m")
-            h = _require(seg, curve, height, "m")
+            force = _require(seg, curve, "force", "N", archive.path)
+            defl = _require(seg, curve, "vDeflection", "m", archive.path)
+            h = _require(seg, curve, height, "m", archive.path)
             if not force.size == defl.size == h.size == n:
                 raise InstrumentFormatError(
                     f"curve {curve.index} segment {seg.index}: channel lengths force {force.size}, "

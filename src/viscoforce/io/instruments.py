@@ -27,7 +27,12 @@ name              kind      what
 
 :func:`load_instrument` detects the format by CONTENT (zip members, header line), never by the
 extension alone, reads the file read-only, validates the result against the schema and records
-``attrs["source"]`` (the format name) and ``attrs["file"]``. Every error names the file.
+``attrs["source"]`` (the format name) and ``attrs["file"]``. Every error names the file. A file
+no format recognises is refused with the closest format and its first failure, e.g. "a JPK
+archive (first member 'header.properties') that is truncated or damaged", "a JPK archive without
+header.properties", "UTF-16 text (a table with the header ...): save it as UTF-8", "looks like a
+CSV spectrum (header ...) but it has no phase column 'phase (deg)'"; the list of format names
+follows only when the guess is weak (prose, binary content, a zip of other files).
 
 Adding a format (e.g. an ``afmformats``-based entry for Asylum ``.ibw``, AFM Workshop, Optics11
 Chiaro, NT-MDT text):
@@ -65,7 +70,13 @@ from viscoforce.exceptions import (
 )
 from viscoforce.io.afm import AFMFORMATS_EXTENSIONS, detect_afmformats, read_afmformats
 from viscoforce.io.bruker import detect_nanoscope, detect_uff, read_uff, refuse_nanoscope
-from viscoforce.io.csv_formats import header_names, read_curves_csv, read_spectrum_csv
+from viscoforce.io.csv_formats import (
+    encoding_problem,
+    header_names,
+    header_problem,
+    read_curves_csv,
+    read_spectrum_csv,
+)
 from viscoforce.io.curves import jpk_to_curves
 from viscoforce.io.jpk import read_jpk
 from viscoforce.schema import validate_curves, validate_spectrum
@@ -211,8 +222,76 @@ FORMATS: tuple[InstrumentFormat, ...] = (
 
 
 def _known() -> str:
-    return "; ".join(f"{f.name} ({f.description}; usually {', '.join(f.extensions)})"
-                     for f in FORMATS)
+    """The short last line of a detection failure (the full list is in the module docstring)."""
+    names = [f"{f.name} ({f.extensions[0]})" if f.name == "jpk" else f.name for f in FORMATS]
+    return f"known formats: {', '.join(names)}"
+
+
+#: Diagnoses sure of the format (the list of known formats would add nothing to them).
+_SURE = ("looks like ", "a JPK archive", "UTF-16 text (a table", "a header '")
+
+
+_HDF5_MAGIC = (b"\x89HDF\r\n\x1a\n", b"CDF\x01", b"CDF\x02")
+#: Members only a JPK archive has (its curves, its shared headers, a map's index).
+_JPK_PARTS = ("segments/", "shared-data/", "index/")
+
+
+def _jpk_member(name: str) -> bool:
+    return name.startswith(_JPK_PARTS) or "/segments/" in name or name.endswith(
+        "segment-header.properties")
+
+
+def _first_member(head: bytes) -> str | None:
+    """Name of the first member from a zip's first local header (readable in a truncated zip)."""
+    if head[:4] != b"PK\x03\x04" or len(head) < 30:
+        return None
+    size = int.from_bytes(head[26:28], "little")
+    name = head[30:30 + size]
+    return name.decode("utf-8", errors="replace") if name and len(name) == size else None
+
+
+def _short(name: str, width: int = 40) -> str:
+    return name if len(name) <= width else "…" + name[-(width - 1):]
+
+
+def _zip_problem(path: Path, head: bytes) -> str:
+    try:
+        with zipfile.ZipFile(path, mode="r") as zf:
+            names = zf.namelist()
+    except (zipfile.BadZipFile, OSError, ValueError, EOFError) as exc:
+        first = _first_member(head)
+        what = "a JPK archive" if first and (_jpk_member(first) or first.endswith(
+            ("header.properties", *_JPK_SUFFIXES))) else "a zip archive"
+        seen = f" (first member '{_short(first)}')" if first else ""
+        return f"{what}{seen} that is truncated or damaged ({exc}); copy it again"
+    real = [n for n in names if not n.startswith("__MACOSX/") and not n.endswith("/")]
+    if not real:
+        return "an empty zip archive"
+    jpk = sorted((n for n in real if _jpk_member(n)), key=lambda n: "segments/" not in n)
+    if jpk and "header.properties" not in names:
+        return (f"a JPK archive without header.properties ({len(real)} members, e.g. "
+                f"'{_short(jpk[0])}'): incomplete; export it again")
+    listing = ", ".join(f"'{_short(n, 30)}'" for n in real[:3])
+    more = f" and {len(real) - 3} more" if len(real) > 3 else ""
+    return (f"a zip archive without .jpk-force members or files afmformats reads (members: "
+            f"{listing}{more})")
+
+
+def _closest(path: Path) -> str:
+    """The closest format of a file no format recognises, and its first failure (short)."""
+    head = _head(path)
+    if head[:2] == b"PK":
+        return _zip_problem(path, head)
+    if head.startswith(_HDF5_MAGIC):
+        return "a netCDF/HDF5 file (fit and bode read the netCDF files viscoforce writes as *.nc)"
+    problem = encoding_problem(head)
+    if problem and problem.startswith("binary"):
+        return (f"binary content (first bytes {head[:8].hex(' ')}), neither a text table nor a "
+                "zip archive")
+    if problem:
+        return problem
+    text = _text_head(path)
+    return header_problem(text) if text is not None else "unreadable text"
 
 
 def get_format(name: str | InstrumentFormat) -> InstrumentFormat:
@@ -251,17 +330,18 @@ def detect_format(path: str | Path) -> InstrumentFormat:
     Raises
     ------
     InstrumentFormatError
-        If the file is missing or empty, or no format recognises it (the message lists the
-        known formats).
+        If the file is missing or empty, or no format recognises it: the message names the
+        closest format and its first failure (a truncated zip, a JPK archive without
+        header.properties, UTF-16 text, a header cell without a unit, a missing column...), then
+        the known format names, in under 300 characters besides the path.
     """
     path = _require_file(path)
     for fmt in FORMATS:
         if fmt.detect(path):
             return fmt
-    raise InstrumentFormatError(
-        f"{path}: not a known instrument format (content not recognised; a CSV needs a "
-        f"'name (unit)' header, e.g. 'time (s),force (nN),height (nm)' or 'frequency (Hz),"
-        f"stiffness (N/m),phase (deg)'); known formats: {_known()}; give format= to force one")
+    closest = _closest(path)
+    tail = "" if closest.startswith(_SURE) else f"; {_known()}"
+    raise InstrumentFormatError(f"{path}: not a known instrument format: {closest}{tail}")
 
 
 def _named(exc: ViscoforceError, path: Path) -> ViscoforceError:

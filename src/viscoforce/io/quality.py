@@ -11,20 +11,89 @@ what can remain, :data:`PHASE_REMAINS`) and the ``quality_summary`` attr. The sp
 Placement: pure NumPy on top of :mod:`viscoforce.schema` (no pandas), so that
 :mod:`viscoforce.experiments` may import it under the "pandas only in io" contract; it belongs
 beside :func:`viscoforce.schema.phase_quality` and can move there.
+
+:data:`PHYSICAL_RANGES` bounds every measured quantity the readers convert to SI (a value beyond
+them is no measurement: a wrong unit in a header or a damaged file, and its square overflows
+downstream); :func:`first_beyond` finds the first such value and :func:`range_text` states the
+range in the readers' refusals.
 """
 
 from __future__ import annotations
+
+import math
 
 import numpy as np
 from numpy.typing import ArrayLike
 
 from viscoforce.schema import QUALITY_FLAGS, phase_quality
 
-__all__ = ["LOW_SIGNAL_RATIO", "PHASE_REMAINS", "PIEZO_CHANNELS", "SENSOR_CHANNELS", "phase_basis",
-           "quality_notes", "spectrum_quality"]
+__all__ = ["LOW_SIGNAL_RATIO", "PHASE_REMAINS", "PHYSICAL_RANGES", "PIEZO_CHANNELS",
+           "SENSOR_CHANNELS", "first_beyond", "phase_basis", "quality_notes", "range_text",
+           "spectrum_quality"]
+
+_METRE = (-1.0, 1.0, "m")  # no piezo, stage or cantilever moves a metre
+#: Physical range ``(lowest, highest, SI unit)`` of each measured quantity, by its column or
+#: channel name. Readers refuse a value beyond it naming the column (channel), the row (sample)
+#: and this range; a lowest bound of 0 means "> 0" (checked by each reader with its own message).
+#: The bounds are far beyond any AFM, colloid-probe or surface-force measurement and far below
+#: where the fits' squares overflow (1e308 is refused, not carried to an inf downstream).
+PHYSICAL_RANGES: dict[str, tuple[float, float, str]] = {
+    "frequency": (0.0, 1e9, "Hz"),  # no mechanical drive of a probe reaches 1 GHz
+    "omega": (0.0, 2e9 * math.pi, "rad/s"),
+    "stiffness": (0.0, 1e10, "N/m"),  # E*L of a 5 cm steel cube; AFM and SFA contacts < 1e8 N/m
+    "phase": (-360.0, 360.0, "deg"),
+    "amplitude": (0.0, 1e12, "1"),  # |F1| / mean force; the stiffness it gives is bounded too
+    "force_amplitude": (0.0, 1e3, "N"),  # a kilonewton: beyond any AFM or SFA load
+    "mean_force": (-1e3, 1e3, "N"),
+    "force": (-1e3, 1e3, "N"),
+    "drive_amplitude": (0.0, 1.0, "m"),
+    "mean_indentation": _METRE, "height": _METRE, "position": _METRE, "z": _METRE,
+    "deflection": _METRE, "vDeflection": _METRE, "tip_position": _METRE, "x": _METRE,
+    "y": _METRE,
+    "time": (-1e10, 1e10, "s"),  # 300 years: absolute (Unix) time stamps fit too
+    "modulus": (0.0, 1e13, "Pa"),  # diamond's Young modulus is 1.2e12 Pa
+    "tau": (0.0, 1e10, "s"),
+    "spring_constant": (0.0, 1e3, "N/m"),  # the stiffest cantilevers are ~1e2 N/m
+    "sensitivity": (0.0, 1e-3, "m/V"),  # deflection sensitivities are 1e-8 to 1e-6 m/V
+}
+
+
+def _bounds(name: str) -> tuple[float, float, str]:
+    base = name.removesuffix("_stderr")
+    low, high, unit = PHYSICAL_RANGES[base]
+    if base != name:  # a standard error: >= 0, at most the quantity's largest magnitude
+        return 0.0, max(abs(low), abs(high)), unit
+    return low, high, unit
+
+
+def range_text(name: str) -> str:
+    """The allowed range of ``name`` (a key of :data:`PHYSICAL_RANGES`, or ``<key>_stderr``).
+
+    E.g. ``"0 < stiffness <= 1e+10 N/m"``, ``"-1000 <= force <= 1000 N"``.
+    """
+    low, high, unit = _bounds(name)
+    opening = "<=" if low < 0 or name.endswith("_stderr") else "<"
+    return f"{low:g} {opening} {name} <= {high:g} {unit}"
+
+
+def first_beyond(name: str, values: ArrayLike) -> int | None:
+    """Flat index of the first value whose magnitude exceeds the range of ``name``, else None.
+
+    Only the magnitude is checked (``|value| <= max(|lowest|, highest)``; NaN passes, inf does
+    not): signs and zeros are each reader's own checks, with their own messages.
+    """
+    low, high, _ = _bounds(name)
+    limit = max(abs(low), abs(high))
+    v = np.asarray(values, dtype=float).ravel()
+    with np.errstate(invalid="ignore"):
+        bad = np.abs(v) > limit
+    hits = np.flatnonzero(bad)
+    return int(hits[0]) if hits.size else None
 
 #: Least signal-to-noise of the stiffness: ``low_signal`` where stiffness < this × its stderr.
 LOW_SIGNAL_RATIO = 3.0
+#: Most frequencies listed per flag in ``quality_summary`` (the rest are counted).
+SUMMARY_FREQUENCIES = 20
 #: Height channels that are calibrated position sensors (JPK names; afmformats' "measured").
 SENSOR_CHANNELS = ("strainGaugeHeight", "measuredHeight", "capacitiveSensorHeight",
                    "height (measured)")
@@ -121,7 +190,8 @@ def quality_notes(quality: np.ndarray, phase: np.ndarray, frequency: np.ndarray,
     -------
     dict
         ``comment`` (for ``quality``) and ``summary``: per flag, the frequencies with flagged
-        points, how many, and their median phase.
+        points, how many, and their median phase (the first :data:`SUMMARY_FREQUENCIES`
+        frequencies, then how many more).
     """
     comment = (
         "phase_outside_passive_range: the phase as stored, after the corrections "
@@ -133,12 +203,16 @@ def quality_notes(quality: np.ndarray, phase: np.ndarray, frequency: np.ndarray,
     q = np.asarray(quality).reshape(-1, np.shape(quality)[-1])
     ph = np.broadcast_to(np.asarray(phase, dtype=float), np.shape(quality)).reshape(q.shape)
     parts = []
+    freq = np.asarray(frequency)
     for code, name in QUALITY_FLAGS.items():
         if code == 0:
             continue
-        hits = [f"{float(f):g} Hz ({int(m.sum())} of {m.size} points, median phase "
+        flagged = np.flatnonzero((q == code).any(axis=0))  # frequencies with a flagged point
+        hits = [f"{float(freq[j]):g} Hz ({int(m.sum())} of {m.size} points, median phase "
                 f"{_median(ph[m, j]):.1f} deg)"
-                for j, f in enumerate(np.asarray(frequency)) if (m := q[:, j] == code).any()]
+                for j in flagged[:SUMMARY_FREQUENCIES] if (m := q[:, j] == code).any()]
+        if flagged.size > SUMMARY_FREQUENCIES:
+            hits.append(f"and {flagged.size - SUMMARY_FREQUENCIES} more frequencies")
         if hits:
             parts.append(f"{name}: " + ", ".join(hits))
     return {"comment": comment, "summary": "; ".join(parts) or "no point flagged"}
