@@ -93,6 +93,7 @@ def sls_closed_form(t, e_inf, e1, rho, c):
     StandardLinearSolid(1e4, 1e3, 0.1),
     PronySeries.from_moduli([1e4, 5e3, 2e3, 1e3], [0.01, 0.1, 1.0]),
     PronySeries.from_moduli([3e9, 2e9, 1e9], [1e-3, 1.000001e-3]),  # nearly equal creep times
+    PronySeries.from_moduli([1e13, 1e6, 1e4, 1e3, 10.0], [1e-9, 1e-5, 1e-1, 1e3]),  # 12 decades
 ])
 def test_relaxation_from_creep_gives_the_material_complex_modulus(material):
     kernel = PronyRelaxation.from_material(material)

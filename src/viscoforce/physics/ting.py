@@ -116,6 +116,8 @@ __all__ = [
 DEFAULT_RTOL = 1e-6
 #: Largest relative spread of the sample spacing treated as a uniform grid (FFT, filters).
 UNIFORM_RTOL = 1e-6
+#: Newton steps (at most) on each relaxation rate of :func:`relaxation_from_creep`.
+SECULAR_STEPS = 100
 #: Order of the discretisation error assumed by :func:`ting_error` (Richardson factor 2^p − 1).
 ERROR_ORDER = 1.0
 
@@ -452,12 +454,35 @@ def relaxation_from_creep(glassy_compliance: float, delta_compliances: ArrayLike
     e_inf = 1.0 / (jg + float(np.sum(dj)))
     if dj.size == 0:
         return e_inf, np.empty(0), np.empty(0)
-    u = 1.0 / tau
-    v = np.sqrt(dj * u / jg)
-    rates = np.linalg.eigvalsh(np.diag(u) + np.outer(v, v))
-    moduli = np.array([1.0 / (x * float(np.sum(dj * u / (u - x) ** 2))) for x in rates])
-    order = np.argsort(rates)[::-1]  # ascending relaxation time
-    return e_inf, moduli[order], 1.0 / rates[order]
+    order = np.argsort(tau)[::-1]  # ascending creep rates u_i = 1/τ_i
+    u, dj = 1.0 / tau[order], dj[order]
+    w = dj * u / jg
+    # the k-th rate is u_k + s_k with s_k in (0, u_{k+1} − u_k) (the last: (0, Σ w)); start from
+    # the eigenvalues, then safeguarded Newton on the secular equation in s, whose differences
+    # u_i − u_k − s keep their relative accuracy over decades of rates
+    gaps = np.append(np.diff(u), float(np.sum(w)) * (1.0 + 1e-12))
+    apart = u[None, :] - u[:, None]  # (k, i): u_i − u_k
+    start = np.sort(np.linalg.eigvalsh(np.diag(u) + np.outer(np.sqrt(w), np.sqrt(w)))) - u
+    lo, hi = np.zeros(u.size), gaps.copy()
+    s = np.where((start > 0) & (start < gaps), start, 0.5 * gaps)
+    eye = np.eye(u.size, dtype=bool)
+    for _ in range(SECULAR_STEPS):
+        d = np.where(eye, -s[:, None], apart - s[:, None])  # u_i − x_k
+        f = 1.0 + np.sum(w / d, axis=1)
+        slope = np.sum(w / d**2, axis=1)
+        lo, hi = np.where(f < 0, s, lo), np.where(f < 0, hi, s)
+        step = s - f / slope
+        inside = (step > lo) & (step < hi)
+        new = np.where(inside, step, np.where(lo > 0, np.sqrt(lo * hi), 0.5 * hi))
+        done = np.abs(new - s) <= 4 * np.finfo(float).eps * new
+        s = new
+        if done.all():
+            break
+    d = np.where(eye, -s[:, None], apart - s[:, None])
+    rates = u + s
+    moduli = 1.0 / (rates * np.sum(dj * u / d**2, axis=1))
+    back = np.argsort(rates)[::-1]  # ascending relaxation time
+    return e_inf, moduli[back], 1.0 / rates[back]
 
 
 # ── the hereditary integral ───────────────────────────────────────────────────────────────────
