@@ -6,21 +6,23 @@ spectra (ω log-spaced over [1e1, 1e6] rad/s, 1 % complex noise from a fixed see
 the fit is weighted): the paper's 10 µm sphere and pressure law, SLS E0 = 1e10 Pa, E_inf = 1e9 Pa,
 τ = 1 ms; the two-mode material E0 = 1e10, E_1 = 3e9, E_inf = 1e9 Pa, τ = 0.1 ms and 3 ms.
 
-1. Single fits, ``fit_spectrum`` (lmfit), median wall time of ``--repeats`` runs (≥ 5; 2 with
-   --quick). The exact model's ``linearized_state`` cache is cleared before each timed run
-   ("cold": a new spectrum), and the warm-cache time is reported beside it. Cases: svda at
-   h̄0 = 2 nm; exact one-mode and two-mode at h̄0 = 2 nm (pre-contact) and −5 nm (contact).
+1. Single fits, ``fit_spectrum`` (lmfit), median wall time of ``--repeats`` runs (≥ 5; 1 with
+   --quick, and no warm-up call). The exact model's ``linearized_state`` cache is cleared before
+   each timed run ("cold": a new spectrum), and the warm-cache time is reported beside it. Cases:
+   svda at h̄0 = 2 nm; exact one-mode and two-mode at h̄0 = 2 nm (pre-contact) and −5 nm (contact).
    Beside each, a plain ``scipy.optimize.least_squares`` on the same weighted complex residual
    (real and imaginary parts stacked, the real part of ``FitData.weights`` on the real residual,
    the imaginary part on the imaginary one), from the same start (the model's ``guess``), in the
    same log10 parameters: MINPACK ``lm`` (unbounded, lmfit's ``leastsq`` algorithm) and ``trf``
-   (the guess's bounds). Reported: floor time, function evaluations, the relative difference of
-   the parameters to lmfit's, and every fit's relative error against the truth.
+   (the guess's bounds). Reported: floor time, function evaluations, the relative difference of the
+   parameters to lmfit's, and every fit's relative error against the truth.
 2. Where the time goes, for one cold fit per model (svda, exact one- and two-mode at 2 nm): the
    library's steps timed by wrapping them (reading the dataset, guess, model evaluations, lmfit
-   overhead, result dataset), uncertainties from cProfile, and a cProfile listing per case.
+   overhead, result dataset), uncertainties from cProfile, and a cProfile listing per case
+   (--quick: one fit, instrumented and profiled at once, so its split is inflated by cProfile).
 3. Maps, ``fit_map(..., scheduler=None)`` (a local cluster, 1 thread per worker): a 64×64 svda
    map on 1 and 2 workers (8×8 with --quick) and a 16×16 exact one-mode map on 2 workers (4×4).
+   With --quick the exact model's grid has twice the default spacing (a smoke run).
    The cluster start-up and teardown (LocalCluster + Client) are timed inside each fit_map run
    (``fitting.maps.cluster`` wrapped by a timing context manager) and are part of the total;
    both are reported. Memory: peak of the summed RSS of this process and its children (the
@@ -108,7 +110,10 @@ TARGETS = {"svda_fit_s": 20e-3, "exact_1mode_fit_s": 0.3, "exact_2mode_fit_s": 1
            "svda_map_s": 20.0, "svda_map_speedup": 1.6, "exact_map_s": 60.0,
            "map_memory_bytes": 2 ** 30, "svda_map_size": 64, "exact_map_size": 16,
            "map_workers": 2}
-REPEATS, QUICK_REPEATS = 7, 2
+REPEATS, QUICK_REPEATS = 7, 1
+#: --quick: the exact model's grid spacing × 2 (half the nodes; a smoke run, its times are not the
+#: default grid's)
+QUICK_GRID_FACTOR = 2.0
 SVDA_MAP, QUICK_SVDA_MAP = 64, 8
 EXACT_MAP, QUICK_EXACT_MAP = 16, 4
 SAMPLE_PERIOD = 0.02  # [s] RSS sampling
@@ -137,9 +142,14 @@ def spectrum(k: np.ndarray, mean_force: float, dims: tuple[str, ...] = ("omega",
                          source="simulation")
 
 
-def problem_at(position: float, material) -> vf.ContactProblem:
-    return vf.ContactProblem.create(sphere=Sphere(PAPER.R), surface_force=paper_pressure_law(),
-                                    material=material, deepest_position=position)
+def problem_at(position: float, material, grid_factor: float = 1.0) -> vf.ContactProblem:
+    """The paper's system on the default grid, or one with ``grid_factor`` × its mean spacing."""
+    kw = dict(sphere=Sphere(PAPER.R), surface_force=paper_pressure_law(), material=material,
+              deepest_position=position)
+    if grid_factor == 1.0:
+        return vf.ContactProblem.create(**kw)
+    grid = vf.ContactProblem.create(**kw).grid
+    return vf.ContactProblem.create(**kw, grid_spacing=grid_factor * grid.outer_radius / grid.size)
 
 
 def one_mode() -> StandardLinearSolid:
@@ -156,20 +166,20 @@ def svda_truth_k() -> np.ndarray:
                                   PAPER.debye_length)
 
 
-def cases(rng: np.random.Generator) -> list[dict]:
+def cases(rng: np.random.Generator, grid_factor: float = 1.0) -> list[dict]:
     """The single-fit cases: name, model, modes, fixed inputs, spectrum, truth."""
     out = [{"case": "svda", "model": "svda", "modes": 1, "position": H0_PRE,
             "fixed": dict(SVDA_FIXED), "ds": spectrum(noisy(svda_truth_k(), rng), 1e-7),
             "truth": {"E0": E0, "E_inf": E_INF, "tau": TAU}}]
     for label, h0 in (("2nm", H0_PRE), ("-5nm", H0_CONTACT)):
-        problem = problem_at(h0, one_mode())
+        problem = problem_at(h0, one_mode(), grid_factor)
         k, force = linear_stiffness(problem, h0, omega_grid())
         out.append({"case": f"exact1_{label}", "model": "exact", "modes": 1, "position": h0,
                     "fixed": {"problem": problem, "position": h0},
                     "ds": spectrum(noisy(k, rng), force),
                     "truth": {"E0": E0, "E_inf": E_INF, "tau": TAU}})
     for label, h0 in (("2nm", H0_PRE), ("-5nm", H0_CONTACT)):
-        problem = problem_at(h0, one_mode())  # the fit's problem: its material is not used
+        problem = problem_at(h0, one_mode(), grid_factor)  # its material is not used
         k, force = linear_stiffness(problem.with_material(two_mode()), h0, omega_grid())
         out.append({"case": f"exact2_{label}", "model": "exact", "modes": 2, "position": h0,
                     "fixed": {"problem": problem, "position": h0},
@@ -256,13 +266,18 @@ def lmfit_fit(case: dict):
     return fit_spectrum(case["ds"], case["model"], modes=case["modes"], **case["fixed"])
 
 
-def bench_single(case: dict, repeats: int) -> dict:
-    """lmfit and plain fits of one case: times, evaluations, parameters, errors."""
+def bench_single(case: dict, repeats: int, *, warm_up: bool = True) -> dict:
+    """lmfit and plain fits of one case: times, evaluations, parameters, errors.
+
+    ``warm_up=False`` (--quick) skips the untimed first fit (imports, kernel build): the first
+    cold time then includes them.
+    """
     cold = case["model"] == "exact"
     row = {"case": case["case"], "model": case["model"], "modes": case["modes"],
            "position": case["position"], "n_omega": N_OMEGA}
     try:
-        lmfit_fit(case)  # warm-up: imports, kernel build
+        if warm_up:
+            lmfit_fit(case)  # warm-up: imports, kernel build
         ds, stats = time_runs(lambda: lmfit_fit(case), repeats, cold=cold)
         _, warm = time_runs(lambda: lmfit_fit(case), repeats, cold=False)
     except Exception as exc:  # the exact model may be mid-edit: report, do not crash
@@ -366,28 +381,34 @@ class StepTimers:
         self._saved.clear()
 
 
-def profile_case(case: dict, path: Path, repeats: int = 3) -> dict:
+def profile_case(case: dict, path: Path, repeats: int = 3, *, quick: bool = False) -> dict:
     """Where one cold fit's time goes: instrumented steps (median of runs) and a cProfile listing.
 
     The split comes from :class:`StepTimers` on unprofiled runs; the top ``PROFILE_TOP``
     functions by cumulative time of one cProfile run go to ``path`` (cProfile inflates
     call-heavy Python such as lmfit and asteval, so its shares are not used for the split).
+    ``quick``: a single fit, instrumented and profiled at once (its split is inflated too).
     """
     runs = []
-    for _ in range(repeats):
+    prof = cProfile.Profile()
+    for _ in range(1 if quick else repeats):
         clear_states()
         with gc_paused(), StepTimers() as timers:
+            if quick:
+                prof.enable()
             t0 = time.perf_counter()
             lmfit_fit(case)
             total = time.perf_counter() - t0
+            if quick:
+                prof.disable()
         calls = dict(timers.calls, state_builds=linearized_state.cache_info()["misses"])
         runs.append((total, dict(timers.seconds), calls))
     total, seconds, calls = sorted(runs, key=lambda r: r[0])[len(runs) // 2]  # the median run
-    clear_states()
-    prof = cProfile.Profile()
-    prof.enable()
-    lmfit_fit(case)
-    prof.disable()
+    if not quick:
+        clear_states()
+        prof.enable()
+        lmfit_fit(case)
+        prof.disable()
     text = io.StringIO()
     stats = pstats.Stats(prof, stream=text)
     stats.sort_stats("cumulative").print_stats(PROFILE_TOP)
@@ -512,8 +533,8 @@ def svda_map(n: int, rng: np.random.Generator):
     return spectrum(noisy(k, rng), 1e-7, dims=("y", "x", "omega"))
 
 
-def exact_map(n: int, rng: np.random.Generator):
-    problem = problem_at(H0_PRE, one_mode())
+def exact_map(n: int, rng: np.random.Generator, grid_factor: float = 1.0):
+    problem = problem_at(H0_PRE, one_mode(), grid_factor)
     k, force = linear_stiffness(problem, H0_PRE, omega_grid())
     return spectrum(noisy(np.broadcast_to(k, (n, n, N_OMEGA)), rng), force,
                     dims=("y", "x", "omega")), {"problem": problem, "position": H0_PRE}
@@ -660,7 +681,8 @@ def summarise(single: list[dict], maps: list[dict], quick: bool) -> dict:
 
 def main(argv: list[str] | None = None) -> int:
     args = parse_args(argv, doc=__doc__, min_repeats=2,
-                      quick_help="smoke run (< 60 s): 8x8 svda and 4x4 exact maps, 2 repeats",
+                      quick_help="smoke run: 8x8 svda and 4x4 exact maps, 1 repeat, no "
+                                 "warm-up, one profiled fit per profile",
                       repeats_help=f"timed runs per single fit (default {REPEATS}, "
                                    f"{QUICK_REPEATS} with --quick; at least 2, the targets "
                                    "need >= 5)")
@@ -668,6 +690,7 @@ def main(argv: list[str] | None = None) -> int:
     repeats = args.repeats or (QUICK_REPEATS if quick else REPEATS)
     n_svda = QUICK_SVDA_MAP if quick else SVDA_MAP
     n_exact = QUICK_EXACT_MAP if quick else EXACT_MAP
+    grid_factor = QUICK_GRID_FACTOR if quick else 1.0
     args.out.mkdir(parents=True, exist_ok=True)
     t_start = time.perf_counter()
     rng = np.random.default_rng(SEED)
@@ -679,12 +702,15 @@ def main(argv: list[str] | None = None) -> int:
         print(f"data: {N_OMEGA} omega log-spaced in [{OMEGA_MIN:g}, {OMEGA_MAX:g}] rad/s, "
               f"{100 * NOISE:g} % complex noise (seed {SEED}); load average "
               f"{machine['loadavg_start']}")
+        if grid_factor != 1.0:
+            print(f"quick: the exact model on {grid_factor:g} x the default grid spacing "
+                  "(its times are not the default grid's)")
 
         print(f"\n1. Single fits: median of {repeats} runs (exact: state cache cleared before "
               "each, 'warm' = cache kept); plain least_squares from the same guess")
         print(SINGLE_HEAD)
-        single_cases = cases(rng)
-        single = [bench_single(c, repeats) for c in single_cases]
+        single_cases = cases(rng, grid_factor)
+        single = [bench_single(c, repeats, warm_up=not quick) for c in single_cases]
 
         print("\n2. Where the time goes (one cold fit each: instrumented steps; cProfile listing)")
         profiles = []
@@ -692,8 +718,7 @@ def main(argv: list[str] | None = None) -> int:
             if c["case"] not in ("svda", "exact1_2nm", "exact2_2nm"):
                 continue
             try:
-                p = profile_case(c, args.out / f"fit_profile_{c['case']}.txt",
-                                 repeats=1 if quick else 3)
+                p = profile_case(c, args.out / f"fit_profile_{c['case']}.txt", quick=quick)
             except Exception as exc:
                 print(f"{c['case']}: profile FAILED {type(exc).__name__}: {exc}")
                 continue
@@ -712,7 +737,7 @@ def main(argv: list[str] | None = None) -> int:
         for workers in (1, 2):
             maps.append(bench_map("svda", ds_svda, "svda", SVDA_FIXED, workers, truth1))
         del ds_svda
-        ds_exact, fixed_exact = exact_map(n_exact, rng)
+        ds_exact, fixed_exact = exact_map(n_exact, rng, grid_factor)
         maps.append(bench_map("exact", ds_exact, "exact", fixed_exact, 2, truth1))
 
     summary = {**summarise(single, maps, quick), **run_end(t_start)}
@@ -739,7 +764,8 @@ def main(argv: list[str] | None = None) -> int:
                      "noise": NOISE, "seed": SEED, "repeats": repeats, "radius": PAPER.R,
                      "one_mode": {"E0": E0, "E_inf": E_INF, "tau": TAU}, "two_mode": TWO_MODE,
                      "positions": [H0_PRE, H0_CONTACT], "svda_map": n_svda,
-                     "exact_map": n_exact, "rss_sample_s": SAMPLE_PERIOD,
+                     "exact_map": n_exact, "exact_grid_factor": grid_factor,
+                     "rss_sample_s": SAMPLE_PERIOD,
                      "memory_method": maps[0].get("memory_method") if maps else None},
         "single": single,
         "profiles": profiles,

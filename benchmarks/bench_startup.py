@@ -4,7 +4,7 @@
 What it measures:
 
 1. The wall time (and the child's CPU time) of two commands, each a fresh Python process, run
-   alternately ``--repeats`` times after one warm-up run of each:
+   alternately ``--repeats`` times after one warm-up run of each (none with --quick):
 
    - ``cli``: ``viscoforce static --h0=-5nm --E 1e9 --json`` (the console script next to this
      interpreter, else ``python -m viscoforce``); its output is checked (exit 0, JSON with
@@ -22,7 +22,8 @@ What it measures:
 Outputs (in ``--out``, default benchmarks/out/): ``startup.json`` (SI units; keys in
 :data:`JSON_KEYS`) and ``startup.csv`` (one row per timed run: round, command, wall_s, cpu_s).
 Run ``python benchmarks/bench_startup.py [--quick] [--repeats N] [--out DIR]``. No test asserts
-these times; tests/test_bench_startup.py runs it with ``--repeats 1`` and checks the keys.
+these times; tests/test_bench_startup.py runs it with ``--quick --repeats 1`` and checks the
+keys.
 """
 
 from __future__ import annotations
@@ -105,18 +106,26 @@ def check_cli_output(stdout: str) -> None:
         raise SystemExit(f"unexpected CLI output: {stdout!r}")
 
 
-def time_commands(commands: dict[str, list[str]], repeats: int) -> list[dict]:
-    """One warm-up run of each command, then ``repeats`` alternating rounds; one row per run."""
+def time_commands(commands: dict[str, list[str]], repeats: int,
+                  warmup: bool = True) -> list[dict]:
+    """One warm-up run of each command (unless not ``warmup``: --quick), then ``repeats``
+    alternating rounds; one row per timed run. The CLI's first output is checked."""
     env = child_env()
-    for name, command in commands.items():
-        _, _, out = run_once(command, env)
-        if name == "cli":
-            check_cli_output(out)
+    checked = False
+    if warmup:
+        for name, command in commands.items():
+            _, _, out = run_once(command, env)
+            if name == "cli":
+                check_cli_output(out)
+                checked = True
     rows = []
     for i in range(repeats):
         order = list(commands) if i % 2 == 0 else list(reversed(commands))
         for name in order:
-            wall, cpu, _ = run_once(commands[name], env)
+            wall, cpu, out = run_once(commands[name], env)
+            if name == "cli" and not checked:
+                check_cli_output(out)
+                checked = True
             rows.append({"round": i, "command": name, "wall_s": wall, "cpu_s": cpu})
     return rows
 
@@ -161,8 +170,9 @@ def extra_imports(commands: dict[str, list[str]]) -> dict:
             "largest_s": {k: v * 1e-6 for k, v in largest}}
 
 
-def print_results(results: dict, ratio: dict, extra: dict, repeats: int) -> None:
-    print(f"{repeats} alternating runs of each command after one warm-up run of each")
+def print_results(results: dict, ratio: dict, extra: dict, repeats: int, warmup: int) -> None:
+    print(f"{repeats} alternating runs of each command after {'one' if warmup else 'no'} warm-up "
+          "run of each")
     print(f"{'command':<9} {'median [s]':>11} {'min [s]':>9} {'cpu median [s]':>15}")
     for name, r in results.items():
         print(f"{name:<9} {r['time_median_s']:11.3f} {r['time_min_s']:9.3f} "
@@ -178,7 +188,8 @@ def print_results(results: dict, ratio: dict, extra: dict, repeats: int) -> None
 
 def main(argv: list[str] | None = None) -> int:
     args = parse_args(argv, doc=__doc__,
-                      quick_help=f"smoke run: {QUICK_REPEATS} rounds instead of {DEFAULT_REPEATS}",
+                      quick_help=f"smoke run: {QUICK_REPEATS} rounds instead of {DEFAULT_REPEATS}, "
+                                 "no warm-up run",
                       repeats_help=f"timed rounds per command (default {DEFAULT_REPEATS}, "
                                    f"{QUICK_REPEATS} with --quick)")
     repeats = args.repeats or (QUICK_REPEATS if args.quick else DEFAULT_REPEATS)
@@ -192,14 +203,15 @@ def main(argv: list[str] | None = None) -> int:
     for name, command in commands.items():
         print(f"{name:<9} {' '.join(command)}")
 
-    rows = time_commands(commands, repeats)
+    warmup = 0 if args.quick else 1
+    rows = time_commands(commands, repeats, warmup=bool(warmup))
     results = {name: statistics_of(rows, name) for name in commands}
     cli, base = results["cli"], results["baseline"]
     ratio = {"median": cli["time_median_s"] / base["time_median_s"],
              "min": cli["time_min_s"] / base["time_min_s"],
              "cpu_median": cli["cpu_median_s"] / base["cpu_median_s"]}
     extra = extra_imports(commands)
-    print_results(results, ratio, extra, repeats)
+    print_results(results, ratio, extra, repeats, warmup)
 
     passed = ratio["median"] <= TARGET_RATIO
     verdict = pf(passed)
@@ -214,7 +226,7 @@ def main(argv: list[str] | None = None) -> int:
     report = {
         **report_head(SCHEMA, args.quick, machine),
         "target": {"ratio": TARGET_RATIO, "statistic": "median wall time, cli / baseline"},
-        "settings": {"repeats": repeats, "warmup_runs": 1, "env": PINNED_ENV,
+        "settings": {"repeats": repeats, "warmup_runs": warmup, "env": PINNED_ENV,
                      "commands": commands, "alternating": True},
         "results": results,
         "ratio": ratio,

@@ -84,6 +84,8 @@ AUTO_ACCURACY = 1e-3  # the accuracy asked of the "auto" rows
 REPEATS, QUICK_REPEATS = 3, 1
 CHEAP_S = 1.0  # [s] a run longer than this is timed once; shorter ones `repeats` times (median)
 VERY_CHEAP_S, VERY_CHEAP_REPEATS = 0.05, 5  # and runs under 50 ms at least 5 times
+QUICK_VERY_CHEAP_REPEATS = 1  # --quick: no extra runs of the cheap points
+very_cheap_repeats = VERY_CHEAP_REPEATS  # main() sets QUICK_VERY_CHEAP_REPEATS with --quick
 
 # 1. static
 STATIC_POSITIONS = (2e-9, -5e-9, -10e-9)  # h0 [m]
@@ -94,7 +96,8 @@ REF_REFINE, REF_OUTER = 4.0, 4.0  # reference: grid spacing / 4, outer radius ×
 QUICK_REF_REFINE, QUICK_REF_OUTER = 2.0, 2.0  # --quick (the same to 1e-13)
 # 2. spectra: scene -> (h̄0 [m], η [m])
 SPECTRA = {"Fig. 3 spectrum": (2e-9, 0.1e-9), "Fig. 4 spectrum": (-5e-9, 1e-9)}
-N_OMEGA, QUICK_N_OMEGA = 10, 2
+#: --quick: the lowest ω only (20τ of settling is 0.3 periods there, 300 at 100/τ)
+N_OMEGA, QUICK_N_OMEGA = 10, 1
 SPECTRUM_FACTORS, QUICK_SPECTRUM_FACTORS = (0.5, 1.0, 2.0, 4.0), (1.0, 2.0)
 TD_DEFAULT = {"periods": 4, "samples_per_period": 64, "tol": None}  # sweep()'s defaults
 TD_TOL_DEFAULT = 1e-5  # × η: sweep()'s default tol
@@ -123,6 +126,7 @@ DTS = {"exponential-euler": (1e-4, 3e-5, 1e-5, 3e-6, 1e-6),
 QUICK_DTS = {"exponential-euler": (3e-5,), "euler": (2e-4, 1e-5)}
 EULER_DEFAULT_DT = 0.1 * TAU * E_INF / E0  # explicit Euler's default step [s]
 DYN_REF_TOL, DYN_REF_REFINE, QUICK_DYN_REF_REFINE = 1e-3, 2.0, 1.0
+QUICK_DYN_REF_TOL = 1e-2  # --quick (within 2e-6 of tol 1e-3; the rows' errors are >= 4e-5)
 N_OUTPUTS = 81
 SVDA_RTOLS, QUICK_SVDA_RTOLS = (1e-4, 1e-6, 1e-8, 1e-10), (1e-8,)
 SVDA_DEFAULT_RTOL = 1e-8  # solve_svda()'s default
@@ -188,7 +192,7 @@ def measure(fn, repeats: int):
             if len(wall) == 1:
                 result = out
                 if wall[0] < VERY_CHEAP_S:
-                    n = max(repeats, VERY_CHEAP_REPEATS)
+                    n = max(repeats, very_cheap_repeats)
                 elif wall[0] < CHEAP_S:
                     n = repeats
     return result, statistics.median(wall), len(wall)
@@ -514,9 +518,10 @@ def bench_dynamics(quick: bool, repeats: int) -> list[dict]:
                                dt=dt, progress=False, output_kinks=False, **kw)
 
         refine = QUICK_DYN_REF_REFINE if quick else DYN_REF_REFINE
+        ref_tol = QUICK_DYN_REF_TOL if quick else DYN_REF_TOL
         f_ref = run(make_problem(sls(), deepest, 1 / refine), "exponential",
-                    tol=DYN_REF_TOL * default_tol).force.values
-        label = f"exponential tol={DYN_REF_TOL:g}×default, grid/{refine:g}"
+                    tol=ref_tol * default_tol).force.values
+        label = f"exponential tol={ref_tol:g}×default, grid/{refine:g}"
         problem = make_problem(sls(), deepest)
 
         def err(ds, f_ref=f_ref):
@@ -621,7 +626,8 @@ def fit_parameters(res, model: str, root: float) -> dict:
     return {"E0": e0, "E_inf": e_inf, "tau": tau_relax * e0 / e_inf}
 
 
-def bench_fits(repeats: int) -> list[dict]:
+def bench_fits(repeats: int, quick: bool = False) -> list[dict]:
+    """The 30-point fits of FIT_CASES, noiseless and noisy (``quick``: noiseless only)."""
     rows = []
     omega = np.logspace(*np.log10(FIT_OMEGA), FIT_N_OMEGA)
     rng = np.random.default_rng(FIT_SEED)
@@ -648,7 +654,7 @@ def bench_fits(repeats: int) -> list[dict]:
         note = ("prony fits k_inf, dk_1, tau_1 (stiffness); E0, E_inf, tau via Hertz "
                 "sqrt(R delta0) and tau = tau_1 E0/E_inf" if model == "prony" else
                 "auto: fit_spectrum(..., 'auto', accuracy=1e-3)" if model == "auto" else "")
-        for noise in (0.0, FIT_NOISE):
+        for noise in (0.0,) if quick else (0.0, FIT_NOISE):
             data = clean if noise == 0 else noisy(clean, rng, noise)
 
             def error_of(res, m=model, t=truth, k=root):
@@ -736,7 +742,9 @@ def main(argv: list[str] | None = None) -> int:
     args = parse_args(argv, doc=__doc__, quick_help="coarse subsets (< 90 s)",
                       repeats_help=f"timed runs per cheap point (default {REPEATS}, quick "
                                    f"{QUICK_REPEATS})")
+    global very_cheap_repeats
     repeats = args.repeats or (QUICK_REPEATS if args.quick else REPEATS)
+    very_cheap_repeats = QUICK_VERY_CHEAP_REPEATS if args.quick else VERY_CHEAP_REPEATS
     args.out.mkdir(parents=True, exist_ok=True)
     t_start = time.perf_counter()
     with threadpool_limits(limits=1, user_api="blas"):
@@ -748,7 +756,7 @@ def main(argv: list[str] | None = None) -> int:
         for part in (lambda: bench_static(args.quick, repeats),
                      lambda: bench_spectra(args.quick, repeats),
                      lambda: bench_dynamics(args.quick, repeats),
-                     lambda: bench_fits(repeats)):
+                     lambda: bench_fits(repeats, args.quick)):
             rows += part()
     files = {"json": "speed_accuracy.json", "csv": "speed_accuracy.csv",
              "png": "speed_accuracy.png"}
@@ -774,7 +782,7 @@ def main(argv: list[str] | None = None) -> int:
                                         "outer_radius_factor": DEEP_REF_OUTER},
                 "material": {"E0": E0, "E_inf": E_INF, "tau": TAU},
                 "n_omega": QUICK_N_OMEGA if args.quick else N_OMEGA, "repeats": repeats,
-                "timing": f"median of `repeats` runs (at least {VERY_CHEAP_REPEATS} under "
+                "timing": f"median of `repeats` runs (at least {very_cheap_repeats} under "
                           f"{VERY_CHEAP_S:g} s) for a first run under {CHEAP_S:g} s; a run "
                           f"longer than {CHEAP_S:g} s (time-domain spectra, svda ODE spectra, "
                           "slow steppers) is timed once; `runs` per row",

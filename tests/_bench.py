@@ -1,11 +1,20 @@
-"""Run a benchmark script as a subprocess (shared by the benchmark smoke tests)."""
+"""Run a benchmark script as a subprocess, or its command line in-process (shared by the benchmark
+smoke tests).
+
+No wall-clock timeout: on a loaded machine a smoke run may take several times its quiet time,
+and a timeout would turn that into a failure (issue 22 item 5).
+"""
 
 from __future__ import annotations
 
+import contextlib
+import importlib.util
+import io
 import os
 import subprocess
 import sys
 from pathlib import Path
+from types import ModuleType
 
 REPO = Path(__file__).resolve().parents[1]
 BENCH = REPO / "benchmarks"
@@ -16,4 +25,42 @@ def run_benchmark(name: str, *args: str) -> subprocess.CompletedProcess:
     env = dict(os.environ, MPLBACKEND="Agg")
     env["PYTHONPATH"] = os.pathsep.join(filter(None, [str(REPO / "src"), env.get("PYTHONPATH")]))
     return subprocess.run([sys.executable, str(BENCH / name), *args], capture_output=True,
-                          text=True, env=env, timeout=300, check=False)
+                          text=True, env=env, check=False)
+
+
+def benchmark_module(name: str) -> ModuleType:
+    """``benchmarks/<name>`` imported in this process (once; its ``main`` is not run).
+
+    The scripts put ``benchmarks/`` on ``sys.path`` for their ``_common`` helpers; that entry is
+    taken out again after the import.
+    """
+    key = f"_benchmark_{Path(name).stem}"
+    if key not in sys.modules:
+        spec = importlib.util.spec_from_file_location(key, BENCH / name)
+        module = importlib.util.module_from_spec(spec)
+        saved = list(sys.path)
+        sys.modules[key] = module
+        try:
+            spec.loader.exec_module(module)
+        except BaseException:
+            del sys.modules[key]
+            raise
+        finally:
+            sys.path[:] = saved
+    return sys.modules[key]
+
+
+def run_main(name: str, *args: str) -> tuple[int, str, str]:
+    """Exit status, stdout and stderr of ``main(args)`` of ``benchmarks/<name>``, in-process.
+
+    For command-line checks that end before any work (argument errors): it skips the ~1-2 s
+    interpreter start and imports of a subprocess.
+    """
+    main = benchmark_module(name).main
+    out, err = io.StringIO(), io.StringIO()
+    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+        try:
+            code = main(list(args))
+        except SystemExit as exc:
+            code = exc.code if isinstance(exc.code, int) else 1
+    return code or 0, out.getvalue(), err.getvalue()

@@ -11,7 +11,7 @@ SCRIPT = Path(__file__).resolve().parents[1] / "benchmarks" / "bench_chooser.py"
 
 
 def test_quick_run_writes_documented_files(tmp_path):
-    proc = subprocess.run([sys.executable, str(SCRIPT), "--quick", "--replicas", "2", "--out",
+    proc = subprocess.run([sys.executable, str(SCRIPT), "--quick", "--replicas", "1", "--out",
                            str(tmp_path)],
                           capture_output=True, text=True, check=False)
     assert proc.returncode == 0, proc.stderr

@@ -13,7 +13,7 @@ from pathlib import Path
 
 import pytest
 
-from tests._bench import run_benchmark
+from tests._bench import run_benchmark, run_main
 
 REPO = Path(__file__).resolve().parents[1]
 SCRIPT = REPO / "benchmarks" / "bench_dynamics.py"
@@ -112,6 +112,7 @@ def test_default_setting_accuracy_and_reference(quick):
 
 
 def test_rejects_nonpositive_repeats(tmp_path):
-    proc = run_script("--quick", "--repeats", "0", "--out", str(tmp_path))
-    assert proc.returncode == 2
-    assert "--repeats must be >= 1" in proc.stderr
+    code, _, stderr = run_main("bench_dynamics.py", "--quick", "--repeats", "0", "--out",
+                               str(tmp_path))
+    assert code == 2
+    assert "--repeats must be >= 1" in stderr

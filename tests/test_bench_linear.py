@@ -7,7 +7,7 @@ import json
 
 import pytest
 
-from tests._bench import run_benchmark
+from tests._bench import run_benchmark, run_main
 
 # documented in benchmarks/README.md, section bench_linear.py
 TOP_KEYS = {"schema", "created", "quick", "machine", "target", "settings", "rows", "summary",
@@ -59,6 +59,7 @@ def test_every_path_at_both_positions_agrees_with_the_direct_solve(quick):
 
 
 def test_rejects_too_few_repeats(tmp_path):
-    proc = run_benchmark("bench_linear.py", "--quick", "--repeats", "0", "--out", str(tmp_path))
-    assert proc.returncode == 2
-    assert "--repeats must be >= 1" in proc.stderr
+    code, _, stderr = run_main("bench_linear.py", "--quick", "--repeats", "0", "--out",
+                               str(tmp_path))
+    assert code == 2
+    assert "--repeats must be >= 1" in stderr

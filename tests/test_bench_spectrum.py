@@ -11,7 +11,7 @@ from pathlib import Path
 import pytest
 from scipy.special import i0
 
-from tests._bench import run_benchmark
+from tests._bench import run_benchmark, run_main
 
 REPO = Path(__file__).resolve().parents[1]
 SCRIPT = REPO / "benchmarks" / "bench_spectrum.py"
@@ -145,6 +145,7 @@ def test_fig4_peak_linear_time_domain_and_euler(quick):
 
 
 def test_rejects_too_few_repeats(tmp_path):
-    proc = run_script("--quick", "--repeats", "5", "--out", str(tmp_path))
-    assert proc.returncode == 2
-    assert "--repeats must be >= 10" in proc.stderr
+    code, _, stderr = run_main("bench_spectrum.py", "--quick", "--repeats", "5", "--out",
+                               str(tmp_path))
+    assert code == 2
+    assert "--repeats must be >= 10" in stderr

@@ -1,4 +1,4 @@
-"""Smoke test of benchmarks/bench_startup.py (one round; no timing asserted)."""
+"""Smoke test of benchmarks/bench_startup.py (--quick: one round, no warm-up; no timing asserted)."""
 
 from __future__ import annotations
 
@@ -17,7 +17,7 @@ RESULT_KEYS = {"time_median_s", "time_min_s", "cpu_median_s", "runs"}
 @pytest.fixture(scope="module")
 def report(tmp_path_factory):
     out = tmp_path_factory.mktemp("bench_startup")
-    proc = run_benchmark("bench_startup.py", "--repeats", "1", "--out", str(out))
+    proc = run_benchmark("bench_startup.py", "--quick", "--repeats", "1", "--out", str(out))
     assert proc.returncode == 0, proc.stderr
     return out, proc.stdout, json.loads((out / "startup.json").read_text())
 

@@ -14,7 +14,7 @@ from pathlib import Path
 import pandas as pd
 import pytest
 
-from tests._bench import run_benchmark
+from tests._bench import run_benchmark, run_main
 
 REPO = Path(__file__).resolve().parents[1]
 BENCH = REPO / "benchmarks"
@@ -100,6 +100,7 @@ def test_bench_static_default_grid_is_accurate(static_quick):
 
 
 def test_bench_static_rejects_nonpositive_repeats(tmp_path):
-    proc = run_script("bench_static.py", "--quick", "--repeats", "0", "--out", str(tmp_path))
-    assert proc.returncode == 2
-    assert "--repeats must be >= 1" in proc.stderr
+    code, _, stderr = run_main("bench_static.py", "--quick", "--repeats", "0", "--out",
+                               str(tmp_path))
+    assert code == 2
+    assert "--repeats must be >= 1" in stderr

@@ -89,7 +89,10 @@ def test_bad_fit_input_exits_2_with_one_message(capsys, spectrum_file, argv, mat
     assert match in err and "Traceback" not in err
 
 
-def test_unreachable_scheduler_exits_2(capsys, tmp_path):
+def test_unreachable_scheduler_exits_2(capsys, tmp_path, monkeypatch):
+    # nothing listens on port 9: the connection is refused at once and retried until
+    # fitting.maps.CONNECT_TIMEOUT (10 s) runs out; a short wait gives the same error
+    monkeypatch.setattr("viscoforce.fitting.maps.CONNECT_TIMEOUT", 0.5)
     k = svda_complex_stiffness(OMEGA, 2e-9, PAPER.E0, PAPER.E_inf, PAPER.tau, PAPER.R, PAPER.P,
                                PAPER.debye_length)
     path = tmp_path / "map.nc"

@@ -241,7 +241,10 @@ def test_map_on_a_local_dask_cluster_equals_the_serial_map():
     np.testing.assert_array_equal(parallel["success"].values, serial["success"].values)
 
 
-def test_unreachable_scheduler_is_a_parameter_error():
+def test_unreachable_scheduler_is_a_parameter_error(monkeypatch):
+    # nothing listens on port 9: the connection is refused at once and retried until
+    # CONNECT_TIMEOUT (10 s) runs out; a short wait gives the same error
+    monkeypatch.setattr("viscoforce.fitting.maps.CONNECT_TIMEOUT", 0.5)
     with pytest.raises(ParameterError, match="cannot reach the dask scheduler"):
         fit_map(_map_spectrum(), "svda", scheduler="tcp://127.0.0.1:9", progress=False,
                 **SVDA_FIXED)
