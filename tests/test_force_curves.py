@@ -293,3 +293,23 @@ def test_cli_batch_folder_reports_refused_files(tmp_path, capsys):
     assert refused and all(f["error"] for f in refused)
     fitted = [f for f in info["files"] if "error" not in f and f["n_fits"] > f["n_failed"]]
     assert {f["file"].rsplit("/", 1)[-1] for f in fitted} == {CC_BRAIN.name, CC_GEL.name}
+
+
+@pytest.mark.skipif(not RHEO_MAP.is_file(), reason="shared real data absent")
+def test_cli_ting_curve_with_plot_and_both_power_law_forms(tmp_path, capsys):
+    plot = tmp_path / "ting.png"
+    code, out, err = _cli(capsys, "fit", str(RHEO_MAP), "--model", "ting", "--tip",
+                          "paraboloid:5um", "--drag", "2.5e-6", "--material", "structural",
+                          "--no-newtonian", "--curve", "0", "--plot", str(plot), "--json")
+    assert code == 0, err
+    info = json.loads(out)
+    alpha = info["params"]["alpha"]["value"]
+    assert info["derived"]["beta"]["value"] == pytest.approx(alpha, rel=1e-12)  # β = α
+    # E_ref = E0 Γ(1 − β)(2π f_ref t0)^β with f_ref = 1 Hz, t0 = 1 s
+    e_ref = info["params"]["E_ref"]["value"]
+    e0 = info["derived"]["ting_E0"]["value"]
+    assert e_ref == pytest.approx(e0 * math.gamma(1 - alpha) * (2 * math.pi) ** alpha, rel=1e-9)
+    assert plot.stat().st_size > 10_000
+    code, _, err = _cli(capsys, "fit", str(RHEO_MAP), "--model", "ting", "--tip",
+                        "paraboloid:5um", "--drag", "1e-6", "--fit-drag")
+    assert code == 2 and "not both" in err

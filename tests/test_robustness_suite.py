@@ -331,7 +331,7 @@ API_CASES = [
      ParameterError, r"the SVDA closed form needs a single-relaxation-time material"),
     # make_model
     ("model-unknown", lambda: vf.make_model("foo"), ParameterError,
-     r"model must be one of svda, exact, contact, prony, relaxation, step, hertz, creep, got 'foo'"),
+     r"model must be one of svda, exact, contact, prony, relaxation, step, hertz, creep, ting, got 'foo'"),
     ("model-None", lambda: vf.make_model(None), ParameterError, r"model must be one of"),
     ("model-modes-0", lambda: vf.make_model("prony", 0), ParameterError,
      r"modes must be an integer in \[1, 12\], got 0"),

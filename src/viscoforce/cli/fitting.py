@@ -30,9 +30,10 @@ from viscoforce.physics.paper import PAPER
 
 __all__ = ["SUBCOMMANDS", "modes_type", "read_data"]
 
-_MODELS = ("svda", "exact", "contact", "prony", "relaxation", "step", "hertz", "creep", "auto")
+_MODELS = ("svda", "exact", "contact", "prony", "relaxation", "step", "hertz", "creep", "ting",
+           "auto")
 #: Models of measured force curves (a curves dataset).
-_CURVE_MODELS = ("relaxation", "hertz", "creep")
+_CURVE_MODELS = ("relaxation", "hertz", "creep", "ting")
 _MATERIALS = ("sls", "prony", "power-law", "structural")
 _WEIGHTS = ("stderr", "relative")
 
@@ -81,6 +82,8 @@ FIT_FLAGS = FlagGroup("model", (
          "the constant-height pause after the approach, the approach, the constant-force "
          "pause)"),
     Flag("--curve", integer_type(0), None, "I", "fit only curve (pixel) I of a map"),
+    Flag("--contact-point", "length", None, "LENGTH",
+         "ting: the contact point (tip position) held fixed (default: fitted)"),
     Flag("--accuracy", real_type(0.0), None, "REL",
          "--model auto: the relative model error required, in [1e-4, 0.1] (default 1e-3)"),
 ))
@@ -132,6 +135,10 @@ def _add_fit_flags(parser: argparse.ArgumentParser, *, required: bool, batch: bo
                         help="model of the SPEC table" if required else
                              "fit this model and draw it over the data")
     add_flags(parser, FIT_FLAGS)
+    parser.add_argument("--no-newtonian", action="store_true",
+                        help="ting --material structural: Ting's pure power law (no mu)")
+    parser.add_argument("--fit-drag", action="store_true",
+                        help="ting: fit the viscous drag B instead of holding --drag")
     parser.add_argument("--newtonian", action="store_true",
                         help="contact --material power-law: fit a Newtonian viscosity mu in "
                              "parallel")
@@ -236,6 +243,20 @@ def _fixed(args: argparse.Namespace, ds, kind: str) -> dict[str, Any]:
         return {**_tip_inputs(args, ds), "indentation": args.indentation, "drag": args.drag,
                 "material": args.material, "reference_frequency": args.reference_frequency,
                 "debye_length": args.debye_length}
+    if model == "ting":
+        bad = _given(args, "indentation", "newtonian", "h0", "mean_force")
+        if bad:
+            raise UsageError(f"--model ting cannot honour {', '.join(bad)}")
+        if args.material not in (None, "sls", "prony", "structural"):
+            raise UsageError(f"--model ting takes --material sls, prony or structural, got "
+                             f"{args.material}")
+        if args.fit_drag and args.drag is not None:
+            raise UsageError("give --drag or --fit-drag, not both")
+        return {"tip": _hertz_tip(args, ds), "material": args.material or "sls",
+                "drag": args.drag, "fit_drag": bool(args.fit_drag) or None,
+                "contact_point": args.contact_point,
+                "reference_frequency": args.reference_frequency,
+                "newtonian": False if args.no_newtonian else None}
     if model != "contact":
         bad = _given(args, *contact_only)
         if model == "auto":
@@ -328,7 +349,8 @@ def _hertz_tip(args: argparse.Namespace, ds):
     tip = file_tip(ds)
     if tip is None:
         raise UsageError(
-            f"--model hertz needs the tip, which this {ds.attrs.get('source', '')} file does not "
+            f"--model {args.model} needs the tip, which this {ds.attrs.get('source', '')} file "
+            "does not "
             "record: give --tip sphere:R | paraboloid:R | cone:HALF_ANGLE | pyramid:HALF_ANGLE | "
             "flat:RADIUS (e.g. --tip cone:20) or --R")
     return tip
@@ -356,7 +378,7 @@ def _check_model(args: argparse.Namespace, kind: str) -> None:
         raise UsageError(f"--model {args.model} does not fit {kind} data; for {kind}: "
                          f"{', '.join(wanted[kind])}")
     if args.modes == "auto" and args.model not in ("exact", "contact", "prony", "relaxation",
-                                                   "creep", "auto"):
+                                                   "creep", "ting", "auto"):
         raise UsageError(f"--modes auto needs a model with several modes, not {args.model}")
     if args.criterion not in ("bic", "aic"):
         raise UsageError(f"--criterion must be bic or aic, got {args.criterion!r}")
@@ -422,6 +444,12 @@ def fit_one(args: argparse.Namespace, ds, kind: str):
             raise UsageError("--model hertz has no modes: leave --modes out")
         if args.model == "relaxation":
             return fit_hold(ds, segment=args.segment, modes=modes, criterion=args.criterion)
+        if args.model == "ting":
+            from viscoforce.fitting.ting import fit_ting
+
+            return fit_ting(ds, segment=args.segment, modes=modes, criterion=args.criterion,
+                            poisson=args.poisson, **{k: v for k, v in fixed.items()
+                                                     if v is not None})
         return fit_curve(ds, args.model, segment=args.segment, modes=modes,
                          criterion=args.criterion, tip=fixed.get("tip"),
                          poisson=args.poisson if args.model == "hertz" else None)
@@ -477,7 +505,8 @@ def _single_json(result) -> dict[str, Any]:
         "at_bound": [s for s in str(result.attrs.get("at_bound", "")).split(", ")
                      if s and s != "none"]}
     derived = {str(n): {"value": float(result[n]), "stderr": float(result[f"{n}_stderr"])}
-               for n in result.data_vars if str(n).endswith(("_young", "_shear"))}
+               for n in result.data_vars if str(n).endswith(("_young", "_shear"))
+               or str(n) in ("ting_E0", "beta")}
     if derived:
         out["derived"] = derived
         out["poisson"] = float(result.attrs.get("poisson", 0.5))
@@ -486,6 +515,7 @@ def _single_json(result) -> dict[str, Any]:
             value = result.attrs[key]
             out[key] = value if isinstance(value, str) else float(value)
     for key in ("material", "candidate", "residual_lag1", "effective_samples", "validity",
+                "identifiability_method", "ting_error",
                 "depth_check", "depth_check_E", "depth_check_shift", "precontact_rise",
                 "creep_force", "segment_type"):
         if key in result.attrs:
@@ -536,14 +566,15 @@ def _print_single(info: dict[str, Any]) -> None:
         err = "(no stderr)" if p["stderr"] != p["stderr"] else f"± {show_value(p['stderr'], unit, 3)}"
         line = f"  {name:<8} = {value} {err}"
         if "report_as" in p:
-            line += f"   -> report as {p['report_as']} (2 sigma profile likelihood)"
+            line += f"   -> report as {p['report_as']} ({info.get('identifiability_method', '')})"
         print(line)
     if info.get("derived"):
         nu = info["poisson"]
         print(f"  Young's and shear moduli (Poisson's ratio {nu:g}; E above is the paper's "
               "2/E = sum (1 - nu^2)/E_i):")
         for name, p in info["derived"].items():
-            unit = parameter_units(name.rsplit("_", 1)[0])
+            base = name if name in ("ting_E0", "beta") else name.rsplit("_", 1)[0]
+            unit = parameter_units(base)
             print(f"  {name:<12} = {show_value(p['value'], unit, 4)} ± "
                   f"{show_value(p['stderr'], unit, 3)}")
     if "tip" in info:

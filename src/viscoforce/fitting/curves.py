@@ -188,8 +188,15 @@ def approach_data(curves: xr.Dataset, *, curve: int = 0, segment: int | None = N
     return FitData(z, f, None, source)
 
 
+def _ting_data(curves: xr.Dataset, *, curve: int = 0, segment: int | None = None) -> FitData:
+    from viscoforce.fitting.ting import ting_data
+
+    return ting_data(curves, curve=curve, segment=segment)
+
+
 #: Data of each curve model: the function that cuts its segment out of a curves dataset.
-CURVE_DATA = {"relaxation": hold_data, "creep": creep_data, "hertz": approach_data}
+CURVE_DATA = {"relaxation": hold_data, "creep": creep_data, "hertz": approach_data,
+              "ting": _ting_data}
 
 
 def curve_data(curves: xr.Dataset, model: str, *, curve: int = 0,

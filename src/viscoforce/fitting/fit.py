@@ -425,7 +425,7 @@ def _outcome(model: FitModel, res: lmfit.minimizer.MinimizerResult, data: FitDat
 LAG1_WARN = 0.5
 #: Curve models of measured series whose stderr are corrected for residual autocorrelation
 #: (the step model fits a simulated trajectory, whose residual is the solver's smooth error).
-AUTOCORRELATED_MODELS = ("relaxation", "hertz", "creep")
+AUTOCORRELATED_MODELS = ("relaxation", "hertz", "creep", "ting")
 
 
 def residual_lag1(residual: np.ndarray, t: np.ndarray) -> float:

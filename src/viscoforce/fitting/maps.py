@@ -174,6 +174,8 @@ def fit_block(items: Sequence[FitData | str], model: str, modes: int | str, crit
         own = fixed
         if model == "contact" and fixed.get("indentation") is None:  # each pixel's own depth
             own = {**fixed, "indentation": data.source.get("mean_indentation")}
+        if model == "ting":  # each curve's own tip-position trace
+            own = {**fixed, "position_trace": data.position_trace}
         try:
             best, _ = select(data, model, modes=modes, criterion=criterion, **own)
         except (ViscoforceError, ValueError, ArithmeticError) as exc:
@@ -320,9 +322,15 @@ def fit_map(ds: xr.Dataset, model: str, *, modes: int | str = 1, criterion: str 
     else:
         results = _distributed(items, model, modes, criterion, fixed, scheduler, workers,
                                progress, profile)
-    return add_derived_moduli(
+    out = add_derived_moduli(
         _assemble(results, dims, layout, model, criterion if modes == "auto" else None, n,
                   profile=profile), poisson)
+    if model == "ting" and fixed.get("material") == "structural":
+        from viscoforce.fitting.ting import add_ting_forms
+
+        out.attrs.setdefault("reference_frequency", fixed.get("reference_frequency") or 1.0)
+        out = add_ting_forms(out)
+    return out
 
 
 def _distributed(items: list[FitData | str], model: str, modes: int | str, criterion: str,

@@ -33,7 +33,8 @@ from viscoforce.physics.materials import PronySeries, StandardLinearSolid, Visco
 from viscoforce.problem import ContactProblem
 
 #: Model names of the SPEC table (``--model``).
-MODEL_NAMES = ("svda", "exact", "contact", "prony", "relaxation", "step", "hertz", "creep")
+MODEL_NAMES = ("svda", "exact", "contact", "prony", "relaxation", "step", "hertz", "creep",
+               "ting")
 #: Materials of the ``contact`` model (``--material``).
 CONTACT_MATERIALS = ("sls", "prony", "power-law", "structural")
 #: Reference frequency f_ref [Hz] of the structural material's E_ref (default of the fixed input).
@@ -43,9 +44,9 @@ EXPONENT_BOUNDS = (1e-3, 0.999)
 #: Models whose data are spectra (the others fit force curves over time).
 SPECTRUM_MODELS = ("svda", "exact", "contact", "prony")
 #: Models with a number of relaxation modes (``--modes``).
-MODAL_MODELS = ("exact", "contact", "prony", "relaxation", "creep")
+MODAL_MODELS = ("exact", "contact", "prony", "relaxation", "creep", "ting")
 #: Models of force curves measured on an instrument (a curves dataset: one segment of a curve).
-CURVE_MODELS = ("relaxation", "hertz", "creep")
+CURVE_MODELS = ("relaxation", "hertz", "creep", "ting")
 #: Largest number of modes tried by ``modes="auto"``.
 MAX_AUTO_MODES = 4
 
@@ -774,7 +775,9 @@ _FIXED: dict[str, tuple[str, ...]] = {
     "contact": ("radius", "tip", "indentation", "drag", "material", "debye_length",
                 "newtonian", "reference_frequency"),
     "prony": (), "relaxation": (), "step": ("problem", "position_trace"),
-    "hertz": ("tip", "contact_window"), "creep": ()}
+    "hertz": ("tip", "contact_window"), "creep": (),
+    "ting": ("tip", "position_trace", "material", "drag", "fit_drag", "contact_point",
+             "contact_window", "reference_frequency", "newtonian")}
 
 
 def check_fixed(name: str, fixed: Mapping[str, Any]) -> dict[str, Any]:
@@ -806,7 +809,8 @@ def check_fixed(name: str, fixed: Mapping[str, Any]) -> dict[str, Any]:
         "material": lambda n, v: v if v in CONTACT_MATERIALS else _bad_material(v),
         "newtonian": _require_bool, "reference_frequency": require_positive,
         "tip": lambda n, v: _as_tip(v), "contact_window": _window,
-        "position_trace": lambda n, v: v}
+        "position_trace": lambda n, v: v, "fit_drag": _require_bool,
+        "contact_point": require_finite}
     return {k: (None if v is None else checks[k](k, v)) for k, v in fixed.items()}
 
 
@@ -839,10 +843,16 @@ def _bad_material(value: Any) -> None:
                          f"got {value!r}")
 
 
+def _ting_model(spec: ModelSpec) -> FitModel:
+    from viscoforce.fitting.ting import ting_model
+
+    return ting_model(spec)
+
+
 _BUILDERS: dict[str, Callable[[ModelSpec], FitModel]] = {
     "svda": _svda_model, "exact": _exact_model, "contact": _contact_model,
     "prony": _prony_model, "relaxation": _relaxation_model, "step": _step_model,
-    "hertz": _hertz_model, "creep": _creep_model}
+    "hertz": _hertz_model, "creep": _creep_model, "ting": _ting_model}
 
 
 def make_model(name: str, modes: int = 1, **fixed: Any) -> FitModel:

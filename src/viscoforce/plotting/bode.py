@@ -485,7 +485,8 @@ def fit_curve_plot(fit: xr.Dataset, *, data: tuple[Any, Any] | None = None,
     Returns
     -------
     PlotHandle
-        Figure, axes and the data line, the fit line, the parameter box.
+        Figure, axes (with ``data`` and no ``ax``: the fit and, below, the residual data − fit)
+        and the data line, the fit line, the parameter box (and the residual points).
     """
     import xarray as xr
 
@@ -500,7 +501,15 @@ def fit_curve_plot(fit: xr.Dataset, *, data: tuple[Any, Any] | None = None,
                              "'time', 'fit_approach_force' over 'tip_position'): it is not a "
                              "relaxation, step, hertz or creep fit")
     x_name = axes_of[y_name]
-    figure, axes = _new_or_given_axes(ax, (6.4, 4.2))
+    residual_axes = None
+    if ax is None and data is not None:  # data, fit and the residual below
+        import matplotlib.pyplot as plt
+
+        figure, (axes, residual_axes) = plt.subplots(
+            2, 1, figsize=(6.4, 5.2), sharex=True, layout="constrained",
+            gridspec_kw={"height_ratios": (3, 1)})
+    else:
+        figure, axes = _new_or_given_axes(ax, (6.4, 4.2))
     x = np.asarray(fit[x_name].values, dtype=float)
     if x_name == "time":
         scale, unit = (1e3, "ms") if np.ptp(x) < 1.0 else (1.0, "s")
@@ -527,9 +536,19 @@ def fit_curve_plot(fit: xr.Dataset, *, data: tuple[Any, Any] | None = None,
                     bbox={"boxstyle": "round", "facecolor": "white", "alpha": 0.85,
                           "edgecolor": "0.7"})
     drawn.append(box)
-    axes.set_xlabel(x_label)
     axes.set_ylabel(y_label)
     axes.legend(loc="lower left" if x_name == "time" else "upper left")
     if title:
         axes.set_title(title)
-    return PlotHandle(figure, (axes,), tuple(drawn))
+    if residual_axes is None:
+        axes.set_xlabel(x_label)
+        return PlotHandle(figure, (axes,), tuple(drawn))
+    order = np.argsort(x)
+    fitted = np.interp(dx, x[order], np.asarray(fit[y_name].values, dtype=float)[order])
+    (res,) = residual_axes.plot((dx - shift) * scale, (dy - fitted) * y_scale, ".", ms=2,
+                                color="0.45")
+    residual_axes.axhline(0.0, color="0.3", lw=0.8)
+    residual_axes.set_ylabel(f"data − fit [{y_label.rsplit('[', 1)[-1]}")
+    residual_axes.set_xlabel(x_label)
+    drawn.append(res)
+    return PlotHandle(figure, (axes, residual_axes), tuple(drawn))

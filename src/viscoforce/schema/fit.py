@@ -70,7 +70,8 @@ PARAMETER_UNITS: dict[str, str] = {"tau": "s", "E0": "Pa", "E_inf": "Pa", "k_inf
                                    "F_inf": "N", "C1": "Pa-1 s-m", "m": "1",
                                    "E_ref": "Pa", "alpha": "1", "mu": "Pa s", "E": "Pa",
                                    "contact_point": "m", "baseline": "N",
-                                   "baseline_slope": "N/m", "z_inf": "m"}
+                                   "baseline_slope": "N/m", "z_inf": "m", "drag": "N s/m",
+                                   "ting_E0": "Pa", "beta": "1"}
 _PATTERNS = ((r"tau_\d+", "s"), (r"E_\d+", "Pa"), (r"dk_\d+", "N/m"), (r"dF_\d+", "N"),
              (r"dz_\d+", "m"))
 
