@@ -77,3 +77,16 @@ def test_a_single_curve_jpk_file_is_one_spectrum_not_a_map(capsys, tmp_path):
 
     info = json.loads(out)
     assert "value" in info["params"]["k_inf"]  # a single fit, not a map summary
+
+
+def test_calibration_flags_on_a_self_calibrated_file_are_a_usage_error(capsys):
+    from tests.conftest import REAL_DATA_DIR
+    from viscoforce.cli import main
+
+    path = REAL_DATA_DIR / "afmformats" / "fmt-jpk-cc_pr14-brain-2021.06.30.jpk-force"
+    if not path.is_file():
+        pytest.skip("shared real data absent")
+    code = main(["load", str(path), "--spring-constant", "0.1N/m"])
+    _, err = capsys.readouterr()
+    assert code == 2 and "--spring-constant" in err and "own calibration" in err
+    assert "Traceback" not in err

@@ -177,7 +177,15 @@ def run_load(args: argparse.Namespace) -> int:
 
     options = {k: v for k, v in (("spring_constant", args.spring_constant),
                                  ("sensitivity", args.sensitivity)) if v is not None}
-    data = load_instrument(args.file, format=args.format, **options)
+    try:
+        data = load_instrument(args.file, format=args.format, **options)
+    except TypeError as exc:  # an option the format does not take (its own calibration)
+        if not options:
+            raise
+        flags = " and ".join(f"--{k.replace('_', '-')}" for k in options)
+        raise UsageError(f"{flags}: {exc} (this file carries its own calibration; the flags "
+                         "are for files without one: NT-MDT text, AFM Workshop in volts, "
+                         "Igor, Chiaro, UFF, CSV)") from None
     fmt = str(data.attrs.get("source", args.format or ""))
     if args.drag is not None and args.drag_heights is not None:
         raise UsageError("give --drag or --drag-heights, not both")
