@@ -90,3 +90,14 @@ def test_calibration_flags_on_a_self_calibrated_file_are_a_usage_error(capsys):
     _, err = capsys.readouterr()
     assert code == 2 and "--spring-constant" in err and "own calibration" in err
     assert "Traceback" not in err
+
+
+def test_a_huge_uff_file_is_refused_before_reading(tmp_path, monkeypatch):
+    from viscoforce.exceptions import EffortError
+    from viscoforce.io import bruker
+
+    path = tmp_path / "big.uff"
+    path.write_bytes(b"x" * 2048)
+    monkeypatch.setattr(bruker, "MAX_UFF_BYTES", 1024)
+    with pytest.raises(EffortError, match="UFF text file .*2048.* beyond the limit"):
+        bruker._read_text(path)

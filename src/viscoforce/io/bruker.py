@@ -66,6 +66,7 @@ from typing import Any, NoReturn
 import numpy as np
 import xarray as xr
 
+from viscoforce._limits import check_effort
 from viscoforce._validation import require_path
 from viscoforce.exceptions import InstrumentFormatError, ParameterError, UnitError
 from viscoforce.io.csv_formats import segment_label
@@ -225,8 +226,17 @@ class _Uff:
     notes: dict[str, str] = field(default_factory=dict)
 
 
+#: Largest UFF text file read [bytes] (a force curve of 1e6 samples is ~ 40 MB).
+MAX_UFF_BYTES = 256 * 1024**2
+
+
 def _read_text(path: Path) -> str:
     try:
+        size = path.stat().st_size
+        if size > MAX_UFF_BYTES:
+            check_effort(f"{path}: reading this UFF text file ({size} bytes)", size,
+                         MAX_UFF_BYTES, unit="bytes",
+                         hint="a UFF export holds one force curve; split the file")
         data = path.read_bytes()
     except OSError as exc:
         raise InstrumentFormatError(f"{path}: cannot read ({exc.strerror or exc})") from None
