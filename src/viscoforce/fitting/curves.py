@@ -263,6 +263,17 @@ def file_tip(curves: xr.Dataset):
     return Tip.from_attrs(curves.attrs)
 
 
+def required_tip(curves: xr.Dataset, tip: Any, model: str):
+    """``tip`` or the file's own; a ParameterError naming the model when there is neither."""
+    tip = tip if tip is not None else file_tip(curves)
+    if tip is None:
+        raise ParameterError(
+            f"the {model} model needs the tip, which this file does not record: give tip= "
+            "(--tip sphere:R | paraboloid:R | cone:HALF_ANGLE | pyramid:HALF_ANGLE | "
+            "flat:RADIUS)")
+    return tip
+
+
 def fit_curve(curves: xr.Dataset, model: str, *, curve: int = 0, segment: int | None = None,
               modes: int | str = 1, criterion: str = "bic", tip: Any = None,
               poisson: float | None = None) -> xr.Dataset:
@@ -321,13 +332,7 @@ def fit_curve(curves: xr.Dataset, model: str, *, curve: int = 0, segment: int | 
         if modes not in (1, None):
             raise ParameterError(f"the hertz model has no modes (modes=1), got {modes!r}")
         modes = 1
-        tip = tip if tip is not None else file_tip(curves)
-        if tip is None:
-            raise ParameterError(
-                "the hertz model needs the tip, which this file does not record: give tip= "
-                "(--tip sphere:R | paraboloid:R | cone:HALF_ANGLE | pyramid:HALF_ANGLE | "
-                "flat:RADIUS)")
-        fixed["tip"] = tip
+        fixed["tip"] = required_tip(curves, tip, "hertz")
     elif tip is not None or poisson is not None:
         raise ParameterError("the creep model takes no tip or poisson (it fits the tip position)")
     ds = fit_data(data, model, modes=modes, criterion=criterion, **fixed)

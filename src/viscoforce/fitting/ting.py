@@ -620,14 +620,9 @@ def fit_ting(curves: xr.Dataset, *, curve: int = 0, segment: int | None = None,
     ConvergenceError
         No start converged.
     """
-    from viscoforce.fitting.curves import file_tip
+    from viscoforce.fitting.curves import required_tip
 
-    tip = tip if tip is not None else file_tip(curves)
-    if tip is None:
-        raise ParameterError(
-            "the ting model needs the tip, which this file does not record: give tip= "
-            "(--tip sphere:R | paraboloid:R | cone:HALF_ANGLE | pyramid:HALF_ANGLE | "
-            "flat:RADIUS)")
+    tip = required_tip(curves, tip, "ting")
     data = ting_data(curves, curve=curve, segment=segment)
     fixed: dict[str, Any] = {"tip": tip, "position_trace": data.position_trace,
                              "material": material, "drag": drag, "fit_drag": fit_drag or None,
