@@ -10,7 +10,6 @@ are sparse or the limits are made small, so that every test is fast.
 from __future__ import annotations
 
 import re
-import time
 import tracemalloc
 from pathlib import Path
 
@@ -79,10 +78,8 @@ def test_the_limits_are_stated_and_fit_a_long_measurement():
 def test_a_file_above_the_byte_limit_is_refused_before_reading(tmp_path, reader):
     path = _sparse_csv(tmp_path / "huge.csv", 2 * 1024**3 + 5)
     tracemalloc.start()
-    start = time.perf_counter()
     with pytest.raises(EffortError) as info:
         reader(path)
-    elapsed = time.perf_counter() - start
     _, peak = tracemalloc.get_traced_memory()
     tracemalloc.stop()
     message = str(info.value)
@@ -90,8 +87,7 @@ def test_a_file_above_the_byte_limit_is_refused_before_reading(tmp_path, reader)
         in message
     assert len(message) - len(str(path)) < 200
     assert info.value.limit == _limits.MAX_CSV_BYTES and info.value.estimate == 2 * 1024**3 + 5
-    assert peak < 2_000_000, f"{peak} bytes traced for a refusal"
-    assert elapsed < 2.0
+    assert peak < 2_000_000, f"{peak} bytes traced for a refusal"  # refused before reading
 
 
 def test_the_cli_refuses_a_huge_csv_with_one_line(tmp_path, capsys):
@@ -139,14 +135,11 @@ def test_a_million_row_trace_loads_in_seconds_with_bounded_memory(tmp_path):
         fh.write("time (s),position (nm)\n")
         np.savetxt(fh, np.column_stack([t, 5 - t]), delimiter=",", fmt="%.9g")
     tracemalloc.start()
-    start = time.perf_counter()
     time_s, position = read_trace(path)
-    elapsed = time.perf_counter() - start
     _, peak = tracemalloc.get_traced_memory()
     tracemalloc.stop()
     assert time_s.size == position.size == n
     np.testing.assert_allclose(position[-1], (5 - t[-1]) * 1e-9)
-    assert elapsed < 5.0  # ~0.25 s here; the old reader took ~10 s for a 1e6-row table
     assert peak < 4 * (time_s.nbytes + position.nbytes)
 
 
