@@ -660,17 +660,26 @@ def _hertz_model(spec: ModelSpec) -> FitModel:
     def windows(z: np.ndarray, f: np.ndarray | None = None) -> dict[str, tuple[float, float]]:
         out = {"contact_point": window if window is not None else contact_window(tip, z)}
         if f is not None:
-            f = np.asarray(f, dtype=float)
-            span = float(np.ptp(f)) or float(np.max(np.abs(f))) or 1e-12
-            z_span = float(np.ptp(z)) or 1e-9
-            out["baseline"] = (float(np.min(f)) - 2 * span, float(np.max(f)) + 2 * span)
-            out["baseline_slope"] = (-10 * span / z_span, 10 * span / z_span)
+            out.update(baseline_windows(f, z))
         return out
 
     layout: list[P.Item] = [P.Chain(("E",)), P.Bounded("contact_point", -1.0, 1.0),
                             P.Bounded("baseline", -1.0, 1.0),
                             P.Bounded("baseline_slope", -1.0, 1.0)]
     return FitModel(spec, function, layout, "z", guesser, bounded_windows=windows)
+
+
+def baseline_windows(f: np.ndarray, z: np.ndarray) -> dict[str, tuple[float, float]]:
+    """Bounds of ``baseline`` [N] and ``baseline_slope`` [N/m] from the force span and the tip travel.
+
+    Wide (2 force spans beyond the data, 10 spans over the travel): they only give the bounded
+    parameters an O(1) internal scale for the optimiser's finite differences.
+    """
+    f = np.asarray(f, dtype=float)
+    span = float(np.ptp(f)) or float(np.max(np.abs(f))) or 1e-12
+    z_span = float(np.ptp(z)) or 1e-9
+    return {"baseline": (float(np.min(f)) - 2 * span, float(np.max(f)) + 2 * span),
+            "baseline_slope": (-10 * span / z_span, 10 * span / z_span)}
 
 
 def contact_window(tip: Any, z: np.ndarray) -> tuple[float, float]:

@@ -78,6 +78,7 @@ from viscoforce.fitting.models import (
     _material_guess,
     _material_layout,
     _time_window,
+    baseline_windows,
     contact_window,
     hertz_guess,
     hertz_linear,
@@ -403,11 +404,8 @@ def ting_model(spec: ModelSpec) -> FitModel:
         out = {"contact_point": fixed["contact_window"] or contact_window(
             tip, trace_z[:turning + 1])}
         if f is not None:
-            f = np.asarray(f, dtype=float)
+            out.update(baseline_windows(f, trace_z))
             span = float(np.ptp(f)) or float(np.max(np.abs(f))) or 1e-12
-            z_span = float(np.ptp(trace_z)) or 1e-9
-            out["baseline"] = (float(np.min(f)) - 2 * span, float(np.max(f)) + 2 * span)
-            out["baseline_slope"] = (-10 * span / z_span, 10 * span / z_span)
             out["drag"] = (0.0, 10 * span / max(float(np.max(np.abs(velocity))), 1e-30))
         return out
 
