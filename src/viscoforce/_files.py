@@ -129,3 +129,92 @@ def write_netcdf(ds: Any, path: str | os.PathLike[str], *, engine: str = "h5netc
         return
     with atomic_output(path) as tmp:
         ds.to_netcdf(tmp, engine=engine)
+
+
+#: HDF5 chunk length along an appended dimension: at least, and at most (elements).
+_STREAM_CHUNK = (1024, 1 << 16)
+
+
+def _stream_encoding(ds: Any, append_dims: tuple[str, ...]) -> dict[str, dict[str, Any]]:
+    """HDF5 chunk shapes of the variables along ``append_dims`` (xarray's would be tiny)."""
+    lengths = {d: min(max(_STREAM_CHUNK[0], int(ds.sizes[d])), _STREAM_CHUNK[1])
+               for d in append_dims if d in ds.dims}
+    return {str(name): {"chunksizes": tuple(lengths.get(d, int(ds.sizes[d])) for d in v.dims)}
+            for name, v in ds.variables.items() if set(v.dims) & set(lengths)}
+
+
+def _append(handle: Any, ds: Any, append_dims: tuple[str, ...], index: int) -> None:
+    """Append ``ds`` along ``append_dims`` to the open h5netcdf file ``handle``."""
+    names = {str(n) for n in ds.variables}
+    have = set(handle.variables)
+    if names != have:
+        raise ParameterError(f"chunk {index} has variables {sorted(names ^ have)} the first chunk "
+                             "has not (or lacks them): every chunk must have the same variables")
+    start = {d: int(handle.dimensions[d].size) for d in append_dims if d in ds.dims}
+    for d, n in start.items():
+        handle.resize_dimension(d, n + int(ds.sizes[d]))
+    for name, v in ds.variables.items():
+        if not set(v.dims) & set(start):
+            continue  # not along an appended dim: the first chunk's copy stands
+        where = tuple(slice(start[d], start[d] + int(ds.sizes[d])) if d in start
+                      else slice(None) for d in v.dims)
+        values = v.values
+        if values.dtype.kind == "U":  # netCDF4 variable-length strings
+            values = values.astype(object)
+        handle.variables[str(name)][where] = values
+
+
+def write_netcdf_stream(chunks: Iterable[Any], path: str | os.PathLike[str], *,
+                        append_dims: Iterable[str]) -> dict[str, Any]:
+    """Write datasets one after the other into one netCDF file, appended along ``append_dims``.
+
+    Memory is bounded by one chunk: the first chunk makes the file (``to_netcdf``, engine
+    h5netcdf, ``append_dims`` unlimited), every next chunk is appended by HDF5 writes. The file
+    is written to a temporary file beside ``path`` and renamed into place only when every
+    chunk is in (:func:`atomic_output`): an exception from the writer or from the chunks'
+    producer leaves no file at ``path`` (a previous file there is left untouched).
+
+    Parameters
+    ----------
+    chunks : iterable of xarray.Dataset
+        Datasets with the same variables, dims and dtypes; variables along none of
+        ``append_dims`` are taken from the first chunk.
+    path : path
+        The netCDF file.
+    append_dims : iterable of str
+        The dims the chunks are concatenated along.
+
+    Returns
+    -------
+    dict
+        ``dims`` (name → total size, in the first chunk's order), ``variables`` (the sorted
+        data variable names) and ``chunks`` (how many were written).
+
+    Raises
+    ------
+    ParameterError
+        No chunk, or a chunk whose variables differ from the first chunk's.
+    """
+    import h5netcdf
+
+    dims = tuple(append_dims)
+    iterator = iter(chunks)
+    with atomic_output(path) as tmp:
+        first = next(iterator, None)
+        if first is None:
+            raise ParameterError("write_netcdf_stream needs at least one chunk")
+        sizes = {str(k): int(v) for k, v in first.sizes.items()}
+        variables = sorted(str(v) for v in first.data_vars)
+        first.to_netcdf(tmp, engine="h5netcdf", unlimited_dims=[d for d in dims
+                                                                if d in first.dims],
+                        encoding=_stream_encoding(first, dims))
+        count = 1
+        del first
+        with h5netcdf.File(tmp, "a") as handle:
+            for ds in iterator:
+                _append(handle, ds, dims, count)
+                for d in dims:
+                    if d in ds.dims:
+                        sizes[d] += int(ds.sizes[d])
+                count += 1
+    return {"dims": sizes, "variables": variables, "chunks": count}

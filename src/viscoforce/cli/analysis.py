@@ -22,7 +22,7 @@ from viscoforce.cli._args import (
 )
 from viscoforce.cli._output import print_json, print_written
 
-__all__ = ["SUBCOMMANDS", "phase_lag_type"]
+__all__ = ["SUBCOMMANDS", "open_streamable", "phase_lag_type", "streamed_spectrum"]
 
 _PAIR_RE = re.compile(r"^\s*(?P<f>[^=:]+?)\s*[=:]\s*(?P<deg>[-+0-9.eE]+)\s*$")
 _FREQUENCY = quantity_type("frequency")
@@ -144,14 +144,17 @@ def _phase_lag(values: list | None, data) -> float | dict[float, float] | None:
     return {p: next((v for f, v in lags.items() if abs(f - p) <= 1e-9 * p), 0.0) for p in present}
 
 
+_MODULI_NEED_SPECTRUM = ("--tip and --poisson give the complex modulus of a spectrum; this file "
+                         "gives curves (no modulation segments, or --raw)")
+
+
 def _with_moduli(ds, args: argparse.Namespace):
     """The spectrum with E′, E″, G′, G″ per point (``--tip``, ``--poisson``)."""
     from viscoforce.experiments.moduli import add_complex_modulus
     from viscoforce.physics.tips import parse_tip
 
     if "omega" not in ds.dims:
-        raise UsageError("--tip and --poisson give the complex modulus of a spectrum; this file "
-                         "gives curves (no modulation segments, or --raw)")
+        raise UsageError(_MODULI_NEED_SPECTRUM)
     if args.tip is None:
         raise UsageError("--poisson needs --tip (the moduli need the tip's contact size)")
     poisson = None
@@ -170,15 +173,92 @@ def has_modulation(ds) -> bool:
     return names is not None and bool((names.values == "modulation").any())
 
 
-def run_load(args: argparse.Namespace) -> int:
-    """Read an instrument file; modulation segments become a spectrum unless ``--raw``."""
-    from viscoforce.experiments.modulation import correct_spectrum, modulation_spectrum
-    from viscoforce.io.instruments import load_instrument
+def open_streamable(path: str, fmt: str | None = None, options: dict | None = None):
+    """``(archive, probe)`` of a JPK file read in chunks, or None: read it whole instead.
 
+    A JPK archive (detected, or ``--format jpk``) without calibration options is read chunk by
+    chunk (:mod:`viscoforce.io.stream`); ``probe`` is the curves dataset of its first curve
+    (its segment table says whether the file has modulation segments, and at which
+    frequencies), with the ``source`` and ``file`` attrs :func:`load_instrument` gives. Any
+    other file, or one the JPK reader refuses, is None: the whole-file route reads it and
+    reports its errors. The caller closes the archive.
+    """
+    from pathlib import Path
+
+    from viscoforce.exceptions import ViscoforceError
+    from viscoforce.io.curves import jpk_to_curves
+    from viscoforce.io.instruments import detect_format
+    from viscoforce.io.jpk import read_jpk
+
+    if options or fmt not in (None, "jpk"):
+        return None
+    try:
+        if fmt is None and detect_format(path).name != "jpk":
+            return None
+        archive = read_jpk(path)
+    except ViscoforceError:
+        return None
+    try:
+        probe = jpk_to_curves(archive, curves=0)
+    except ViscoforceError:
+        archive.close()
+        return None
+    probe.attrs.update(source="jpk", file=str(Path(path)))
+    return archive, probe
+
+
+def streamed_spectrum(path: str, fmt: str | None = None):
+    """The spectrum of a modulated JPK file demodulated in chunks, else None (read it whole)."""
+    opened = open_streamable(path, fmt)
+    if opened is None:
+        return None
+    archive, probe = opened
+    with archive:
+        if not has_modulation(probe):
+            return None
+        from viscoforce.experiments.stream import stream_spectrum
+
+        return stream_spectrum(archive)
+
+
+def _curves_streamed(archive, out: str | None, attrs: dict) -> dict:
+    """The dims and variables of the archive's curves dataset, written to ``out`` chunk by chunk."""
+    from viscoforce.io.stream import CURVE_DIMS, iter_curves, write_curves_netcdf
+
+    if out:
+        return write_curves_netcdf(archive, out, attrs=attrs)
+    sizes, variables = None, []
+    for part in iter_curves(archive):
+        if sizes is None:
+            sizes = {str(k): int(v) for k, v in part.sizes.items()}
+            variables = sorted(str(v) for v in part.data_vars)
+        else:
+            for d in CURVE_DIMS:
+                sizes[d] += int(part.sizes[d])
+    return {"dims": sizes, "variables": variables}
+
+
+def run_load(args: argparse.Namespace) -> int:
+    """Read an instrument file; modulation segments become a spectrum unless ``--raw``.
+
+    A JPK archive is read and demodulated in chunks of curves (:func:`open_streamable`): memory
+    stays bounded whatever the map's size, the results are those of reading it whole.
+    """
     options = {k: v for k, v in (("spring_constant", args.spring_constant),
                                  ("sensitivity", args.sensitivity)) if v is not None}
+    opened = open_streamable(args.file, args.format, options)
+    if opened is None:
+        return _run_load(args, None, _load_whole(args, options))
+    archive, probe = opened
+    with archive:
+        return _run_load(args, archive, probe)
+
+
+def _load_whole(args: argparse.Namespace, options: dict):
+    from viscoforce.io.instruments import load_instrument
+
     try:
-        data = load_instrument(args.file, format=args.format, **options)
+        return load_instrument(args.file, format=args.format, **options)
     except TypeError as exc:  # an option the format does not take (its own calibration)
         if not options:
             raise
@@ -186,6 +266,13 @@ def run_load(args: argparse.Namespace) -> int:
         raise UsageError(f"{flags}: {exc} (this file carries its own calibration; the flags "
                          "are for files without one: NT-MDT text, AFM Workshop in volts, "
                          "Igor, Chiaro, UFF, CSV)") from None
+
+
+def _run_load(args: argparse.Namespace, archive, data) -> int:
+    """``load`` of ``data``: the whole file, or (``archive`` given) the probe of a JPK archive."""
+    from viscoforce.experiments.modulation import correct_spectrum, modulation_spectrum
+    from viscoforce.io.instruments import load_instrument
+
     fmt = str(data.attrs.get("source", args.format or ""))
     if args.drag is not None and args.drag_heights is not None:
         raise UsageError("give --drag or --drag-heights, not both")
@@ -201,12 +288,23 @@ def run_load(args: argparse.Namespace) -> int:
             reference = modulation_spectrum(reference)
     drag_fit = _drag_from_heights(args.drag_heights, args.phase_lag, reference)
     drag = args.drag if drag_fit is None else drag_fit.drag_at_contact
+    streamed = None
     if "omega" in data.dims:  # a spectrum CSV or netCDF: the same corrections and flags
         ds = data if not corrections else correct_spectrum(
             data, phase_lag=_phase_lag(args.phase_lag, data), drag=drag,
             phase_reference=reference)
     elif args.raw or not has_modulation(data):
+        if archive is not None:  # the curves go to the file chunk by chunk
+            if args.tip is not None or args.poisson is not None:
+                raise UsageError(_MODULI_NEED_SPECTRUM)
+            streamed = _curves_streamed(archive, args.out, {k: data.attrs[k]
+                                                            for k in ("source", "file")})
         ds = data
+    elif archive is not None:
+        from viscoforce.experiments.stream import stream_spectrum
+
+        ds = stream_spectrum(archive, phase_lag=_phase_lag(args.phase_lag, data), drag=drag,
+                             phase_reference=reference)
     else:
         ds = modulation_spectrum(data, phase_lag=_phase_lag(args.phase_lag, data), drag=drag,
                                  phase_reference=reference)
@@ -214,13 +312,14 @@ def run_load(args: argparse.Namespace) -> int:
         ds.attrs.update(drag_fit.as_attrs())
     if args.tip is not None or args.poisson is not None:
         ds = _with_moduli(ds, args)
-    if args.out:
+    if args.out and streamed is None:
         write_netcdf(ds, args.out)
     kind = "spectrum" if "omega" in ds.dims else "curves"
+    dims = streamed["dims"] if streamed else {str(k): int(v) for k, v in ds.sizes.items()}
     result = {"format": fmt, "kind": kind,
-              "n_curves": int(ds.sizes.get("curve", 1)),
-              "dims": {str(k): int(v) for k, v in ds.sizes.items()},
-              "variables": sorted(str(v) for v in ds.data_vars)}
+              "n_curves": int(dims.get("curve", 1)), "dims": dims,
+              "variables": streamed["variables"] if streamed
+              else sorted(str(v) for v in ds.data_vars)}
     if drag_fit is not None:
         result.update(drag_at_contact=drag_fit.drag_at_contact,
                       drag_at_contact_stderr=drag_fit.drag_at_contact_stderr)

@@ -177,7 +177,7 @@ def read_data(path: str, fmt: str | None = None):
 
     import xarray as xr
 
-    from viscoforce.cli.analysis import has_modulation
+    from viscoforce.cli.analysis import has_modulation, streamed_spectrum
     from viscoforce.io.instruments import load_instrument
 
     if Path(path).suffix.lower() == ".nc" and fmt is None:
@@ -188,6 +188,9 @@ def read_data(path: str, fmt: str | None = None):
                 return one_curve_squeezed(ds.load())
         except (OSError, ValueError) as exc:
             raise UsageError(f"DATA {path}: not a readable netCDF file ({exc})") from None
+    streamed = streamed_spectrum(path, fmt)  # a JPK map: demodulated in chunks of curves
+    if streamed is not None:
+        return one_curve_squeezed(streamed)
     data = load_instrument(path, format=fmt)
     if "omega" not in data.dims and has_modulation(data):
         from viscoforce.experiments.modulation import modulation_spectrum
