@@ -34,9 +34,9 @@ __all__ = ["BYTES_PER_SAMPLE", "CURVE_DIMS", "DEFAULT_CHUNK_BYTES", "MAX_CHUNK",
 
 #: Memory one chunk of curves may take while it is read and demodulated [bytes].
 DEFAULT_CHUNK_BYTES = 128 * 2**20
-#: Peak bytes per sample of reading and demodulating a chunk (tracemalloc on the synthetic map
+#: Peak bytes per sample of reading and demodulating a chunk (tracemalloc, synthetic 16x16 map
 #: of benchmarks/bench_load.py: decoded channels, the flattened curves dataset, the lock-in).
-BYTES_PER_SAMPLE = 200
+BYTES_PER_SAMPLE = 100
 #: Largest chunk (curves), however small the curves.
 MAX_CHUNK = 256
 #: The dims a curves dataset grows along when curves are appended.
