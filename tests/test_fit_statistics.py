@@ -259,7 +259,8 @@ def test_a_one_sided_modulus_is_reported_as_a_bound_that_holds_the_truth():
 def test_a_determined_parameter_has_profile_limits_near_two_sigma():
     k = ROOT * structural_complex_modulus(OMEGA, **STRUCTURAL)
     ds = fit_spectrum(_spectrum(k, 0.02), "contact", radius=R, indentation=DEPTH,
-                      material="structural")
+                      material="structural", identifiability="profile")
+    assert ds["profiled"].values.all()
     for n in STRUCTURAL:
         sd = float(ds[f"{n}_stderr"])
         lo, hi = float(ds[f"{n}_lower"]), float(ds[f"{n}_upper"])

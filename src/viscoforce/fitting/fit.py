@@ -21,7 +21,8 @@ Statistics follow from what the weights are (``attrs["weighting"]``):
 - ``unweighted`` — force curves (relaxation, step, hertz, creep): as ``relative`` with unit
   weights; the stderr of measured curves are corrected for autocorrelated residuals.
 
-Each single fit also profiles its parameters (:mod:`viscoforce.fitting.identify`): a parameter
+Each single fit also profiles the parameters whose curvature can mislead
+(:mod:`viscoforce.fitting.identify`; ``identifiability="profile"`` all of them): a parameter
 whose likelihood is one-sided is reported as a bound, not as a value with an error.
 """
 
@@ -30,7 +31,7 @@ from __future__ import annotations
 import math
 import re
 import warnings
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -60,7 +61,15 @@ from viscoforce.exceptions import (
     ParameterError,
 )
 from viscoforce.fitting import _params
-from viscoforce.fitting.identify import IDENTIFIABILITY, Profile, profile_parameters
+from viscoforce.fitting.identify import (
+    IDENTIFIABILITY,
+    QUADRATIC_CORRELATION,
+    QUADRATIC_DECADES,
+    Profile,
+    needs_profile,
+    profile_parameters,
+    quadratic_limits,
+)
 from viscoforce.fitting.models import (
     MAX_AUTO_MODES,
     MAX_MODES,
@@ -144,7 +153,7 @@ def spectrum_data(ds: xr.Dataset, *, weights: str | None = None) -> FitData:
         on data without stderr.
     """
     validate_spectrum(ds, require=("stiffness", "phase"))
-    extra = [d for d in ds["stiffness"].dims if d != "omega"]
+    extra = [d for d in ds.variables["stiffness"].dims if d != "omega"]
     if extra:
         raise ParameterError(f"one spectrum is over 'omega' only; this one also has {extra} "
                              "(fit it as a map, or select one)")
@@ -152,7 +161,7 @@ def spectrum_data(ds: xr.Dataset, *, weights: str | None = None) -> FitData:
     source = {"data_kind": "spectrum"}
     if "source" in ds.attrs:
         source["data_source"] = str(ds.attrs["source"])
-    data = pixel_fit_data(np.asarray(ds["omega"].values, dtype=float),
+    data = pixel_fit_data(np.asarray(ds.variables["omega"].values, dtype=float),
                           {k: v[0] for k, v in arrays.items()}, source, weights=weights)
     for note in data.notes:
         warnings.warn(note, DataWarning, stacklevel=3)
@@ -174,7 +183,7 @@ def spectrum_arrays(ds: xr.Dataset, dims: tuple[str, ...]) -> dict[str, np.ndarr
     def grab(name: str, fill: float) -> np.ndarray:
         if name not in ds.variables:
             return np.full((n_pixels, n_omega), fill)
-        da = ds[name]  # scalar, per pixel, per frequency or per point: broadcast like xarray
+        da = ds.variables[name]  # scalar, per pixel, per frequency or per point: broadcast
         values = np.asarray(da.transpose(*(d for d in order if d in da.dims)).values, dtype=float)
         index = tuple(slice(None) if d in da.dims else None for d in order)
         return np.broadcast_to(values[index], shape).reshape(n_pixels, n_omega)
@@ -376,16 +385,20 @@ class Outcome:
         """The best-fit model over ``x`` (ω or t)."""
         return self.model.raw(np.asarray(x, dtype=float), self.values)
 
-    def profile(self) -> dict[str, Profile]:
-        """Profile likelihood of every parameter (computed once; :mod:`.identify`)."""
+    def profile(self, names: Sequence[str] | None = None) -> dict[str, Profile]:
+        """Profile likelihood of ``names`` (default all; each computed once; :mod:`.identify`)."""
         if self.profiles is None:
+            self.profiles = {}
+        todo = [n for n in (self.model.names if names is None else names)
+                if n not in self.profiles]
+        if todo:
             stderr = summary_stderr(self)
             scale = 1.0 if self.data.sigma_known else max(float(self.result.redchi), 1e-300)
             scale *= self.stderr_factor ** 2
-            self.profiles = profile_parameters(
+            self.profiles.update(profile_parameters(
                 self.model.layout, _residual(self.model, self.data), self.result.params,
-                stderr, float(self.result.chisqr), scale)
-        return self.profiles
+                stderr, float(self.result.chisqr), scale, names=todo))
+        return {n: self.profiles[n] for n in (self.model.names if names is None else names)}
 
 
 def _residual(model: FitModel, data: FitData):
@@ -514,11 +527,29 @@ def local_identifiability(values: Mapping[str, float], stderr: Mapping[str, floa
             for n, v in values.items()}
 
 
-def summary(outcome: Outcome, *, profile: bool = False) -> dict[str, Any]:
+#: ``profile=`` of :func:`summary` and :func:`result_dataset`: every parameter (True), none
+#: (False: the local test, no limits), or where the curvature can mislead ("auto":
+#: :func:`viscoforce.fitting.identify.needs_profile`; the others get the curvature's ±2σ).
+PROFILE_CHOICES = (True, False, "auto")
+#: ``identifiability=`` of the single-fit functions → ``profile=``.
+IDENTIFIABILITY_CHOICES = {"auto": "auto", "profile": True, "local": False}
+
+
+def profile_choice(identifiability: Any) -> bool | str:
+    """``profile=`` for ``identifiability`` (one of :data:`IDENTIFIABILITY_CHOICES`)."""
+    if not isinstance(identifiability, str) or identifiability not in IDENTIFIABILITY_CHOICES:
+        raise ParameterError(f"identifiability must be one of "
+                             f"{', '.join(map(repr, IDENTIFIABILITY_CHOICES))}, got "
+                             f"{identifiability!r}")
+    return IDENTIFIABILITY_CHOICES[identifiability]
+
+
+def summary(outcome: Outcome, *, profile: bool | str = False) -> dict[str, Any]:
     """Values, stderr, correlations, statistics and identifiability of a fit (SPEC names, SI).
 
-    ``profile=True`` adds the profile likelihood (:mod:`viscoforce.fitting.identify`): codes
-    and 2σ limits; otherwise the identifiability is the local test.
+    ``profile`` (:data:`PROFILE_CHOICES`) adds 2σ limits and identifiability codes from the
+    profile likelihood (:mod:`viscoforce.fitting.identify`) of every parameter (True) or of the
+    ones whose curvature can mislead ("auto"); otherwise the identifiability is the local test.
     """
     res, names = outcome.result, outcome.model.names
     values = dict(outcome.values)
@@ -535,25 +566,35 @@ def summary(outcome: Outcome, *, profile: bool = False) -> dict[str, Any]:
     ident = local_identifiability(values, stderr, at_bound)
     lower = {n: math.nan for n in names}
     upper = dict(lower)
+    profiled: list[str] = []
     if profile:
-        for n, prof in outcome.profile().items():
+        layout = outcome.model.layout
+        profiled = (list(names) if profile is True
+                    else needs_profile(layout, values, stderr, corr, at_bound))
+        limits = {**quadratic_limits(layout, values, stderr,
+                                     [n for n in names if n not in profiled]),
+                  **outcome.profile(profiled)}
+        for n, prof in limits.items():
             ident[n], lower[n], upper[n] = prof.code, prof.lower, prof.upper
     return {"values": values, "stderr": stderr, "correlation": corr, "success": success,
             "redchi": float(res.redchi), "chisqr": float(res.chisqr), "dof": outcome.dof,
             "chi2_pvalue": outcome.pvalue, **outcome.criterion, "nfev": int(res.nfev),
             "at_bound": bound, "message": str(res.message), "weighting": outcome.data.weighting,
             "identifiability": ident, "lower": lower, "upper": upper,
-            "notes": list(outcome.data.notes), "profiled": bool(profile)}
+            "notes": list(outcome.data.notes), "profiled": profiled}
 
 
 def result_dataset(outcome: Outcome, data: FitData, *,
                    selection: list[dict[str, Any]] | None = None,
-                   profile: bool = True) -> xr.Dataset:
+                   profile: bool | str = "auto") -> xr.Dataset:
     """The fit-result dataset (schema.fit) of one fit, with its best-fit curve.
 
     Besides the schema's variables: ``chi2_pvalue``, ``identifiability`` over ``param_i``
-    (codes of :data:`viscoforce.fitting.identify.IDENTIFIABILITY`) and, with ``profile``,
-    ``<name>_lower`` / ``<name>_upper`` (the 2σ profile limits, NaN on an unbounded side).
+    (codes of :data:`viscoforce.fitting.identify.IDENTIFIABILITY`) and, with ``profile``
+    (:data:`PROFILE_CHOICES`), ``<name>_lower`` / ``<name>_upper`` (the 2σ limits, NaN on an
+    unbounded side) and ``profiled`` over ``param_i`` (1: the limits are the profile
+    likelihood's; 0: the curvature's ±2σ); the derived moduli at ν = 0.5
+    (:func:`add_derived_moduli` re-derives them at another ν).
     """
     info = summary(outcome, profile=profile)
     model = outcome.model
@@ -562,8 +603,7 @@ def result_dataset(outcome: Outcome, data: FitData, *,
                              "weighting": info["weighting"], "chisqr": info["chisqr"],
                              "chisqr_calibrated": outcome.calibrated_chisqr,
                              "dof": info["dof"],
-                             "identifiability_method": "profile likelihood (2 sigma)" if profile
-                             else "local (stderr > value, none, or at a bound)"}
+                             "identifiability_method": _method_text(profile, info["profiled"])}
     if info["notes"]:
         attrs["data_notes"] = "; ".join(info["notes"])
     if math.isfinite(outcome.lag1):
@@ -588,45 +628,67 @@ def result_dataset(outcome: Outcome, data: FitData, *,
         t = np.sort(data.x)
         name = "fit_tip_position" if model.spec.name == "creep" else "fit_force"
         curves = {"time": t, name: outcome.evaluate(t)}
-    ds = make_fit_result({n: (info["values"][n], info["stderr"][n]) for n in model.names},
-                         correlation=info["correlation"], success=info["success"],
-                         redchi=info["redchi"], aic=info["aic"], bic=info["bic"],
-                         modes=model.spec.modes, model=model.spec.name, attrs=attrs, **curves)
-    ds = ds.assign(_statistics_variables(info, model.names, profile))
+    extra = _statistics_variables(info, model.names, bool(profile))
     if selection:
-        ds = ds.assign(
-            selection_modes=("candidate", [s["modes"] for s in selection],
-                             {"units": "1", "long_name": "modes of the candidate"}),
-            selection_aic=("candidate", [s["aic"] for s in selection],
-                           {"units": "1", "long_name": "AIC of the candidate"}),
-            selection_bic=("candidate", [s["bic"] for s in selection],
-                           {"units": "1", "long_name": "BIC of the candidate"}))
-    return ds
+        def per_candidate(key: str, long_name: str) -> xr.Variable:
+            return xr.Variable("candidate", [s[key] for s in selection],
+                               {"units": "1", "long_name": long_name})
+
+        extra.update(selection_modes=per_candidate("modes", "modes of the candidate"),
+                     selection_aic=per_candidate("aic", "AIC of the candidate"),
+                     selection_bic=per_candidate("bic", "BIC of the candidate"))
+    from viscoforce.physics.tips import DEFAULT_POISSON
+
+    params = {n: (info["values"][n], info["stderr"][n]) for n in model.names}
+    extra.update(derived_variables(params, DEFAULT_POISSON))
+    attrs.update(derived_attrs(DEFAULT_POISSON))
+    return make_fit_result(params,
+                           correlation=info["correlation"], success=info["success"],
+                           redchi=info["redchi"], aic=info["aic"], bic=info["bic"],
+                           modes=model.spec.modes, model=model.spec.name, attrs=attrs,
+                           extra=extra, **curves)
 
 
 def _statistics_variables(info: Mapping[str, Any], names: list[str],
-                          limits: bool) -> dict[str, xr.DataArray]:
+                          limits: bool) -> dict[str, xr.Variable]:
     from viscoforce.schema.fit import parameter_units
 
-    out = {"chi2_pvalue": xr.DataArray(info["chi2_pvalue"], attrs={
+    out = {"chi2_pvalue": xr.Variable((), info["chi2_pvalue"], {
         "units": "1", "long_name": "chi-square goodness-of-fit p-value (NaN: stderr unknown)",
         "comment": "residuals whose stderr were estimated with nu degrees of freedom (the "
                    "lock-in's 2 x lockin_stderr_bins) enter as normal scores of their t_nu "
                    "tail probability"}),
-        "identifiability": xr.DataArray(
-            np.array([info["identifiability"][n] for n in names], dtype=np.int8),
-            dims=("param_i",), attrs={
-                "long_name": "identifiability of the fitted parameter",
-                "flag_values": np.array(list(IDENTIFIABILITY), dtype=np.int8),
-                "flag_meanings": " ".join(IDENTIFIABILITY.values())})}
+        "identifiability": xr.Variable(
+            ("param_i",), np.array([info["identifiability"][n] for n in names], dtype=np.int8),
+            {"long_name": "identifiability of the fitted parameter",
+             "flag_values": np.array(list(IDENTIFIABILITY), dtype=np.int8),
+             "flag_meanings": " ".join(IDENTIFIABILITY.values())})}
     if limits:
+        out["profiled"] = xr.Variable(
+            ("param_i",), np.array([n in info["profiled"] for n in names], dtype=np.int8),
+            {"units": "1", "long_name": "limits from the profile likelihood (1) or from the "
+                                        "curvature, +-2 stderr in log10 for positive parameters (0)"})
         for n in names:
             unit = parameter_units(n)
-            out[f"{n}_lower"] = xr.DataArray(info["lower"][n], attrs={
-                "units": unit, "long_name": f"2-sigma profile-likelihood lower limit of {n}"})
-            out[f"{n}_upper"] = xr.DataArray(info["upper"][n], attrs={
-                "units": unit, "long_name": f"2-sigma profile-likelihood upper limit of {n}"})
+            out[f"{n}_lower"] = xr.Variable((), info["lower"][n], {
+                "units": unit, "long_name": f"2-sigma lower limit of {n}"})
+            out[f"{n}_upper"] = xr.Variable((), info["upper"][n], {
+                "units": unit, "long_name": f"2-sigma upper limit of {n}"})
     return out
+
+
+def _method_text(profile: bool | str, profiled: Sequence[str]) -> str:
+    """``attrs["identifiability_method"]``: how the codes and 2σ limits were found."""
+    if not profile:
+        return "local (stderr > value, none, or at a bound)"
+    if profile is True:
+        return "profile likelihood (2 sigma)"
+    quadratic = (f"curvature (+-2 stderr, log10 for positive parameters) where the local 2 "
+                 f"sigma spans <= {QUADRATIC_DECADES} decade and |correlation| <= "
+                 f"{QUADRATIC_CORRELATION}")
+    if not profiled:
+        return quadratic
+    return f"profile likelihood (2 sigma) of {', '.join(profiled)}; elsewhere {quadratic}"
 
 
 def _fixed_attrs(fixed: Mapping[str, Any]) -> dict[str, Any]:
@@ -673,33 +735,60 @@ def add_derived_moduli(ds: xr.Dataset, poisson: float | None = None) -> xr.Datas
     xarray.Dataset
         ``ds`` with the derived variables.
     """
-    from viscoforce.physics.tips import DEFAULT_POISSON, shear_from_young, young_from_paper
+    from viscoforce.physics.tips import DEFAULT_POISSON
 
     nu = DEFAULT_POISSON if poisson is None else poisson
+    names = [str(n) for n in ds["param_i"].values]
+    if ds.attrs.get("poisson") == nu and all(
+            f"{n}_young" in ds.variables for n in names if PAPER_CONVENTION.fullmatch(n)):
+        return ds  # already derived at this ν (result_dataset derives at the default)
+    variables = ds.variables
+    result = ds.assign(derived_variables(
+        {n: (variables[n], variables[f"{n}_stderr"]) for n in names}, nu))
+    result.attrs.update(derived_attrs(nu))
+    return result
+
+
+def derived_variables(params: Mapping[str, tuple[Any, Any]], nu: float
+                      ) -> dict[str, xr.Variable]:
+    """``<name>_young``, ``<name>_shear`` and their ``_stderr`` of each paper-convention modulus.
+
+    ``params``: name → (value, stderr) as :class:`xarray.Variable` (a map) or floats (one fit,
+    units from :func:`viscoforce.schema.fit.parameter_units`). ν is validated here (the message
+    names its range).
+    """
+    from viscoforce.physics.tips import shear_from_young, young_from_paper
+    from viscoforce.schema.fit import parameter_units
+
     young_from_paper(1.0, nu)  # validates ν (the message names the range)
     out = {}
-    for name in (str(n) for n in ds["param_i"].values):
+    for name, pair in params.items():
         if not PAPER_CONVENTION.fullmatch(name):
             continue
-        unit = str(ds[name].attrs.get("units", "Pa"))
+        first = pair[0]
+        unit = (str(first.attrs.get("units", "Pa")) if isinstance(first, xr.Variable)
+                else parameter_units(name))
         for suffix, convert, what in (
                 ("young", lambda x: young_from_paper(x, nu), "Young's"),
                 ("shear", lambda x: shear_from_young(young_from_paper(x, nu), nu), "shear")):
-            for tail, source in (("", name), ("_stderr", f"{name}_stderr")):
-                values = np.asarray(ds[source].values, dtype=float)
-                out[f"{name}_{suffix}{tail}"] = xr.DataArray(
-                    convert(values) if values.ndim else float(convert(values)),
-                    dims=ds[source].dims, attrs={
+            for tail, source in zip(("", "_stderr"), pair, strict=True):
+                dims = source.dims if isinstance(source, xr.Variable) else ()
+                values = np.asarray(source.values if isinstance(source, xr.Variable) else (
+                    math.nan if source is None else source), dtype=float)
+                out[f"{name}_{suffix}{tail}"] = xr.Variable(
+                    dims, convert(values) if values.ndim else float(convert(values)), {
                         "units": unit, "poisson": float(nu),
                         "long_name": f"{'standard error of ' if tail else ''}{what} "
                                      f"{'viscosity' if name == 'mu' else 'modulus'} from {name} "
                                      f"(nu = {nu:g})"})
-    result = ds.assign(out)
-    result.attrs["poisson"] = float(nu)
-    result.attrs["modulus_convention"] = (
+    return out
+
+
+def derived_attrs(nu: float) -> dict[str, Any]:
+    """The dataset attributes that go with :func:`derived_variables`."""
+    return {"poisson": float(nu), "modulus_convention": (
         "E (and E0, E_inf, E_i, E_ref, mu) is the paper's: 2/E = sum (1 - nu_i^2)/E_i, twice "
-        "Johnson's E*; <name>_young = E (1 - nu^2)/2, <name>_shear = <name>_young/(2 (1 + nu))")
-    return result
+        "Johnson's E*; <name>_young = E (1 - nu^2)/2, <name>_shear = <name>_young/(2 (1 + nu))")}
 
 
 # ── public entry points ─────────────────────────────────────────────────────────────────────────
@@ -773,7 +862,8 @@ def _share_effective_size(outcomes: list[Outcome]) -> None:
 
 
 def fit_data(data: FitData, name: str, *, modes: int | str = 1, criterion: str = "bic",
-             max_modes: int = MAX_AUTO_MODES, profile: bool = True, **fixed: Any) -> xr.Dataset:
+             max_modes: int = MAX_AUTO_MODES, profile: bool | str = "auto",
+             **fixed: Any) -> xr.Dataset:
     """Fit prepared data (:class:`FitData`) with model ``name``; ``modes="auto"`` selects.
 
     Parameters
@@ -788,8 +878,9 @@ def fit_data(data: FitData, name: str, *, modes: int | str = 1, criterion: str =
         Information criterion of ``modes="auto"``.
     max_modes : int
         Most modes "auto" tries.
-    profile : bool
-        Profile-likelihood identifiability of the kept fit (default True; False: the local test).
+    profile : bool or "auto"
+        Profile-likelihood identifiability of the kept fit (:data:`PROFILE_CHOICES`; default
+        "auto": the parameters whose curvature can mislead; False: the local test).
     **fixed
         The model's fixed inputs (:func:`viscoforce.fitting.models.make_model`).
 
@@ -897,7 +988,7 @@ def warn_fit(ds: xr.Dataset, *, stacklevel: int = 4) -> None:
 def fit_spectrum(spectrum: xr.Dataset, model: str, *, modes: int | str | None = None,
                  criterion: str = "bic", accuracy: float | None = None,
                  weights: str | None = None, poisson: float | None = None,
-                 **fixed: Any) -> xr.Dataset:
+                 identifiability: str = "auto", **fixed: Any) -> xr.Dataset:
     """Fit one spectrum (over ``omega``) with a spectrum model.
 
     Parameters
@@ -927,6 +1018,13 @@ def fit_spectrum(spectrum: xr.Dataset, model: str, *, modes: int | str | None = 
     poisson : float, optional
         The sample's Poisson's ratio in [0, 0.5] (default 0.5) of the derived Young's and shear
         moduli (:func:`add_derived_moduli`).
+    identifiability : {"auto", "profile", "local"}
+        How each parameter's identifiability codes and 2σ limits ``<name>_lower``/``_upper``
+        are found: "auto" (default) walks the profile likelihood of the parameters whose
+        curvature can mislead (not determined by the local test, a local 2σ wider than 0.1
+        decade, or correlated beyond 0.98: :func:`viscoforce.fitting.identify.needs_profile`)
+        and takes ±2σ of the curvature for the others; "profile" walks every parameter (several
+        refits each); "local" only the local test (no limits).
     **fixed
         The model's fixed inputs (see :func:`viscoforce.fitting.models.make_model`); for
         ``contact`` the ``indentation`` defaults to the data's median ``mean_indentation``.
@@ -937,6 +1035,7 @@ def fit_spectrum(spectrum: xr.Dataset, model: str, *, modes: int | str | None = 
         Fit result (:mod:`viscoforce.schema.fit`); with ``"auto"`` also ``selection_modes``,
         ``selection_aic``, ``selection_bic`` over ``candidate``.
     """
+    profile = profile_choice(identifiability)
     if model == "auto":
         if fixed.get("position") is None and fixed.get("mean_force") is None:
             from viscoforce.fitting.measured import fit_measured_auto
@@ -948,10 +1047,10 @@ def fit_spectrum(spectrum: xr.Dataset, model: str, *, modes: int | str | None = 
                     "materials by the criterion instead: leave accuracy out")
             return add_derived_moduli(fit_measured_auto(
                 spectrum, modes="auto" if modes is None else modes, criterion=criterion,
-                weights=weights, **fixed), poisson)
+                weights=weights, profile=profile, **fixed), poisson)
         return add_derived_moduli(fit_spectrum_auto(
             spectrum, modes=1 if modes is None else modes, criterion=criterion,
-            accuracy=accuracy, weights=weights, **fixed), poisson)
+            accuracy=accuracy, weights=weights, profile=profile, **fixed), poisson)
     modes = _check_modes(model, 1 if modes is None else modes) if model in MODEL_NAMES else 1
     if criterion not in CRITERIA:
         raise ParameterError(f"criterion must be one of {', '.join(CRITERIA)}, got {criterion!r}")
@@ -971,7 +1070,7 @@ def fit_spectrum(spectrum: xr.Dataset, model: str, *, modes: int | str | None = 
             f"model {model!r} needs the mean position: give h0 (--h0) or the mean force "
             f"(--mean-force; this spectrum's median mean_force is {mean:.4g} N)")
     decay = fixed.pop("debye_length", None) if model == "contact" else None
-    ds = fit_data(data, model, modes=modes, criterion=criterion, **fixed)
+    ds = fit_data(data, model, modes=modes, criterion=criterion, profile=profile, **fixed)
     if model == "svda":
         h0 = fixed.get("position")
         if h0 is None:
@@ -1087,7 +1186,7 @@ AUTO_MODELS = ("svda", "contact", "exact")
 
 def _auto_candidate(spectrum: xr.Dataset, name: str, modes: int | str, criterion: str,
                     problem: ContactProblem, fixed: Mapping[str, Any],
-                    data: FitData, profile: bool = False
+                    data: FitData, profile: bool | str = False
                     ) -> tuple[xr.Dataset | None, float, str]:
     """Fit one candidate of ``model="auto"``: (result or None, estimated model error, reason).
 
@@ -1139,7 +1238,7 @@ def _auto_candidate(spectrum: xr.Dataset, name: str, modes: int | str, criterion
 
 def fit_spectrum_auto(spectrum: xr.Dataset, *, modes: int | str = 1, criterion: str = "bic",
                       accuracy: float | None = None, weights: str | None = None,
-                      **fixed: Any) -> xr.Dataset:
+                      profile: bool | str = "auto", **fixed: Any) -> xr.Dataset:
     """``fit_spectrum(..., "auto")``: the cheapest spectrum model adequate at the fitted values.
 
     Tries svda (pre-contact, one mode), contact (Hertz, h̄0 < 0, one mode) and exact in order
@@ -1150,7 +1249,8 @@ def fit_spectrum_auto(spectrum: xr.Dataset, *, modes: int | str = 1, criterion: 
     sensitivity are both O(κ|u0|), so its moduli are biased by an O(1) fraction of the
     relative error at any position: ``auto`` keeps svda only at a loose accuracy.
     ``attrs["explanation"]`` says what was compared; ``attrs["estimated_model_error"]`` holds
-    the estimate of the model kept.
+    the estimate of the model kept. ``profile`` (:data:`PROFILE_CHOICES`): the limits and
+    identifiability of the kept fit.
 
     Raises
     ------
@@ -1185,7 +1285,7 @@ def fit_spectrum_auto(spectrum: xr.Dataset, *, modes: int | str = 1, criterion: 
         if ds is not None and error <= meets(accuracy):
             # the kept one again, with its profile likelihood (the same fit: deterministic)
             kept = _auto_candidate(spectrum, name, modes, criterion, problem, fixed, data,
-                                   profile=True)[0]
+                                   profile=profile)[0] if profile else ds
             break
     choice = finish("fit model", rows, accuracy, "")
     if kept is None:  # exact fits or raises; keep the loop honest anyway

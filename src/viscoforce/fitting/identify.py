@@ -11,8 +11,8 @@ log10 q, the others in q. A side is bounded when the profile reaches Δχ² = 4 
 one parameter; χ² divided by the reduced χ² when the data carry no stderr, the scale of the
 covariance lmfit reports then): the first step is the local 2σ; if Δχ² < 1 there (the quadratic
 says 4) the step grows ×4 up to :data:`MAX_WALK_DECADES` (or the parameter's window; a
-positive parameter's first step is at most :data:`FIRST_STEP_DECADES`). The 2σ limit is
-interpolated in √Δχ² (after :data:`BISECTIONS` bisections when the walk bracketed it). The
+positive parameter's first step is at most :data:`FIRST_STEP_DECADES`). The 2σ limit is found
+in √Δχ² (false position to within :data:`ROOT_TOLERANCE` when the walk bracketed it). The
 constraint is a stiff quadratic penalty on the parameter, so any parameter (a chain member
 E0 = E_inf·10^log_E0 too) is profiled the same way.
 
@@ -55,13 +55,23 @@ GROWTH = 4.0
 MAX_WALK_DECADES = 12.0
 #: Largest first step [decades] of a positive parameter (when its local 2σ is wider).
 FIRST_STEP_DECADES = 0.5
-#: Bisections of a 2σ limit bracketed between two steps of the walk.
+#: Most steps narrowing a 2σ limit bracketed between two steps of the walk.
 BISECTIONS = 6
+#: A step whose √(Δχ²/scale) is this close to 2 is the limit (Δχ² = 4 ± 0.04: the limit to
+#: ≈ 0.5 % of its distance from the best value where the profile is quadratic).
+ROOT_TOLERANCE = 0.01
 #: Model evaluations per free parameter of one constrained fit (lmfit's default is 2000: a
 #: profile step that has not converged by then overestimates Δχ², towards "bounded").
 PROFILE_NFEV = 100
 #: Penalty scale of the constraint: a miss of 1e-6 (decades, or relative) costs Δχ²/scale = 1.
 PENALTY = 1e-6
+#: ``"auto"`` profiles a positive parameter whose local 2σ spans more than this [decades]: over
+#: a narrower range a smooth model is close to linear in log q, so the curvature's ±2σ and the
+#: profile agree (to ≈ 1 % of the width on the test cases; tests/test_fit_statistics.py).
+QUADRATIC_DECADES = 0.1
+#: ``"auto"`` profiles both members of a pair correlated beyond this (a long, possibly curved
+#: valley, along which the curvature at the minimum says little).
+QUADRATIC_CORRELATION = 0.98
 
 
 @dataclass(frozen=True)
@@ -76,10 +86,58 @@ class Profile:
 Residual = Callable[[lmfit.Parameters], np.ndarray]
 
 
+def positive_names(layout: Sequence[_params.Item]) -> set[str]:
+    """The SPEC parameters walked in log10 (the members of a positive chain)."""
+    return {n for item in layout if isinstance(item, _params.Chain) for n in item.names}
+
+
+def needs_profile(layout: Sequence[_params.Item], values: Mapping[str, float],
+                  stderr: Mapping[str, float | None], correlation: np.ndarray,
+                  at_bound: Sequence[str]) -> list[str]:
+    """The parameters whose curvature can mislead: the ones ``"auto"`` profiles.
+
+    A parameter is profiled when the local test does not call it determined (no stderr,
+    stderr > |value|, or at a bound), when it is positive and its local 2σ spans more than
+    :data:`QUADRATIC_DECADES`, or when it is correlated with another beyond
+    :data:`QUADRATIC_CORRELATION`. The others get :func:`quadratic_limits`.
+    """
+    positive = positive_names(layout)
+    names = list(values)
+    corr = np.nan_to_num(np.abs(np.asarray(correlation, dtype=float)), nan=1.0)
+    np.fill_diagonal(corr, 0.0)
+    out = []
+    for i, name in enumerate(names):
+        err, value = stderr.get(name), values[name]
+        local = (err is None or not math.isfinite(err) or err <= 0 or err > abs(value)
+                 or name in at_bound)
+        wide = (name in positive and not local and value > 0
+                and 2.0 * err / (value * math.log(10.0)) > QUADRATIC_DECADES)
+        if local or wide or corr[i].max(initial=0.0) > QUADRATIC_CORRELATION:
+            out.append(name)
+    return out
+
+
+def quadratic_limits(layout: Sequence[_params.Item], values: Mapping[str, float],
+                     stderr: Mapping[str, float | None], names: Sequence[str]
+                     ) -> dict[str, Profile]:
+    """The curvature's 2σ limits (code 0): ±2 stderr, in log10 for positive parameters."""
+    positive = positive_names(layout)
+    out = {}
+    for name in names:
+        value, err = values[name], float(stderr[name])  # type: ignore[arg-type]
+        if name in positive:
+            width = 2.0 * err / (value * math.log(10.0))
+            out[name] = Profile(0, value * 10.0 ** -width, value * 10.0 ** width)
+        else:
+            out[name] = Profile(0, value - 2.0 * err, value + 2.0 * err)
+    return out
+
+
 def profile_parameters(layout: Sequence[_params.Item], residual: Residual,
                        best: lmfit.Parameters, stderr: Mapping[str, float | None],
-                       chisqr: float, scale: float) -> dict[str, Profile]:
-    """Profile every SPEC parameter of a fit (see the module docstring).
+                       chisqr: float, scale: float, names: Sequence[str] | None = None
+                       ) -> dict[str, Profile]:
+    """Profile the SPEC parameters of a fit (see the module docstring).
 
     Parameters
     ----------
@@ -95,16 +153,18 @@ def profile_parameters(layout: Sequence[_params.Item], residual: Residual,
         χ² at the best fit.
     scale : float
         Divisor of Δχ² (1 with known stderr; the reduced χ² without).
+    names : sequence of str, optional
+        The parameters to profile (default: all).
 
     Returns
     -------
     dict
         SPEC name → :class:`Profile`.
     """
-    positive = {n for item in layout if isinstance(item, _params.Chain) for n in item.names}
+    positive = positive_names(layout)
     values, _ = _params.to_reported(layout, best.valuesdict())
     out = {}
-    for name in _params.reported_names(layout):
+    for name in _params.reported_names(layout) if names is None else names:
         log = name in positive
         value = values[name]
         err = stderr.get(name)
@@ -196,21 +256,34 @@ def _interpolate(lo: float, r_lo: float, hi: float, r_hi: float) -> float:
 
 def _bisect(root_at: Callable[[float], float], lo: float, r_lo: float, hi: float,
             r_hi: float = math.nan) -> float:
-    """Bisect [lo, hi] for √(Δχ²/scale) = 2; ``r_hi`` NaN: hi is held by the window.
+    """Narrow [lo, hi] to √(Δχ²/scale) = 2; ``r_hi`` NaN: hi is held by the window.
+
+    Where both ends are measured the next step is the false-position point (Illinois variant:
+    an end kept twice has its miss halved), since √Δχ² is close to linear in the step; where
+    hi is held by the window or by the data (inf) it is the midpoint. Stops at a step within
+    :data:`ROOT_TOLERANCE` of 2, else after :data:`BISECTIONS` steps (then interpolated).
 
     NaN when the profile never rose to 2 before the window (unbounded by the data) or when the
     bracket shrank to the best value itself (nothing measured on that side).
     """
     target = math.sqrt(DELTA_CHI2)
+    f_lo, f_hi, kept = r_lo - target, r_hi - target, 0
     for _ in range(BISECTIONS):
-        mid = 0.5 * (lo + hi)
+        if math.isfinite(f_hi):
+            mid = lo + (hi - lo) * min(max(-f_lo / max(f_hi - f_lo, 1e-300), 0.05), 0.95)
+        else:
+            mid = 0.5 * (lo + hi)
         r_mid = root_at(mid)
         if r_mid != r_mid:  # still held by the window: look nearer
-            hi = mid
+            hi, r_hi, f_hi, kept = mid, math.nan, math.nan, 0
+        elif abs(r_mid - target) <= ROOT_TOLERANCE:
+            return mid
         elif r_mid >= target:
-            hi, r_hi = mid, r_mid
+            hi, r_hi, f_hi = mid, r_mid, r_mid - target
+            f_lo, kept = (0.5 * f_lo if kept == -1 else f_lo), -1
         else:
-            lo, r_lo = mid, r_mid
+            lo, r_lo, f_lo = mid, r_mid, r_mid - target
+            f_hi, kept = (0.5 * f_hi if kept == 1 else f_hi), 1
     if r_hi != r_hi or lo == 0.0 and not math.isfinite(r_hi):
         return math.nan
     return _interpolate(lo, r_lo, hi, r_hi)

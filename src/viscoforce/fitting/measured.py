@@ -73,7 +73,8 @@ def _candidates(family: str, modes: int | str) -> list[tuple[str, int, dict[str,
 
 
 def fit_measured_auto(spectrum: xr.Dataset, *, modes: int | str = "auto", criterion: str = "bic",
-                      weights: str | None = None, **fixed: Any) -> xr.Dataset:
+                      weights: str | None = None, profile: bool | str = "auto",
+                      **fixed: Any) -> xr.Dataset:
     """Fit the contact material the data support best (module docstring).
 
     Parameters
@@ -86,6 +87,8 @@ def fit_measured_auto(spectrum: xr.Dataset, *, modes: int | str = "auto", criter
         The information criterion.
     weights : {"stderr", "relative"}, optional
         Residual weights (:func:`viscoforce.fitting.fit.spectrum_data`).
+    profile : bool or "auto"
+        Limits and identifiability of the kept fit (:data:`viscoforce.fitting.fit.PROFILE_CHOICES`).
     **fixed
         ``tip`` (a :class:`viscoforce.physics.tips.Tip` or its text) or ``radius`` [m] (the
         paper's sphere; one is required), ``indentation`` [m] (default: the data's median
@@ -167,7 +170,7 @@ def fit_measured_auto(spectrum: xr.Dataset, *, modes: int | str = "auto", criter
     best_score = min(o.criterion[criterion] for _, o, _ in kept)
     within = [k for k in kept if k[1].criterion[criterion] <= best_score + MARGIN]
     label, outcome, inputs = min(within, key=lambda k: (k[1].n_free, k[1].criterion[criterion]))
-    ds = result_dataset(outcome, data, profile=True)
+    ds = result_dataset(outcome, data, profile=profile)
     ds = _with_selection(ds, kept, criterion)
     ds.attrs.update(material=str(inputs["material"]), candidate=label, criterion=criterion,
                     selection_margin=MARGIN, explanation=_explain(rows, label, criterion,

@@ -117,7 +117,7 @@ def make_curves(time: ArrayLike, force: ArrayLike, height: ArrayLike, deflection
     counts = np.asarray([n[0]] if sample_count is None else sample_count)
     data["sample_count"] = variable(counts, _C, t["sample_count"], name="sample_count",
                                     attrs={"sample_dimension": "sample"})
-    coords: dict[str, xr.DataArray] = {"time": variable(time, _S, t["time"])}
+    coords: dict[str, xr.Variable] = {"time": variable(time, _S, t["time"])}
     if not segment_names:
         raise SchemaError("segment_names must name at least one segment, e.g. ('other',)")
     coords["segment_name"] = variable(list(segment_names), _G, t["segment_name"])

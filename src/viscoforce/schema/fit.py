@@ -100,7 +100,8 @@ def make_fit_result(params: Mapping[str, tuple[float, float | None]], *,
                     tip_position: ArrayLike | None = None,
                     fit_approach_force: ArrayLike | None = None,
                     units: Mapping[str, str] | None = None,
-                    attrs: Mapping[str, Any] | None = None) -> xr.Dataset:
+                    attrs: Mapping[str, Any] | None = None,
+                    extra: Mapping[str, xr.Variable | xr.DataArray] | None = None) -> xr.Dataset:
     """Build the result of one fit.
 
     Parameters
@@ -129,6 +130,9 @@ def make_fit_result(params: Mapping[str, tuple[float, float | None]], *,
         Units of parameters not in :data:`PARAMETER_UNITS`.
     attrs : mapping, optional
         Fixed inputs (position or mean force, geometry) and the data's provenance.
+    extra : mapping, optional
+        More variables (statistics, limits, derived moduli) put into the same dataset, over
+        its dims; checked with the rest.
 
     Returns
     -------
@@ -184,6 +188,10 @@ def make_fit_result(params: Mapping[str, tuple[float, float | None]], *,
         for name, v in curves.items():
             if v is not None:
                 data[name] = variable(shaped(name, v, x.shape, (axis,)), (axis,), t[name])
+    for name, v in as_mapping("extra", extra).items():
+        if name in data or name in coords:
+            raise SchemaError(f"extra variable {name!r} clashes with a fit-result variable")
+        data[name] = v
     meta = clean_attrs(attrs)
     meta["model"] = model
     return validate_fit_result(xr.Dataset(data, coords=coords, attrs=meta))
@@ -208,18 +216,19 @@ def validate_fit_result(ds: xr.Dataset, *, require: Iterable[str] | None = None)
     if not isinstance(ds.attrs.get("model"), str):
         raise SchemaError("fit result has no attrs['model'] (the model name)")
     check_present(ds, "fit result", FIT_VARIABLES, require)
-    extra = tuple(str(d) for d in ds["success"].dims) if "success" in ds.variables else ()
+    variables = ds.variables
+    extra = tuple(str(d) for d in variables["success"].dims) if "success" in variables else ()
     check_variables(ds, "fit result", FIT_VARIABLES, extra)
     if "correlation" in ds.variables:
         if "param_i" not in ds.coords or "param_j" not in ds.coords:
             raise SchemaError("fit result: 'correlation' needs the param_i and param_j "
                               "coordinates (the parameter names)")
-        names = [str(v) for v in ds["param_i"].values]
-        if names != [str(v) for v in ds["param_j"].values]:
+        names = [str(v) for v in variables["param_i"].values]
+        if names != [str(v) for v in variables["param_j"].values]:
             raise SchemaError("fit result: param_i and param_j must list the same parameters")
         for name in names:
             check_present(ds, "fit result", {}, (name, f"{name}_stderr"))
-            unit = ds[name].attrs.get("units")
+            unit = variables[name].attrs.get("units")
             if not isinstance(unit, str) or not unit:
                 raise SchemaError(f"fit result: parameter '{name}' has no units")
             spec = VariableSpec(unit, "", (EXTRA,))
