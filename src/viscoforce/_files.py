@@ -10,6 +10,8 @@ rename wins), never a mixture or a truncated file.
 
 netCDF files are made in memory first (:func:`write_netcdf`) and written with plain file I/O, so
 that an I/O error is an ordinary :class:`OSError` and never reaches the HDF5 library mid-write.
+Datasets too big to hold at once (the raw curves of a big map) are written chunk by chunk by
+:func:`write_netcdf_stream` into the temporary file, renamed likewise only when complete.
 """
 
 from __future__ import annotations
