@@ -137,3 +137,20 @@ def test_quadratic_limits_are_two_sigma_in_log10_for_positive_parameters():
     assert out["E_inf"].upper == pytest.approx(1e9 * 10 ** width, rel=1e-12)
     assert (out["offset"].lower, out["offset"].upper) == pytest.approx((-0.4, 0.0))
     assert out["E_inf"].code == out["offset"].code == 0
+
+
+def test_the_cli_takes_identifiability_for_one_spectrum(tmp_path):
+    from viscoforce.cli import main
+
+    ds_in, _ = _structural()
+    path = tmp_path / "spectrum.nc"
+    ds_in.to_netcdf(path)
+    out = tmp_path / "fit.nc"
+    code = main(["fit", str(path), "--model", "contact", "--R", "5um", "--indentation", "500nm",
+                 "--material", "structural", "--identifiability", "profile", "--out", str(out)])
+    assert code == 0
+    import xarray as xr
+
+    with xr.open_dataset(out) as fit:
+        assert fit["profiled"].values.all()
+        assert fit.attrs["identifiability_method"] == "profile likelihood (2 sigma)"

@@ -111,9 +111,11 @@ FIT_SYSTEM_FLAGS = FlagGroup(SYSTEM_FLAGS.title, (
 ))
 
 MAP_FLAGS = FlagGroup("maps (several spectra or curves)", (
-    Flag("--identifiability", choice_type("local", "profile", what="--identifiability"), None,
-         "local|profile",
-         "per-pixel identifiability test (default local; profile: profile likelihood, slower)"),
+    Flag("--identifiability", choice_type("auto", "local", "profile", what="--identifiability"),
+         None, "auto|local|profile",
+         "identifiability test and 2-sigma limits: maps local (default) or profile (profile "
+         "likelihood, slower); a single spectrum auto (default: the profile where the "
+         "curvature can mislead), profile (every parameter) or local (no limits)"),
     Flag("--scheduler", None, None, "ADDRESS",
          "a running dask scheduler (tcp://host:8786); default: a local cluster"),
     Flag("--workers", integer_type(1), None, "N", "workers of the local cluster (default 2)"),
@@ -437,8 +439,13 @@ def fit_one(args: argparse.Namespace, ds, kind: str):
         elif args.accuracy is not None:
             raise UsageError("--accuracy needs --model auto")
         weights = {} if args.weights is None else {"weights": args.weights}
+        options = {} if args.identifiability is None else {
+            "identifiability": args.identifiability}
         return fit_spectrum(ds, args.model, modes=args.modes, criterion=args.criterion,
-                            poisson=args.poisson, **weights, **fixed)
+                            poisson=args.poisson, **weights, **options, **fixed)
+    if args.identifiability is not None:
+        raise UsageError("--identifiability applies to spectra and maps (curve fits use "
+                         "their own rule)")
     if args.weights is not None:
         raise UsageError("--weights applies to spectra (curve fits are unweighted)")
     modes = 1 if args.modes is None else args.modes
@@ -689,8 +696,9 @@ def run_fit(args: argparse.Namespace) -> int:
     if is_map and args.model == "auto":
         raise UsageError("--model auto fits one spectrum: add --curve I, or name the model "
                          "for the whole map")
-    if not is_map and args.identifiability is not None:
-        raise UsageError("--identifiability applies to maps (a single fit always profiles)")
+    if is_map and args.identifiability == "auto":
+        raise UsageError("--identifiability auto applies to a single spectrum; a map takes "
+                         "local (default) or profile")
     if is_map:
         from viscoforce.fitting.maps import fit_map
 
