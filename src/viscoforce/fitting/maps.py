@@ -4,12 +4,22 @@ Every pixel is fitted from its own data-driven guess (nothing is carried from on
 next), so the results do not depend on the order or on the partition into tasks. A pixel that
 cannot be fitted is flagged (``success`` = 0, the reason in ``message``) and never stops the map.
 
-``scheduler=None`` starts a local cluster (``workers`` processes × 1 thread; BLAS inside the
-workers is the user's setting) — except for maps of at most :data:`SMALL_MAP` pixels without
-``workers``, fitted in this process (a cluster would cost more than it saves); an address
-(``tcp://host:8786``) uses a running scheduler and computes nothing locally; ``"synchronous"``
-fits in this process. A script that starts a local cluster must guard its entry point with
-``if __name__ == "__main__":`` (dask starts the workers as fresh processes that import it).
+Where the pixels are fitted (``attrs["execution"]`` of the result says where, and why):
+
+- ``scheduler=None`` and no ``workers``: the cost model of :mod:`~viscoforce.fitting.map_cost`
+  decides. A few pixels spread over the map are fitted in this process first (their results
+  are kept) to measure the per-pixel cost; the rest is fitted here, or on a local cluster of
+  2 … cores workers when that is expected to finish sooner (per-pixel cost × pixels against
+  the cluster's start-up).
+- ``workers=N``: a local cluster of N worker processes × 1 thread, as asked.
+- ``"synchronous"``: this process only.
+- an address (``tcp://host:8786``): a running scheduler; nothing is computed locally.
+
+A local cluster's workers are forked from this process where that is safe
+(:func:`~viscoforce.fitting.map_cost.start_method`: Linux, Python < 3.12; ready in ~0.1 s,
+viscoforce already imported), else started as fresh interpreters (~2–4 s of imports; a script
+must then guard its entry point with ``if __name__ == "__main__":``). BLAS inside the workers is
+the user's setting. While the cluster starts, this process fits pixels itself.
 
 Every pixel gets a ``quality`` code (:data:`MAP_QUALITY`, the rule in :data:`QUALITY_RULE`), so
 that a map warns pixel by pixel where a single fit would warn once: the optimiser failed, the
@@ -24,6 +34,8 @@ from __future__ import annotations
 import contextlib
 import math
 import os
+import time
+from collections import deque
 from collections.abc import Callable, Iterator, Sequence
 from typing import Any
 
@@ -43,17 +55,26 @@ from viscoforce.fitting.fit import (
     summary,
 )
 from viscoforce.fitting.identify import IDENTIFIABILITY
+from viscoforce.fitting.map_cost import (
+    OVERLAP_METHODS,
+    PROBE_MIN_PIXELS,
+    PROBE_SECONDS,
+    ExecutionPlan,
+    plan_execution,
+    probe_indices,
+    start_method,
+)
 from viscoforce.fitting.models import SPECTRUM_MODELS
 from viscoforce.schema import validate_fit_result, validate_spectrum
 from viscoforce.schema.fit import SUCCESS_FLAGS, parameter_units
 
 #: Seconds to wait for a scheduler before giving up.
 CONNECT_TIMEOUT = 10.0
-#: Pixels per task: enough to amortise the task overhead, small enough to balance the load.
+#: Most pixels per cluster task.
 MAX_BLOCK = 64
-#: Maps up to this many pixels are fitted in this process when neither ``scheduler`` nor
-#: ``workers`` is given: starting a local cluster (3–4 s) costs more than fitting them.
-SMALL_MAP = 64
+#: Aimed duration of one cluster task [s] (with the measured per-pixel cost): long against
+#: dask's ~1 ms per task, short enough that the last tasks leave no worker idle for long.
+TASK_SECONDS = 0.1
 #: ``identifiability=`` of :func:`fit_map`: the local test (stderr > |value|, none, or at a
 #: bound; free) or the profile likelihood of :mod:`viscoforce.fitting.identify` (several refits
 #: per parameter and pixel).
@@ -210,23 +231,50 @@ def check_workers(workers: Any) -> None:
                              f"only compete for them), got {workers!r}")
 
 
-@contextlib.contextmanager
-def cluster(scheduler: str | None = None, workers: int | None = None) -> Iterator[Any]:
-    """A dask.distributed Client: a local cluster, or the running scheduler at ``scheduler``."""
-    check_workers(workers)
+def _start_local(workers: int) -> tuple[Any, Any]:
+    """A local cluster of ``workers`` processes × 1 thread and its Client (both to be closed)."""
+    import dask
     from distributed import Client, LocalCluster
 
-    if scheduler is None:
-        import dask
+    # The fits are CPU-bound Python: dask's statistical profiler (a sampling thread in every
+    # worker), fast system monitoring and a dashboard would take a share of the cores.
+    quiet = {"distributed.worker.profile.enabled": False,
+             "distributed.admin.system-monitor.interval": "2s",
+             "distributed.worker.multiprocessing-method": start_method()}
+    with dask.config.set(quiet):
+        local = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
+                             dashboard_address=None)
+    try:
+        return local, Client(local)
+    except BaseException:
+        local.close()
+        raise
 
-        # The fits are CPU-bound Python: dask's statistical profiler (a sampling thread in every
-        # worker) and fast system monitoring would take a share of the two cores.
-        quiet = {"distributed.worker.profile.enabled": False,
-                 "distributed.admin.system-monitor.interval": "2s"}
-        with dask.config.set(quiet), LocalCluster(
-                n_workers=workers or 2, threads_per_worker=1, processes=True,
-                dashboard_address=":0") as local, Client(local) as client:
-            yield client
+
+def _close_local(started: tuple[Any, Any]) -> None:
+    local, client = started
+    try:
+        client.close()
+    finally:
+        local.close()
+
+
+@contextlib.contextmanager
+def cluster(scheduler: str | None = None, workers: int | None = None) -> Iterator[Any]:
+    """A dask.distributed Client: a local cluster, or the running scheduler at ``scheduler``.
+
+    The local cluster has ``workers`` (default 2) processes × 1 thread, started as in the
+    module docstring.
+    """
+    check_workers(workers)
+    from distributed import Client
+
+    if scheduler is None:
+        started = _start_local(workers or 2)
+        try:
+            yield started[1]
+        finally:
+            _close_local(started)
         return
     try:
         client = Client(scheduler, timeout=f"{CONNECT_TIMEOUT}s")
@@ -258,13 +306,13 @@ def fit_map(ds: xr.Dataset, model: str, *, modes: int | str = 1, criterion: str 
     criterion : {"bic", "aic"}
         Information criterion of ``modes="auto"``.
     scheduler : str, optional
-        Where to fit (module docstring): None (a local cluster, or this process for a small
-        map), ``"synchronous"`` or a scheduler address.
+        Where to fit (module docstring): None (this process or a local cluster, whichever the
+        cost model expects to finish sooner), ``"synchronous"`` or a scheduler address.
     workers : int, optional
-        Worker processes of a local cluster, in [1, the machine's cores] (default 2; never more
-        than the pixels).
+        Worker processes of a local cluster, in [1, the machine's cores] (default: the cost
+        model's choice; never more than the pixels).
     progress : bool
-        Show a progress bar (distributed fits only).
+        Show a progress bar.
     segment : int, optional
         Curve segment of a curve-model map (default: the model's own segment).
     poisson : float, optional
@@ -289,7 +337,14 @@ def fit_map(ds: xr.Dataset, model: str, *, modes: int | str = 1, criterion: str 
         lacks the parameter) and ``quality`` (:data:`MAP_QUALITY`); the coordinates of ``ds``
         over the map dims (``x``, ``y``, …). ``attrs``: ``model``, ``n_fits``, ``n_failed``
         (the optimiser failed), ``n_good`` (quality 0), ``quality_rule``,
-        ``identifiability_method`` and, with ``modes="auto"``, ``criterion``.
+        ``identifiability_method``, with ``modes="auto"``, ``criterion``, and where the pixels
+        were fitted: ``execution`` (``"in-process"``, ``"local cluster (2 workers)"`` or
+        ``"dask scheduler ADDRESS"``), ``execution_reason`` (the cost model's comparison, or the
+        option given), ``execution_time_s`` [s] (wall time of the fits, cluster start
+        included), ``expected_time_s`` [s] (the cost model's expectation; NaN without it),
+        ``pixel_cost_estimated_s`` [s] (the probe's per-pixel cost; NaN without a probe),
+        ``pixel_cost_measured_s`` [s] (the fits' wall time per pixel, here and in the
+        workers) and ``pixels_in_process`` (pixels fitted in this process).
 
     Raises
     ------
@@ -315,16 +370,16 @@ def fit_map(ds: xr.Dataset, model: str, *, modes: int | str = 1, criterion: str 
     fixed = check_fixed(model, fixed)
     items, dims, layout = pixel_data(ds, model, segment=segment)
     n = len(items)
-    if scheduler is None and workers is None and n <= SMALL_MAP:
-        scheduler = "synchronous"
-    if scheduler == "synchronous":
-        results = fit_block(items, model, modes, criterion, fixed, profile=profile)
-    else:
-        results = _distributed(items, model, modes, criterion, fixed, scheduler, workers,
-                               progress, profile)
+    run = _Run(items, model, modes, criterion, fixed, profile)
+    with _progress_bar(n, model, progress) as bar:
+        run.bar = bar
+        execution = _execute(run, scheduler, workers)
+    results = [r if r is not None else {"success": False, "message": "lost"}
+               for r in run.results]
     out = add_derived_moduli(
         _assemble(results, dims, layout, model, criterion if modes == "auto" else None, n,
                   profile=profile), poisson)
+    out.attrs.update(execution)
     if model == "ting" and fixed.get("material") == "structural":
         from viscoforce.fitting.ting import add_ting_forms
 
@@ -333,44 +388,173 @@ def fit_map(ds: xr.Dataset, model: str, *, modes: int | str = 1, criterion: str 
     return out
 
 
-def _distributed(items: list[FitData | str], model: str, modes: int | str, criterion: str,
-                 fixed: dict[str, Any], scheduler: str | None, workers: int | None,
-                 progress: bool, profile: bool = False) -> list[dict[str, Any]]:
-    from distributed import as_completed
+class _Run:
+    """One map fit in progress: what to fit, the results so far, and the time spent fitting."""
+
+    def __init__(self, items: list[FitData | str], model: str, modes: int | str,
+                 criterion: str, fixed: dict[str, Any], profile: bool) -> None:
+        self.items, self.model, self.modes = items, model, modes
+        self.criterion, self.fixed, self.profile = criterion, fixed, profile
+        self.results: list[dict[str, Any] | None] = [None] * len(items)
+        self.bar: Any = None
+        self.fit_seconds = 0.0  # wall time of the pixel fits, here and in the workers
+        self.here = 0  # pixels fitted in this process
+
+    def fit_here(self, indices: Sequence[int]) -> float:
+        """Fit ``indices`` in this process; their wall time [s]."""
+        t0 = time.perf_counter()
+        block = fit_block([self.items[i] for i in indices], self.model, self.modes,
+                          self.criterion, self.fixed, profile=self.profile)
+        seconds = time.perf_counter() - t0
+        self.store(indices, block, seconds)
+        self.here += len(indices)
+        return seconds
+
+    def store(self, indices: Sequence[int], block: list[dict[str, Any]], seconds: float) -> None:
+        for i, r in zip(indices, block, strict=True):
+            self.results[i] = r
+        self.fit_seconds += seconds
+        self.bar.update(len(indices))
+
+    def left(self) -> list[int]:
+        return [i for i, r in enumerate(self.results) if r is None]
+
+
+class _NoBar:
+    def update(self, count: int) -> None:
+        pass
+
+
+@contextlib.contextmanager
+def _progress_bar(n: int, model: str, show: bool) -> Iterator[Any]:
+    if not show:  # tqdm is not imported at all
+        yield _NoBar()
+        return
     from tqdm.auto import tqdm
 
-    n = len(items)
-    if scheduler is None and workers is not None:
-        workers = min(workers, max(1, n))  # a worker per pixel at most: the rest would idle
-    with cluster(scheduler, workers) as client:
-        n_workers = max(1, len(client.scheduler_info().get("workers", {})) or (workers or 2))
-        size = max(1, min(MAX_BLOCK, math.ceil(n / (n_workers * 8))))
-        blocks = [(start, items[start:start + size]) for start in range(0, n, size)]
-        shared = client.scatter(fixed, broadcast=True) if fixed else fixed
-        futures = {client.submit(_fit_block_shared, block, model, modes, criterion, shared,
-                                 profile, pure=False): start for start, block in blocks}
-        results: list[dict[str, Any] | None] = [None] * n
-        with tqdm(total=n, unit="fit", disable=not progress, desc=f"fit {model}") as bar:
-            for future in as_completed(futures):
-                start = futures[future]
-                try:
-                    block = future.result()
-                except ViscoforceError:
-                    raise
-                except Exception as exc:  # the cluster, not a fit (fit_block catches those)
-                    for other in futures:
-                        other.cancel()
-                    where = "the scheduler" if scheduler else "the local cluster"
-                    raise ClusterError(
-                        f"the map fit lost pixels {start} to "
-                        f"{start + len(items[start:start + size]) - 1} of {n}: {where} failed "
-                        f"({type(exc).__name__}: {_first_line(exc)}); "
-                        "no partial result is returned — check the workers (memory, a killed "
-                        "process) and run again, or fit in this process with "
-                        "scheduler='synchronous'") from None
-                results[start:start + len(block)] = block
-                bar.update(len(block))
-    return [r if r is not None else {"success": False, "message": "lost"} for r in results]
+    with tqdm(total=n, unit="fit", desc=f"fit {model}") as bar:
+        yield bar
+
+
+def _execute(run: _Run, scheduler: str | None, workers: int | None) -> dict[str, Any]:
+    """Fit every pixel of ``run`` where the module docstring says; the ``execution`` attrs."""
+    n = len(run.items)
+    t0 = time.perf_counter()
+    estimate = math.nan
+    if scheduler == "synchronous":
+        run.fit_here(range(n))
+        label, plan = "in-process", ExecutionPlan(0, math.nan, {}, "scheduler='synchronous'")
+    elif scheduler is not None:
+        with cluster(scheduler) as client:
+            _on_cluster(run, client, run.left(), math.nan, "the scheduler")
+        label, plan = (f"dask scheduler {scheduler}",
+                       ExecutionPlan(0, math.nan, {}, f"scheduler={scheduler!r}"))
+    else:
+        if workers is None:
+            estimate = _probe(run)
+            plan = plan_execution(len(run.left()), estimate, cores=max_workers())
+        else:  # a worker per pixel at most: the rest would idle
+            plan = ExecutionPlan(min(workers, max(1, n)), math.nan, {}, f"workers={workers}")
+        left = run.left()
+        if plan.workers == 0 or not left:
+            run.fit_here(left)
+        else:
+            _on_local_cluster(run, min(plan.workers, len(left)), estimate)
+        label = plan.label
+    return {"execution": label, "execution_reason": plan.reason,
+            "execution_time_s": time.perf_counter() - t0,
+            "expected_time_s": plan.expected.get(plan.label, math.nan),
+            "pixel_cost_estimated_s": estimate,
+            "pixel_cost_measured_s": run.fit_seconds / n if n else math.nan,
+            "pixels_in_process": run.here}
+
+
+def _probe(run: _Run) -> float:
+    """Fit a few pixels spread over the map here (kept); their mean wall time per pixel [s].
+
+    The first pixel (lmfit's model set-up, cold caches) counts only when it is all there is.
+    """
+    times = []
+    started = time.perf_counter()
+    for i in probe_indices(len(run.items)):
+        times.append(run.fit_here([i]))
+        if len(times) >= PROBE_MIN_PIXELS and time.perf_counter() - started >= PROBE_SECONDS:
+            break
+    if not times:
+        return math.nan
+    warm = times[1:] or times
+    return sum(warm) / len(warm)
+
+
+def _on_local_cluster(run: _Run, workers: int, estimate: float) -> None:
+    """Fit what is left on a local cluster; this process fits pixels while it starts.
+
+    Only while fresh interpreters start (:data:`~.map_cost.OVERLAP_METHODS`): a forked cluster
+    is up in ~0.1 s unless a fit here keeps its event loop waiting for the GIL.
+    """
+    from concurrent.futures import ThreadPoolExecutor
+
+    if start_method() not in OVERLAP_METHODS:
+        started = _start_local(workers)
+        try:
+            _on_cluster(run, started[1], run.left(), estimate, "the local cluster")
+        finally:
+            _close_local(started)
+        return
+    with ThreadPoolExecutor(1, thread_name_prefix="viscoforce-cluster-start") as starter:
+        pending = starter.submit(_start_local, workers)
+        try:
+            queue = deque(run.left())
+            while queue and not pending.done():
+                run.fit_here([queue.popleft()])
+            started = pending.result()
+        except BaseException:
+            pending.add_done_callback(
+                lambda f: f.exception() is None and _close_local(f.result()))
+            raise
+        try:
+            if queue:
+                per_pixel = run.fit_seconds / run.here if run.here else estimate
+                _on_cluster(run, started[1], list(queue), per_pixel, "the local cluster")
+        finally:
+            _close_local(started)
+
+
+def _block_size(pixels: int, workers: int, per_pixel: float) -> int:
+    """Pixels per task: about :data:`TASK_SECONDS` of fitting, at least 4 tasks per worker."""
+    size = math.ceil(pixels / (4 * workers))
+    if math.isfinite(per_pixel) and per_pixel > 0:
+        size = min(size, math.ceil(TASK_SECONDS / per_pixel))
+    return max(1, min(MAX_BLOCK, size))
+
+
+def _on_cluster(run: _Run, client: Any, left: list[int], per_pixel: float, where: str) -> None:
+    """Fit the pixels ``left`` on the cluster of ``client``, blocks of :func:`_block_size`."""
+    from distributed import as_completed
+
+    n_workers = max(1, len(client.scheduler_info().get("workers", {})))
+    size = _block_size(len(left), n_workers, per_pixel)
+    blocks = [left[start:start + size] for start in range(0, len(left), size)]
+    shared = client.scatter(run.fixed, broadcast=True) if run.fixed else run.fixed
+    futures = {client.submit(_fit_block_shared, [run.items[i] for i in block], run.model,
+                             run.modes, run.criterion, shared, run.profile, pure=False): block
+               for block in blocks}
+    for future in as_completed(futures):
+        block = futures[future]
+        try:
+            results, seconds = future.result()
+        except ViscoforceError:
+            raise
+        except Exception as exc:  # the cluster, not a fit (fit_block catches those)
+            for other in futures:
+                other.cancel()
+            raise ClusterError(
+                f"the map fit lost pixels {block[0]} to {block[-1]} of {len(run.items)}: "
+                f"{where} failed ({type(exc).__name__}: {_first_line(exc)}); "
+                "no partial result is returned — check the workers (memory, a killed "
+                "process) and run again, or fit in this process with "
+                "scheduler='synchronous'") from None
+        run.store(block, results, seconds)
 
 
 def _first_line(exc: BaseException) -> str:
@@ -379,9 +563,12 @@ def _first_line(exc: BaseException) -> str:
 
 
 def _fit_block_shared(items: Sequence[FitData | str], model: str, modes: int | str,
-                      criterion: str, fixed: dict[str, Any],
-                      profile: bool = False) -> list[dict[str, Any]]:
-    return fit_block(items, model, modes, criterion, fixed, profile=profile)
+                      criterion: str, fixed: dict[str, Any], profile: bool = False
+                      ) -> tuple[list[dict[str, Any]], float]:
+    """:func:`fit_block` in a worker, with its wall time [s]."""
+    t0 = time.perf_counter()
+    return fit_block(items, model, modes, criterion, fixed, profile=profile), \
+        time.perf_counter() - t0
 
 
 def pixel_quality(result: dict[str, Any]) -> int:
