@@ -63,6 +63,8 @@ REPO = BENCH.parent
 #: The previous release timed by default: the last commit before issue 22's work started
 #: (``linear_response`` already ran the direct finite-amplitude check on every call there).
 PREVIOUS_RELEASE = "b8f8e44"
+#: ``previous`` value of :class:`Workers` for an A/A control (the current sources twice).
+SELF = "current"
 #: Environment of every worker: one BLAS/OpenMP thread.
 THREAD_ENV = {"OPENBLAS_NUM_THREADS": "1", "OMP_NUM_THREADS": "1", "MKL_NUM_THREADS": "1"}
 
@@ -195,7 +197,9 @@ class Workers:
     cases : str
         Name of the cases module in ``benchmarks/`` (e.g. ``"_regression_cases"``).
     previous : str or None
-        Git revision of the previous release (default :data:`PREVIOUS_RELEASE`); None: none.
+        Git revision of the previous release (default :data:`PREVIOUS_RELEASE`); None: none;
+        :data:`SELF` (``"current"``): the current sources again, in a second worker — an A/A
+        control whose ratios show the noise floor of two processes running identical code.
     current_src : Path
         viscoforce sources of the current worker (default this checkout's ``src/``).
 
@@ -238,6 +242,8 @@ class Workers:
     def _previous_tree(self) -> Path | None:
         if not self.previous:
             return None
+        if self.previous == SELF:
+            return Path(self.current_src)
         try:
             self.previous_commit = resolve_revision(self.previous)
             self._tmp = tempfile.mkdtemp(prefix="viscoforce-previous-")

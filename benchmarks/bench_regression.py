@@ -22,15 +22,18 @@ ratios are paired per round. Verdicts, each printed PASS/FAIL:
 - ``reference / current cold`` at −5 nm ≥ 5 (median of the per-round ratios);
 - every case: current ≤ previous × (1 + margin), on the median of the per-round ratios
   current/previous; margin = the half-width of that median's 95 % bootstrap interval (the spread
-  of the interleaved samples), floored at 1 % and capped at 5 % (noise can excuse at most 5 %);
+  of the interleaved samples), floored at 4 % (two workers running identical code,
+  ``--previous current``, differed by up to 3.3 % on this machine: a per-process offset the
+  within-run interval does not see) and capped at 5 % (noise can excuse at most 5 %);
 - accuracy: k*(ω) of the reference and of the previous release equal the current
   ``linear_response`` to ≤ 1e-10 relative, the reference's finite-amplitude bias b(ω) equals the
   library's ``amplitude_bias`` to ≤ 1e-10, and all three flag the finite amplitude alike.
 
 Outputs (in ``--out``, default benchmarks/out/): ``regression_benchmark.json`` (keys in
 :data:`JSON_KEYS`), ``regression_timings.csv`` (one row per case) and ``regression_timings.png``.
-Run ``python benchmarks/bench_regression.py [--quick] [--repeats ROUNDS] [--previous REV|none]
-[--out DIR]``; no test asserts the times (tests/test_bench_regression.py runs ``--quick``).
+Run ``python benchmarks/bench_regression.py [--quick] [--repeats ROUNDS]
+[--previous REV|none|current] [--out DIR]``; no test asserts the times
+(tests/test_bench_regression.py runs ``--quick``).
 """
 
 from __future__ import annotations
@@ -61,7 +64,7 @@ from _common import (  # noqa: E402
     write_csv,
     write_json,
 )
-from _previous import PREVIOUS_RELEASE, Workers  # noqa: E402
+from _previous import PREVIOUS_RELEASE, SELF, WorkerError, Workers  # noqa: E402
 
 SCHEMA = "viscoforce.bench_regression/1"
 #: Top-level keys of regression_benchmark.json.
@@ -75,7 +78,7 @@ DEFAULT_ROUNDS, QUICK_ROUNDS = 40, 3
 MIN_SAMPLE, QUICK_MIN_SAMPLE = 10e-3, 2e-3
 MAX_CALLS = 400
 SPEEDUP_TARGET = 5.0  # reference / current cold at −5 nm
-MARGIN_FLOOR, MARGIN_CAP = 0.01, 0.05
+MARGIN_FLOOR, MARGIN_CAP = 0.04, 0.05
 REL_TOL = 1e-10
 BOOTSTRAP, SEED = 2000, 20261203
 
@@ -120,7 +123,8 @@ def parse_args(argv: list[str] | None) -> argparse.Namespace:
                              "--quick)")
     parser.add_argument("--previous", default=PREVIOUS_RELEASE,
                         help=f"git revision of the previous release (default {PREVIOUS_RELEASE}); "
-                             "'none' skips it")
+                             f"'none' skips it; '{SELF}' times the current tree against itself "
+                             "in a second worker (A/A control: the noise floor of the ratios)")
     args = parser.parse_args(argv)
     if args.repeats is not None and args.repeats < 1:
         parser.error("--repeats must be >= 1")
@@ -169,7 +173,7 @@ def _rel(a: np.ndarray, b: np.ndarray) -> float:
     return float(np.max(np.abs(a - b) / np.abs(b)))
 
 
-def accuracy(workers: Workers, n_omega: int) -> dict:
+def accuracy(workers: Workers, plan: list[dict], n_omega: int) -> dict:
     """Reference and previous release against the current ``linear_response`` (module docstring)."""
     out = {}
     cur = workers["current"]
@@ -190,7 +194,9 @@ def accuracy(workers: Workers, n_omega: int) -> dict:
                  "caches_cleared_current": now["caches"],
                  "k_rel_diff_previous": None, "warned_previous": None,
                  "caches_cleared_previous": None}
-        if "previous" in workers:
+        lr_case = next(c for c in plan if c["case"] == "linear_response"
+                       and c["params"]["position"] == position)
+        if "previous" in lr_case["workers"]:
             before = workers["previous"].value("linear_response", {**lr, "cold": True})
             entry.update(k_rel_diff_previous=_rel(_complex(before["k"]), k_now),
                          warned_previous=before["warned"],
@@ -215,8 +221,16 @@ def measure(workers: Workers, plan: list[dict], rounds: int, min_sample: float) 
     """
     for c in plan:
         c["workers"] = tuple(w for w in c["workers"] if w in workers)
+        c["note"] = None
         for w in c["workers"]:
-            workers[w].setup(c["case"], c["params"], warmup=2)
+            try:
+                workers[w].setup(c["case"], c["params"], warmup=2)
+            except WorkerError as exc:  # a case the previous release cannot run: left out
+                if w != "previous":
+                    raise
+                c["workers"] = ("current",)
+                c["note"] = f"previous release cannot run it: {str(exc).splitlines()[-1]}"
+                print(f"note: {c['label']}: {c['note']}")
         cpu, _ = workers["current"].time(c["case"], c["params"], calls=1)
         c["calls"] = int(min(MAX_CALLS, max(1, math.ceil(min_sample / max(cpu, 1e-7)))))
         c["samples"] = {w: {"cpu": [], "wall": []} for w in c["workers"]}
@@ -234,8 +248,9 @@ def rows_and_checks(plan: list[dict], rng: np.random.Generator) -> tuple[list[di
     rows, checks, by_label = [], [], {c["label"]: c for c in plan}
     for c in plan:
         s = c["samples"]
-        row = {"case": c["label"], "function": c["case"], **{k: v for k, v in c["params"].items()},
-               "calls_per_sample": c["calls"], "rounds": len(s["current"]["cpu"])}
+        row = {"case": c["label"], "function": c["case"], **c["params"],
+               "calls_per_sample": c["calls"], "rounds": len(s["current"]["cpu"]),
+               "note": c["note"]}
         for w in ("current", "previous"):
             cpu = s.get(w, {}).get("cpu")
             row[f"{w}_cpu_median_s"] = statistics.median(cpu) if cpu else None
@@ -271,9 +286,13 @@ def info_ratios(plan: list[dict], rng: np.random.Generator) -> dict:
 def plot(rows: list[dict], checks: list[dict], path: Path, title: str) -> None:
     fig, (ax, bx) = plt.subplots(1, 2, figsize=(13.0, 5.5), gridspec_kw={"width_ratios": [3, 2]})
     y = np.arange(len(rows))
+    is_ref = np.array([r["function"] == "reference" for r in rows])
     for dy, w, colour in ((-0.2, "current", "tab:blue"), (0.2, "previous", "tab:orange")):
-        vals = [1e3 * (r[f"{w}_cpu_median_s"] or np.nan) for r in rows]
-        ax.barh(y + dy, vals, 0.4, color=colour, label=w)
+        vals = np.array([1e3 * (r[f"{w}_cpu_median_s"] or np.nan) for r in rows])
+        keep = ~is_ref if w == "current" else np.ones(len(rows), dtype=bool)
+        ax.barh(y[keep] + dy, vals[keep], 0.4, color=colour, label=w)
+    ref_vals = [1e3 * r["current_cpu_median_s"] for r in rows if r["function"] == "reference"]
+    ax.barh(y[is_ref], ref_vals, 0.4, color="tab:grey", label="reference (dense LU per ω)")
     ax.set(yticks=y, yticklabels=[r["case"] for r in rows], xscale="log",
            xlabel="CPU time per call [ms] (median over rounds, 1 BLAS thread)")
     ax.invert_yaxis()
@@ -327,14 +346,16 @@ def main(argv: list[str] | None = None) -> int:
         for w, d in info.items():
             print(f"worker {w}: pid {d['pid']}, viscoforce from {d['viscoforce_file']}, "
                   f"BLAS threads {d['blas_threads']}")
-        if workers.previous_commit and "previous" in workers:
+        if args.previous == SELF:
+            print("A/A control: 'previous' is the current tree again, in a second worker")
+        elif workers.previous_commit and "previous" in workers:
             print(f"previous release: {args.previous} = {workers.previous_commit}")
         print(f"h0 = {POSITION * 1e9:g} nm (and {FREE_POSITION * 1e9:+g} nm), eta = "
               f"{ETA * 1e9:g} nm, {n_omega} omega log-spaced in [1, 1e6] rad/s, default grid; "
               f"{rounds} interleaved rounds, >= {min_sample * 1e3:g} ms CPU per sample; "
               f"load average {machine['loadavg_start']}")
         measure(workers, plan, rounds, min_sample)
-        acc = accuracy(workers, n_omega)
+        acc = accuracy(workers, plan, n_omega)
         worker_info = {"current": info.get("current"), "previous": info.get("previous"),
                        "previous_revision": args.previous,
                        "previous_commit": workers.previous_commit if "previous" in workers
@@ -388,7 +409,7 @@ def main(argv: list[str] | None = None) -> int:
              "csv": args.out / "regression_timings.csv",
              "json": args.out / "regression_benchmark.json"}
     plot(rows, checks, files["png"],
-         f"viscoforce: current vs previous release ({worker_info['previous_commit'] or 'n/a'}), "
+         f"viscoforce: current vs previous release ({(worker_info['previous_commit'] or 'n/a')[:10]}), "
          f"{n_omega} omega, eta = 1 nm; reference/current cold at -5 nm = {speed['ratio']:.2f}x")
     write_csv(rows, files["csv"])
     report = report_head(SCHEMA, args.quick, machine)
@@ -401,7 +422,7 @@ def main(argv: list[str] | None = None) -> int:
                      "n_omega": n_omega, "omega_min": 1.0, "omega_max": 1e6, "rounds": rounds,
                      "min_sample_s": min_sample, "bootstrap": BOOTSTRAP, "seed": SEED,
                      "cases_module": CASES_MODULE,
-                     "cases": [{k: c[k] for k in ("label", "case", "params", "workers", "calls")}
+                     "cases": [{k: c[k] for k in ("label", "case", "params", "workers", "calls", "note")}
                                for c in plan]},
         "workers": worker_info, "accuracy": acc, "rows": rows, "checks": checks,
         "summary": summary, "files": {k: str(v) for k, v in files.items()}})
