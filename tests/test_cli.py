@@ -68,7 +68,7 @@ def test_user_errors_exit_2_with_one_message(capsys, argv, message):
 
 def test_python_dash_m_entry_point():
     proc = subprocess.run([sys.executable, "-m", "viscoforce", "static", "--h0", "2nm", "--E",
-                           "1e9", "--json"], capture_output=True, text=True, timeout=120)
+                           "1e9", "--json"], capture_output=True, text=True)
     assert proc.returncode == 0, proc.stderr
     assert json.loads(proc.stdout)["u_center"] == pytest.approx(-0.46e-9, abs=0.005e-9)
 
@@ -231,7 +231,7 @@ def test_usage_errors_exit_2(capsys, argv, message):
 
 def test_python_dash_m_help_lists_the_commands():
     proc = subprocess.run([sys.executable, "-m", "viscoforce", "--help"], capture_output=True,
-                          text=True, timeout=120)
+                          text=True)
     assert proc.returncode == 0, proc.stderr
     assert "static" in proc.stdout and "spectrum" in proc.stdout
 
@@ -406,7 +406,7 @@ def test_cli_modules_import_no_heavy_optional_libraries():
     code = ("import sys, viscoforce.cli, viscoforce.cli.model; "
             f"print([m for m in {heavy!r} if m in sys.modules])")
     proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
-                          timeout=120, check=True)
+                          check=True)
     assert proc.stdout.strip() == "[]"
 
 

@@ -320,7 +320,7 @@ def test_figure_formats_come_from_matplotlib_without_pyplot():
     code = ("import sys; from viscoforce.cli._args import figure_formats; figure_formats(); "
             "print('matplotlib.pyplot' in sys.modules)")
     proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
-                          timeout=120, check=True)
+                          check=True)
     assert proc.stdout.strip() == "False"
 
 

@@ -39,7 +39,8 @@ def test_notebook_runs(name, monkeypatch):
     pytest.importorskip("ipykernel")
     monkeypatch.setenv("VISCOFORCE_NB_QUICK", "1")   # inherited by the kernel process
     notebook = nbformat.read(NOTEBOOKS_DIR / name, as_version=4)
-    client = nbclient.NotebookClient(notebook, timeout=600, kernel_name="python3",
+    client = nbclient.NotebookClient(notebook, timeout=None, startup_timeout=3600,
+                                     kernel_name="python3",
                                      resources={"metadata": {"path": str(NOTEBOOKS_DIR)}})
     client.execute()   # raises CellExecutionError, naming the cell, if any cell fails
     warned = [i for i, cell in enumerate(notebook.cells) if cell.cell_type == "code"
