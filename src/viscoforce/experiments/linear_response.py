@@ -129,8 +129,8 @@ class LinearizedState:
                                   "finite [m] (h0, the undeformed apex separation)")
         modulus = _relaxed_modulus(problem, relaxed_modulus)
         problem.check_covers(position)
-        return cls._from_equilibrium(problem, position, modulus,
-                                     equilibrium_gap(problem, position, modulus))
+        return cls._from_decomposition(problem, position, modulus, _decompose(
+            problem, equilibrium_gap(problem, position, modulus)))
 
     @classmethod
     def at_load(cls, problem: ContactProblem, load: float,
@@ -156,25 +156,24 @@ class LinearizedState:
     def _from_equilibrium(cls, problem: ContactProblem, position: float, modulus: float,
                           sol: NewtonResult) -> LinearizedState:
         """Decompose the linearisation about the static solution ``sol`` (module docstring)."""
-        stiff = -problem.surface_force.pressure_derivative(sol.gap)  # −p′ (> 0 where repulsive)
-        area = problem.grid.area_weights
-        active = np.flatnonzero(stiff != 0.0)
-        d = area[active] * stiff[active]  # D = W s on the nodes that carry a force derivative
-        q = np.sqrt(np.abs(d))
-        left = np.copysign(q, d)
-        kernel = problem.influence[np.ix_(active, active)] / area[active][None, :]  # A W⁻¹
-        balanced = q[:, None] * kernel * left[None, :]  # M' = |D|^½ A W⁻¹ |D|^½ sign(D)
-        lam, vec = np.linalg.eig(balanced)
-        weights = 2.0 * np.pi * (left @ vec) * np.linalg.solve(vec, q.astype(vec.dtype))
-        gap = np.array(sol.gap, dtype=float)
+        return cls._from_decomposition(problem, position, modulus, _decompose(problem, sol))
+
+    @classmethod
+    def _from_decomposition(cls, problem: ContactProblem, position: float, modulus: float,
+                            dec: _Decomposition) -> LinearizedState:
+        """The state of a decomposed linearisation: its modes and their load weights."""
+        left = np.copysign(dec.q, dec.d)
+        weights = 2.0 * np.pi * (left @ dec.vec) * np.linalg.solve(
+            dec.vec, dec.q.astype(dec.vec.dtype))
+        gap = np.array(dec.sol.gap, dtype=float)
         gap.flags.writeable = False
-        lam = np.asarray(lam, dtype=complex)
+        lam = np.array(dec.lam, dtype=complex)
         weights = np.asarray(weights, dtype=complex)
         lam.flags.writeable = False
         weights.flags.writeable = False
         return cls(position=float(position), relaxed_modulus=float(modulus),
-                   mean_force=float(problem.load(sol.pressure)), gap=gap, eigenvalues=lam,
-                   weights=weights, total_weight=float(2.0 * np.pi * np.sum(d)))
+                   mean_force=float(problem.load(dec.sol.pressure)), gap=gap, eigenvalues=lam,
+                   weights=weights, total_weight=float(2.0 * np.pi * np.sum(dec.d)))
 
     @property
     def residues(self) -> NDArray[np.complex128]:
@@ -279,6 +278,36 @@ def _require_compliance(compliance: Any) -> NDArray[np.complex128]:
     return c
 
 
+@dataclass(frozen=True)
+class _Decomposition:
+    """A static solution and the eigen-decomposition of its balanced linearisation.
+
+    On the nodes where s = −p′ ≠ 0 (``active``), D = W s (``d``), q = |D|^½ and
+    M' = q (A W⁻¹) q sign(D) = V Λ V⁻¹ (``lam``, ``vec``): what :class:`LinearizedState`
+    (the modal stiffness) and :class:`_BiasModes` (the finite-amplitude check) both need, so a
+    cold :func:`linear_response` solves and decomposes once.
+    """
+
+    sol: NewtonResult
+    active: NDArray[np.intp]
+    d: FloatArray
+    q: FloatArray
+    lam: NDArray[np.complex128]
+    vec: NDArray[np.complex128]
+
+
+def _decompose(problem: ContactProblem, sol: NewtonResult) -> _Decomposition:
+    stiff = -problem.surface_force.pressure_derivative(sol.gap)  # −p′ (> 0 where repulsive)
+    area = problem.grid.area_weights
+    active = np.flatnonzero(stiff != 0.0)
+    d = area[active] * stiff[active]  # D = W s on the nodes that carry a force derivative
+    q = np.sqrt(np.abs(d))
+    kernel = problem.influence[np.ix_(active, active)] / area[active][None, :]  # A W⁻¹
+    lam, vec = np.linalg.eig(q[:, None] * kernel * np.copysign(q, d)[None, :])
+    return _Decomposition(sol=sol, active=active, d=d, q=q, lam=np.asarray(lam, dtype=complex),
+                          vec=np.asarray(vec, dtype=complex))
+
+
 # ── the bounded cache of static states ───────────────────────────────────────────────────────────
 
 class _StateCache:
@@ -328,6 +357,15 @@ class _StateCache:
 
 
 _STATES = _StateCache(STATE_CACHE_SIZE)
+#: The last few decompositions (O(N²) each), shared by the state and the finite-amplitude check.
+_DECOMPOSITIONS = _StateCache(4)
+
+
+def _decomposition(problem: ContactProblem, position: float, modulus: float) -> _Decomposition:
+    """The cached :class:`_Decomposition` of the static E_inf state at ``position``."""
+    key = (problem.sphere, problem.surface_force, problem.grid, float(modulus), float(position))
+    return _DECOMPOSITIONS.get(key, lambda: _decompose(
+        problem, equilibrium_gap(problem, position, modulus)))
 
 
 def linearized_state(problem: ContactProblem, position: float | None = None,
@@ -371,8 +409,12 @@ def linearized_state(problem: ContactProblem, position: float | None = None,
     if load is None:
         position = require_number("position", position, require_finite,
                                   "finite [m] (h0, the undeformed apex separation)")
-        return _STATES.get((*base, "position", position),
-                           lambda: LinearizedState.at(problem, position, modulus))
+        def build() -> LinearizedState:
+            problem.check_covers(position)
+            return LinearizedState._from_decomposition(
+                problem, position, modulus, _decomposition(problem, position, modulus))
+
+        return _STATES.get((*base, "position", position), build)
     load = require_number("load", load, require_positive, "> 0 [N] (finite; the mean force)")
     return _STATES.get((*base, "load", load),
                        lambda: LinearizedState.at_load(problem, load, modulus))
@@ -554,22 +596,17 @@ class _BiasModes:
 
     @classmethod
     def build(cls, problem: ContactProblem, position: float, e_inf: float) -> _BiasModes:
-        gap = equilibrium_gap(problem, position, e_inf).gap
-        d1, d2, d3 = _pressure_derivatives(problem, gap)
+        dec = _decomposition(problem, position, e_inf)  # shared with linearized_state
+        d1, d2, d3 = _pressure_derivatives(problem, dec.sol.gap)
         area = problem.grid.area_weights
         stiff = -d1
-        active = np.flatnonzero(stiff != 0.0)
+        active, q, vec = dec.active, dec.q, dec.vec
         inactive = np.flatnonzero(stiff == 0.0)
-        d = area[active] * stiff[active]
-        q = np.sqrt(np.abs(d))
-        kernel = problem.influence[np.ix_(active, active)] / area[active][None, :]
-        lam, vec = np.linalg.eig(q[:, None] * kernel * np.copysign(q, d)[None, :])
         left = vec / q[:, None]
         right = np.linalg.solve(vec, np.diag(q).astype(vec.dtype))
         coupling = problem.influence[np.ix_(inactive, active)] * stiff[active][None, :]
         return cls(d1=d1, d2=d2, d3=d3, influence=problem.influence, active=active,
-                   inactive=inactive, lam=np.asarray(lam, dtype=complex),
-                   left=np.asarray(left, dtype=complex), right=np.asarray(right, dtype=complex),
+                   inactive=inactive, lam=dec.lam, left=left, right=right,
                    coupling=coupling, load_weights=2.0 * np.pi * np.asarray(area, dtype=float))
 
     def solve(self, c: np.ndarray, rhs: np.ndarray) -> np.ndarray:
