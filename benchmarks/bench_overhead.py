@@ -1,0 +1,308 @@
+#!/usr/bin/env python
+"""Fit-overhead benchmark (issue 22 item 2): the library's fits against a plain lmfit floor.
+
+What it measures, on 20-point synthetic data with 1 % noise from a fixed seed (stderr given, so
+the fits are weighted), for each model below:
+
+- ``library``: the public call a user makes — ``fit_spectrum(ds, model, ...)`` for the spectrum
+  models (reading the dataset, the guess, the fit, the default identifiability ``"auto"``, the
+  result dataset with its 200-point curve and derived moduli, the model-bias checks) and
+  ``fit_data(FitData(t, F), "relaxation")`` for the force-relaxation model;
+- ``floor``: a plain ``lmfit.minimize(residual, start, method="leastsq")`` of the same closed form
+  (the model's own function ``FitModel.raw``) from the same start (the model's guess, computed
+  once outside the timing), its residual written out by hand: weighted complex differences as
+  real numbers, the chain parameters decoded as 10**(sum of logs);
+- ``local`` and ``profile``: the library call with ``identifiability="local"`` (no limits) and
+  ``"profile"`` (the profile likelihood of every parameter), for information;
+- ``pixel``: what one pixel of a map costs (``fitting.maps.fit_block`` on the prepared data: the
+  guess, the fit and the summary, no dataset per pixel), for information.
+
+Cases: ``svda`` (h0 = 2 nm, the paper's system), ``contact`` (SLS, Hertz sphere R = 10 µm,
+δ0 = 50 nm), ``prony`` (two modes), ``relaxation`` (one mode, F(t) over 20 samples) and
+``exact`` (one mode, h0 = −5 nm, default grid: every change of E_inf is a new static state).
+
+Times are process CPU medians over interleaved rounds (library, floor, local, profile, then
+again), the garbage collector paused, BLAS pinned to one thread (environment before NumPy loads,
+plus threadpoolctl) and reported. Targets (issue 22 item 2): closed-form fits (svda, contact,
+prony, relaxation) ≤ 1.5× the floor; the exact fit ≤ 8× the floor. The summary lines end in
+PASS/FAIL.
+
+Run ``python benchmarks/bench_overhead.py [--quick] [--repeats N] [--out DIR]``. Outputs (in
+``--out``, default benchmarks/out/): ``overhead.json`` (keys :data:`JSON_KEYS`),
+``overhead.csv`` (one row per case) and ``overhead.png`` (bars: time per fit, each path). No test
+asserts these times; tests/test_bench_overhead.py runs ``--quick`` and checks the keys.
+"""
+
+from __future__ import annotations
+
+import os
+
+for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
+    os.environ[_var] = "1"  # before NumPy loads
+
+import math  # noqa: E402
+import statistics  # noqa: E402
+import sys  # noqa: E402
+import time  # noqa: E402
+import warnings  # noqa: E402
+from pathlib import Path  # noqa: E402
+
+import matplotlib  # noqa: E402
+
+matplotlib.use("Agg")
+
+import lmfit  # noqa: E402
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+from threadpoolctl import threadpool_limits  # noqa: E402
+
+import viscoforce as vf  # noqa: E402
+from viscoforce import PAPER  # noqa: E402
+from viscoforce.experiments.linear_response import linear_stiffness, linearized_state  # noqa: E402
+from viscoforce.fitting import _params  # noqa: E402
+from viscoforce.fitting.fit import FitData, fit_data, fit_spectrum, spectrum_data  # noqa: E402
+from viscoforce.fitting.maps import fit_block  # noqa: E402
+from viscoforce.fitting.models import check_fixed, make_model  # noqa: E402
+from viscoforce.physics.materials import StandardLinearSolid  # noqa: E402
+from viscoforce.physics.paper import paper_pressure_law  # noqa: E402
+from viscoforce.physics.particle import Sphere  # noqa: E402
+from viscoforce.schema import make_spectrum  # noqa: E402
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))  # benchmarks/_common.py, from any cwd
+from _common import (  # noqa: E402
+    gc_paused,
+    machine_facts,
+    parse_args,
+    pf,
+    print_machine,
+    report_head,
+    run_end,
+    write_csv,
+    write_json,
+)
+
+SCHEMA = "viscoforce.bench_overhead/1"
+JSON_KEYS = ("schema", "created", "quick", "machine", "target", "settings", "cases", "summary",
+             "files")
+N_POINTS = 20
+NOISE = 0.01
+SEED = 20261203
+REPEATS, QUICK_REPEATS = 40, 3
+EXACT_REPEATS, QUICK_EXACT_REPEATS = 7, 1
+TARGETS = {"closed_form_ratio": 1.5, "exact_ratio": 8.0}
+CLOSED_FORM = ("svda", "contact", "prony", "relaxation")
+RADIUS, DEPTH = 10e-6, 50e-9  # contact and prony cases [m]
+SLS = {"E0": 1e10, "E_inf": 1e9, "tau": 1e-3}
+
+
+# ── the cases ────────────────────────────────────────────────────────────────────────────────────
+
+def omega() -> np.ndarray:
+    return np.geomspace(10.0, 1e6, N_POINTS)
+
+
+def noisy_spectrum(k: np.ndarray, rng: np.random.Generator, mean_force: float):
+    noisy = k + NOISE * np.abs(k) * (rng.standard_normal(k.shape)
+                                     + 1j * rng.standard_normal(k.shape))
+    stderr = {"stiffness": NOISE * np.abs(k), "phase": np.full(k.shape, math.degrees(NOISE))}
+    return make_spectrum(omega(), noisy, mean_force, 1e-10, stderr=stderr, source="simulation")
+
+
+def spectrum_case(name: str, model: str, modes: int, fixed: dict, truth: dict,
+                  rng: np.random.Generator, k: np.ndarray | None = None) -> dict:
+    fm = make_model(model, modes, **fixed)
+    if k is None:
+        k = fm.raw(omega(), truth)
+    ds = noisy_spectrum(k, rng, 1e-7)
+    return {"case": name, "model": model, "modes": modes, "fixed": fixed, "ds": ds,
+            "library": lambda **kw: fit_spectrum(ds, model, modes=modes, **fixed, **kw),
+            "data": lambda: spectrum_data(ds)}
+
+
+def relaxation_case(rng: np.random.Generator) -> dict:
+    t = np.linspace(0.0, 0.05, N_POINTS)
+    truth = {"F_inf": 2e-9, "dF_1": 3e-9, "tau_1": 0.01}
+    f = make_model("relaxation", 1).raw(t, truth)
+    f = f + NOISE * float(np.max(np.abs(f))) * rng.standard_normal(t.shape)
+    data = FitData(t, f, None, {"data_kind": "curve"})
+    return {"case": "relaxation", "model": "relaxation", "modes": 1, "fixed": {},
+            "library": lambda **kw: fit_data(data, "relaxation", profile={
+                "auto": "auto", "local": False, "profile": True}[kw.get("identifiability",
+                                                                         "auto")]),
+            "data": lambda: data}
+
+
+def exact_case(rng: np.random.Generator) -> dict:
+    h0 = -5e-9
+    problem = vf.ContactProblem.create(sphere=Sphere(PAPER.R), surface_force=paper_pressure_law(),
+                                       material=StandardLinearSolid(**SLS), deepest_position=h0)
+    k, force = linear_stiffness(problem, h0, omega())
+    fixed = {"problem": problem, "position": h0}
+    case = spectrum_case("exact", "exact", 1, fixed, SLS, rng, k=k)
+    return case
+
+
+def cases(rng: np.random.Generator) -> list[dict]:
+    svda = {"position": 2e-9, "radius": PAPER.R, "P": PAPER.P, "debye_length": PAPER.debye_length}
+    contact = {"radius": RADIUS, "indentation": DEPTH}
+    return [spectrum_case("svda", "svda", 1, svda, SLS, rng),
+            spectrum_case("contact", "contact", 1, contact, SLS, rng),
+            spectrum_case("prony", "prony", 2, {}, {"k_inf": 1.0, "dk_1": 2.0, "dk_2": 1.0,
+                                                    "tau_1": 1e-4, "tau_2": 1e-2}, rng),
+            relaxation_case(rng), exact_case(rng)]
+
+
+# ── the floor ────────────────────────────────────────────────────────────────────────────────────
+
+def decode(layout, p: dict) -> dict:
+    """SPEC values from the internal ``log_`` parameters (10**(sum of logs) along a chain)."""
+    out = {}
+    for item in layout:
+        if isinstance(item, _params.Chain):
+            total = 0.0
+            for name in item.names:
+                total += p[f"log_{name}"]
+                out[name] = 10.0 ** total
+        else:
+            out[item.name] = p[item.name]
+    return out
+
+
+def floor_fit(case: dict):
+    """A plain ``lmfit.minimize`` of the model's function from the model's start (a closure)."""
+    data = case["data"]()
+    model = make_model(case["model"], case["modes"], **case["fixed"])
+    start = model.internal_guess(data.y, data.x)
+    x, y, layout, func = data.x, data.y, model.layout, model.raw
+    w = None if data.weights is None else (data.weights.view(float)
+                                           if np.iscomplexobj(data.weights) else data.weights)
+
+    def residual(params):
+        d = np.asarray(y - func(x, decode(layout, params.valuesdict())))
+        d = d.view(float) if np.iscomplexobj(d) else d
+        return d if w is None else d * w
+
+    def run():
+        return lmfit.minimize(residual, start, method="leastsq", scale_covar=w is None)
+
+    return run
+
+
+# ── timing ───────────────────────────────────────────────────────────────────────────────────────
+
+def interleaved(runs: dict, repeats: int, before=None) -> dict:
+    """CPU time medians of each run over ``repeats`` interleaved rounds (gc paused)."""
+    cpu = {k: [] for k in runs}
+    with gc_paused(), warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        for _ in range(repeats):
+            for key, fn in runs.items():
+                if before is not None:
+                    before()
+                c0 = time.process_time()
+                fn()
+                cpu[key].append(time.process_time() - c0)
+    return {k: {"cpu_median_s": statistics.median(v), "cpu_min_s": min(v), "samples": len(v)}
+            for k, v in cpu.items()}
+
+
+def bench_case(case: dict, repeats: int) -> dict:
+    floor = floor_fit(case)
+    data = case["data"]()
+    fixed = check_fixed(case["model"], case["fixed"])
+    runs = {"library": case["library"], "floor": floor,
+            "local": lambda: case["library"](identifiability="local"),
+            "profile": lambda: case["library"](identifiability="profile"),
+            "pixel": lambda: fit_block([data], case["model"], case["modes"], "bic", fixed)}
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        ds, res = case["library"](), floor()  # warm-up (imports, caches of the grid)
+    before = linearized_state.cache_clear if case["model"] == "exact" else None
+    times = interleaved(runs, repeats, before)
+    base = times["floor"]["cpu_median_s"]
+    row = {"case": case["case"], "model": case["model"], "modes": case["modes"],
+           "points": N_POINTS, "floor_nfev": int(res.nfev),
+           "library_nfev": int(ds.attrs.get("nfev", -1)),
+           "profiled": [str(n) for n, p in zip(ds["param_i"].values,
+                                               ds["profiled"].values, strict=True) if p]
+           if "profiled" in ds else []}
+    for key, t in times.items():
+        row[f"{key}_cpu_s"] = t["cpu_median_s"]
+        row[f"{key}_cpu_min_s"] = t["cpu_min_s"]
+        row[f"{key}_ratio"] = t["cpu_median_s"] / base
+    row["samples"] = repeats
+    target = TARGETS["exact_ratio" if case["model"] == "exact" else "closed_form_ratio"]
+    row["target_ratio"] = target
+    row["passed"] = bool(row["library_ratio"] <= target)
+    return row
+
+
+def plot(rows: list[dict], path: Path) -> None:
+    fig, ax = plt.subplots(figsize=(7.5, 4.0))
+    keys = ("floor", "pixel", "library", "local", "profile")
+    width = 0.16
+    xs = np.arange(len(rows))
+    for i, key in enumerate(keys):
+        ax.bar(xs + (i - 2) * width, [r[f"{key}_cpu_s"] * 1e3 for r in rows], width,
+               label=key)
+    ax.set_xticks(xs, [r["case"] for r in rows])
+    ax.set_yscale("log")
+    ax.set_ylabel("CPU time per fit [ms]")
+    ax.set_title(f"Fit overhead on {N_POINTS} points (1 BLAS thread)")
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = parse_args(argv, doc=__doc__, quick_help="3 rounds per case (a smoke run)",
+                      repeats_help=f"interleaved rounds per closed-form case (default {REPEATS})")
+    t_start = time.perf_counter()
+    repeats = args.repeats or (QUICK_REPEATS if args.quick else REPEATS)
+    exact_repeats = QUICK_EXACT_REPEATS if args.quick else max(1, min(repeats, EXACT_REPEATS))
+    args.out.mkdir(parents=True, exist_ok=True)
+    with threadpool_limits(1):
+        machine = machine_facts()
+        print_machine(machine)
+        rows = []
+        for case in cases(np.random.default_rng(SEED)):
+            row = bench_case(case, exact_repeats if case["model"] == "exact" else repeats)
+            rows.append(row)
+            print(f"{row['case']:>10}: library {row['library_cpu_s'] * 1e3:8.2f} ms, floor "
+                  f"{row['floor_cpu_s'] * 1e3:8.2f} ms ({row['floor_nfev']} evaluations): "
+                  f"{row['library_ratio']:5.2f}x (local {row['local_ratio']:.2f}x, profile "
+                  f"{row['profile_ratio']:.2f}x, map pixel {row['pixel_ratio']:.2f}x; "
+                  f"profiled: {', '.join(row['profiled']) or '-'})"
+                  f" target <= {row['target_ratio']:g}x {pf(row['passed'])}")
+    closed = [r for r in rows if r["model"] in CLOSED_FORM]
+    exact = [r for r in rows if r["model"] == "exact"]
+    summary = {"worst_closed_form_ratio": max(r["library_ratio"] for r in closed),
+               "exact_ratio": exact[0]["library_ratio"],
+               "closed_form_passed": all(r["passed"] for r in closed),
+               "exact_passed": exact[0]["passed"]}
+    summary["passed"] = summary["closed_form_passed"] and summary["exact_passed"]
+    summary["verdict"] = pf(summary["passed"])
+    summary.update(run_end(t_start))
+    print(f"closed-form fits: worst {summary['worst_closed_form_ratio']:.2f}x the floor "
+          f"(target <= {TARGETS['closed_form_ratio']}x) {pf(summary['closed_form_passed'])}")
+    print(f"exact fit: {summary['exact_ratio']:.2f}x the floor (target <= "
+          f"{TARGETS['exact_ratio']}x) {pf(summary['exact_passed'])}")
+    print(f"overall {summary['verdict']}")
+    files = {"json": str(args.out / "overhead.json"), "csv": str(args.out / "overhead.csv"),
+             "png": str(args.out / "overhead.png")}
+    plot(rows, Path(files["png"]))
+    write_csv([{k: (";".join(v) if isinstance(v, list) else v) for k, v in r.items()}
+               for r in rows], Path(files["csv"]))
+    report = report_head(SCHEMA, args.quick, machine)
+    report.update(target=TARGETS, settings={
+        "points": N_POINTS, "noise": NOISE, "seed": SEED, "repeats": repeats,
+        "exact_repeats": exact_repeats, "timer": "process CPU time, median of interleaved "
+        "rounds, gc paused", "floor": "lmfit.minimize(leastsq) of FitModel.raw from the "
+        "model's guess"}, cases=rows, summary=summary, files=files)
+    write_json(report, Path(files["json"]))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
