@@ -439,11 +439,11 @@ def fit_one(args: argparse.Namespace, ds, kind: str):
         elif args.accuracy is not None:
             raise UsageError("--accuracy needs --model auto")
         weights = {} if args.weights is None else {"weights": args.weights}
-        options = {} if args.identifiability is None else {
-            "identifiability": args.identifiability}
+        chosen = getattr(args, "identifiability", None)  # bode --fit has no such flag
+        options = {} if chosen is None else {"identifiability": chosen}
         return fit_spectrum(ds, args.model, modes=args.modes, criterion=args.criterion,
                             poisson=args.poisson, **weights, **options, **fixed)
-    if args.identifiability is not None:
+    if getattr(args, "identifiability", None) is not None:
         raise UsageError("--identifiability applies to spectra and maps (curve fits use "
                          "their own rule)")
     if args.weights is not None:
