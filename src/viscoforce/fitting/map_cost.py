@@ -153,6 +153,9 @@ def plan_execution(pixels: int, pixel_cost: float, *, cores: int,
         faster; on a tie, this process.
     """
     method = start_method() if method is None else method
+    if pixels <= 0:
+        return ExecutionPlan(0, pixel_cost, {"in-process": 0.0},
+                             "cost model: the probe fitted every pixel")
     options = {"in-process": expected_in_process(pixels, pixel_cost)}
     best, best_time = 0, options["in-process"]
     for w in range(2, min(cores, pixels) + 1):

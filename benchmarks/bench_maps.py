@@ -1,0 +1,360 @@
+#!/usr/bin/env python
+"""Map benchmark: svda maps in this process, on a 2-worker local cluster, by the cost model, and by the CLI.
+
+What it measures, on synthetic svda maps of 4x4, 16x16 and 64x64 pixels (spectra of the svda
+closed form at h0 = 2 nm with the paper's R, P and Debye length, E_inf and tau varying over the
+map, 1 % seeded noise in stiffness and phase and those stderr columns; 30 frequencies):
+
+1. ``fit_map(ds, "svda", ...)`` on the in-memory map, three ways, each with ``progress=False``:
+
+   - ``in_process``: ``scheduler="synchronous"``;
+   - ``cluster``: ``workers=2``, a local cluster started and closed inside the call (start-up
+     included);
+   - ``auto``: neither, so that the cost model of viscoforce.fitting.map_cost chooses; its
+     choice (``attrs["execution"]``), expectation and measured per-pixel costs are recorded.
+2. ``cli``: ``viscoforce fit MAP.nc --model svda --h0 2nm --json --out fits.nc`` in a child
+   process (the console script of this interpreter). Its overhead is its wall time minus the
+   API's ``auto`` time (the same choice, made by the same cost model). The CLI's start-up is the
+   same command on a 1x2 map (its fixed cost: interpreter, imports, argument parsing, reading
+   and writing netCDF; the two fits take ~5 ms); for reference, a child that only imports
+   ``viscoforce.cli``, ``viscoforce.cli.fitting``, ``viscoforce.fitting.maps`` and
+   ``viscoforce.fitting.fit`` is timed too.
+
+Every size is timed ``--repeats`` rounds (default 3; the order of the ways rotates from round to
+round, so that load from other processes spreads over all of them); medians are reported.
+Checks, printed PASS/FAIL:
+
+- 64x64 on 2 workers (``cluster``) <= 10 s;
+- speed-up = ``in_process`` / ``cluster`` on 64x64 >= 1.6 where the cost model chooses the
+  cluster (otherwise reported, not judged);
+- the cost model's time within 10 % (or 0.05 s) of the better of ``in_process`` and ``cluster``,
+  for every size;
+- CLI - API <= the CLI's start-up + 0.5 s (what grows with the map: reading it, writing
+  fits.nc, the summary), every size.
+
+BLAS is pinned to one thread (OPENBLAS/OMP/MKL_NUM_THREADS=1 before NumPy loads; inherited by
+the cluster's workers and the CLI children). Outputs (in ``--out``, default benchmarks/out/):
+``maps.json`` (keys in :data:`JSON_KEYS`), ``maps.csv`` (one row per timed run) and
+``maps.png`` (median times per size and way). ``--quick``: the 4x4 map in this process and by the
+cost model only, one round (no cluster, no CLI; a smoke run of a few seconds).
+Run ``python benchmarks/bench_maps.py [--quick] [--repeats N] [--out DIR]``. No test asserts
+these times; tests/test_bench_maps.py runs it with ``--quick`` and checks the keys.
+"""
+
+from __future__ import annotations
+
+import os
+
+for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
+    os.environ[_var] = "1"  # this process, the forked workers and the CLI children
+
+import json  # noqa: E402
+import shutil  # noqa: E402
+import statistics  # noqa: E402
+import subprocess  # noqa: E402
+import sys  # noqa: E402
+import tempfile  # noqa: E402
+import time  # noqa: E402
+import warnings  # noqa: E402
+from pathlib import Path  # noqa: E402
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))  # benchmarks/_common.py, from any cwd
+import numpy as np  # noqa: E402
+from _common import (  # noqa: E402
+    load_average,
+    machine_facts,
+    parse_args,
+    pf,
+    print_machine,
+    report_head,
+    run_end,
+    write_csv,
+    write_json,
+)
+
+SCHEMA = "viscoforce.bench_maps/1"
+SIZES = (4, 16, 64)
+QUICK_SIZES = (4,)
+DEFAULT_REPEATS = 3
+WAYS = ("in_process", "cluster", "auto", "cli")
+QUICK_WAYS = ("in_process", "auto")
+TARGET = {"cluster_64_s": 10.0, "speedup_64": 1.6, "auto_rel": 0.10, "auto_abs_s": 0.05,
+          "cli_margin_s": 0.5}
+OMEGA = np.geomspace(10.0, 1e6, 30)
+NOISE = 0.01
+POSITION = 2e-9
+STARTUP_CODE = ("import viscoforce.cli, viscoforce.cli.fitting, viscoforce.fitting.maps, "
+                "viscoforce.fitting.fit")
+#: Top-level keys of maps.json.
+JSON_KEYS = ("schema", "created", "quick", "machine", "target", "settings", "startup",
+             "results", "checks", "summary", "files", "wall_time_s", "loadavg_end")
+
+
+def svda_map(n: int, seed: int = 0):
+    """An n x n svda spectrum map (module docstring) as a viscoforce spectrum dataset."""
+    from viscoforce import PAPER
+    from viscoforce.schema import make_spectrum
+    from viscoforce.svda import svda_complex_stiffness
+
+    rng = np.random.default_rng(seed)
+    e_inf = PAPER.E_inf * (1 + 0.3 * rng.random((n, n)))
+    tau = PAPER.tau * (1 + 0.5 * rng.random((n, n)))
+    k = np.empty((n, n, OMEGA.size), complex)
+    with warnings.catch_warnings():  # the SVDA's validity estimate at 2 nm: the truth is the SVDA
+        warnings.simplefilter("ignore")
+        for i in range(n):
+            for j in range(n):
+                k[i, j] = svda_complex_stiffness(OMEGA, POSITION, PAPER.E0, e_inf[i, j],
+                                                 tau[i, j], PAPER.R, PAPER.P, PAPER.debye_length)
+    k = k * (1 + NOISE * rng.standard_normal(k.shape)) * np.exp(
+        1j * NOISE * rng.standard_normal(k.shape))
+    return make_spectrum(OMEGA, k, np.full(k.shape, 1e-7), 1e-10,
+                         stderr={"stiffness": NOISE * np.abs(k),
+                                 "phase": np.full(k.shape, np.degrees(NOISE))},
+                         dims=("y", "x", "omega"), source="synthetic")
+
+
+def fixed_inputs() -> dict:
+    """The svda model's fixed inputs of the synthetic maps (the CLI's defaults, and --h0 2nm)."""
+    from viscoforce import PAPER
+
+    return {"position": POSITION, "radius": PAPER.R, "P": PAPER.P,
+            "debye_length": PAPER.debye_length}
+
+
+def cli_command(data: Path, out: Path) -> list[str]:
+    """``viscoforce fit DATA --model svda --h0 2nm --json --out OUT`` (console script if any)."""
+    script = Path(sys.executable).with_name("viscoforce")
+    if not script.is_file():
+        found = shutil.which("viscoforce")
+        script = Path(found) if found else None
+    head = [str(script)] if script is not None and script.is_file() else [
+        sys.executable, "-m", "viscoforce"]
+    return [*head, "fit", str(data), "--model", "svda", "--h0", "2nm", "--json",
+            "--out", str(out)]
+
+
+def run_api(ds, way: str) -> tuple[float, dict]:
+    """Wall time [s] of one ``fit_map`` call of ``way`` and the result's execution attrs."""
+    from viscoforce.fitting.maps import fit_map
+
+    options = {"in_process": {"scheduler": "synchronous"}, "cluster": {"workers": 2},
+               "auto": {}}[way]
+    t0 = time.perf_counter()
+    result = fit_map(ds, "svda", progress=False, **options, **fixed_inputs())
+    wall = time.perf_counter() - t0
+    attrs = {k: result.attrs[k] for k in (
+        "execution", "execution_reason", "expected_time_s", "pixel_cost_estimated_s",
+        "pixel_cost_measured_s", "pixels_in_process", "n_good", "n_fits")}
+    return wall, attrs
+
+
+def run_cli(data: Path, out: Path) -> tuple[float, dict]:
+    """Wall time [s] of one CLI fit of ``data`` and the execution attrs of its output file."""
+    import xarray as xr
+
+    t0 = time.perf_counter()
+    proc = subprocess.run(cli_command(data, out), capture_output=True, text=True, check=False)
+    wall = time.perf_counter() - t0
+    if proc.returncode != 0:
+        raise SystemExit(f"the CLI failed ({proc.returncode}):\n{proc.stderr}")
+    json.loads(proc.stdout)
+    with xr.open_dataset(out) as fits:
+        attrs = {k: fits.attrs[k] for k in ("execution", "execution_reason", "n_good", "n_fits")}
+    return wall, attrs
+
+
+def cli_startup(rounds: int, tmp: Path) -> dict:
+    """Median wall time [s] of the CLI fit of a 1x2 map, and of a child importing only."""
+    from viscoforce._files import write_netcdf
+
+    data = tmp / "svda-1x2.nc"
+    write_netcdf(svda_map(2).isel(y=[0]), data)
+    walls, imports = [], []
+    for _ in range(rounds):
+        walls.append(run_cli(data, tmp / "fits-1x2.nc")[0])
+        t0 = time.perf_counter()
+        subprocess.run([sys.executable, "-c", STARTUP_CODE], check=True)
+        imports.append(time.perf_counter() - t0)
+    return {"time_median_s": statistics.median(walls), "time_min_s": min(walls),
+            "runs": len(walls), "imports_median_s": statistics.median(imports),
+            "imports_code": STARTUP_CODE}
+
+
+def time_size(n: int, ways: tuple[str, ...], repeats: int, tmp: Path, rows: list[dict]) -> dict:
+    """All ways on the n x n map, ``repeats`` rotated rounds; per way medians and choices."""
+    ds = svda_map(n)
+    data = tmp / f"svda-{n}x{n}.nc"
+    if "cli" in ways:
+        from viscoforce._files import write_netcdf
+
+        write_netcdf(ds, data)
+    walls: dict[str, list[float]] = {w: [] for w in ways}
+    seen: dict[str, list[dict]] = {w: [] for w in ways}
+    for r in range(repeats):
+        order = ways[r % len(ways):] + ways[:r % len(ways)]
+        for way in order:
+            if way == "cli":
+                wall, attrs = run_cli(data, tmp / f"fits-{n}.nc")
+            else:
+                wall, attrs = run_api(ds, way)
+            walls[way].append(wall)
+            seen[way].append(attrs)
+            rows.append({"size": f"{n}x{n}", "pixels": n * n, "round": r, "way": way,
+                         "wall_s": wall, "execution": attrs["execution"],
+                         "loadavg_1min": (load_average() or [None])[0]})
+    out = {"pixels": n * n}
+    for way in ways:
+        attrs = seen[way]
+        out[way] = {"time_median_s": statistics.median(walls[way]),
+                    "time_min_s": min(walls[way]), "runs": len(walls[way]),
+                    "executions": sorted({a["execution"] for a in attrs}),
+                    "n_good": attrs[0]["n_good"]}
+        if way == "auto":
+            out[way]["reasons"] = [a["execution_reason"] for a in attrs]
+            for key in ("expected_time_s", "pixel_cost_estimated_s", "pixel_cost_measured_s",
+                        "pixels_in_process"):
+                out[way][key] = statistics.median(float(a[key]) for a in attrs)
+    return out
+
+
+def judge(results: dict, startup: dict, quick: bool) -> dict:
+    """The PASS/FAIL checks of the module docstring (None where a check does not apply)."""
+    checks: dict = {}
+    big = results.get("64x64")
+    if big and "cluster" in big:
+        cluster_s = big["cluster"]["time_median_s"]
+        speedup = big["in_process"]["time_median_s"] / cluster_s
+        chose_cluster = any(e.startswith("local cluster") for e in big["auto"]["executions"])
+        checks["cluster_64"] = {"value_s": cluster_s, "target_s": TARGET["cluster_64_s"],
+                                "passed": cluster_s <= TARGET["cluster_64_s"]}
+        checks["speedup_64"] = {"value": speedup, "target": TARGET["speedup_64"],
+                                "cluster_chosen": chose_cluster,
+                                "passed": speedup >= TARGET["speedup_64"] if chose_cluster
+                                else None}
+    for size, res in results.items():
+        options = [res[w]["time_median_s"] for w in ("in_process", "cluster") if w in res]
+        best = min(options)
+        auto = res["auto"]["time_median_s"]
+        allowed = max(best * (1 + TARGET["auto_rel"]), best + TARGET["auto_abs_s"])
+        checks[f"auto_{size}"] = {"value_s": auto, "best_s": best, "allowed_s": allowed,
+                                  "choice": res["auto"]["executions"],
+                                  "passed": auto <= allowed}
+        if "cli" in res:
+            over = res["cli"]["time_median_s"] - auto
+            allowed = startup["time_median_s"] + TARGET["cli_margin_s"]
+            checks[f"cli_{size}"] = {"overhead_s": over, "allowed_s": allowed,
+                                     "passed": over <= allowed}
+    judged = [c["passed"] for c in checks.values() if c["passed"] is not None]
+    return {"checks": checks, "summary": {"passed": all(judged), "verdict": pf(all(judged)),
+                                          "judged": len(judged), "quick": quick}}
+
+
+def plot(results: dict, path: Path) -> None:
+    """Bars of the median times per map size and way (log time axis)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    sizes = list(results)
+    ways = [w for w in WAYS if any(w in results[s] for s in sizes)]
+    fig, ax = plt.subplots(figsize=(7, 4))
+    width = 0.8 / len(ways)
+    for j, way in enumerate(ways):
+        values = [results[s][way]["time_median_s"] if way in results[s] else np.nan
+                  for s in sizes]
+        ax.bar(np.arange(len(sizes)) + j * width, values, width, label=way.replace("_", "-"))
+    ax.set_xticks(np.arange(len(sizes)) + width * (len(ways) - 1) / 2, sizes)
+    ax.set_yscale("log")
+    ax.set_ylabel("median wall time [s]")
+    ax.set_title("svda maps: in-process, 2-worker cluster, cost model, CLI")
+    ax.legend()
+    fig.tight_layout()
+    fig.savefig(path, dpi=100)
+    plt.close(fig)
+
+
+def print_results(results: dict, startup: dict | None) -> None:
+    if startup is not None:
+        print(f"CLI start-up (the fit command on a 1x2 map): {startup['time_median_s']:.2f} s "
+              f"median of {startup['runs']} (a child only importing the fit modules: "
+              f"{startup['imports_median_s']:.2f} s)")
+    for size, res in results.items():
+        parts = [f"{w} {res[w]['time_median_s']:.2f} s" for w in WAYS if w in res]
+        auto = res["auto"]
+        print(f"{size} ({res['pixels']} pixels): " + ", ".join(parts))
+        print(f"  cost model chose {' / '.join(auto['executions'])}: probe "
+              f"{auto['pixel_cost_estimated_s'] * 1e3:.2f} ms/pixel, measured "
+              f"{auto['pixel_cost_measured_s'] * 1e3:.2f} ms/pixel, expected "
+              f"{auto['expected_time_s']:.2f} s for the pixels after the probe")
+        if "cli" in res:
+            print(f"  CLI chose {' / '.join(res['cli']['executions'])}")
+
+
+def print_checks(judged: dict) -> None:
+    for name, c in judged["checks"].items():
+        verdict = "n/a (the cost model did not choose the cluster)" if c["passed"] is None \
+            else pf(c["passed"])
+        if name == "cluster_64":
+            print(f"64x64 svda map on 2 workers: {c['value_s']:.2f} s, target <= "
+                  f"{c['target_s']:g} s: {verdict}")
+        elif name == "speedup_64":
+            print(f"speed-up in-process / 2-worker cluster on 64x64: {c['value']:.2f}x, target "
+                  f">= {c['target']:g}x where the cluster is chosen: {verdict}")
+        elif name.startswith("auto_"):
+            print(f"cost model on {name[5:]} ({' / '.join(c['choice'])}): {c['value_s']:.2f} s "
+                  f"against the better {c['best_s']:.2f} s, target <= {c['allowed_s']:.2f} s "
+                  f"(10 % or 0.05 s): {verdict}")
+        else:
+            print(f"CLI - API on {name[4:]}: {c['overhead_s']:.2f} s, target <= "
+                  f"{c['allowed_s']:.2f} s (start-up + {TARGET['cli_margin_s']:g} s): "
+                  f"{verdict}")
+    print(f"overall: {judged['summary']['verdict']}")
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = parse_args(argv, doc=__doc__,
+                      quick_help="the 4x4 map in this process and by the cost model, one round "
+                                 "(no cluster, no CLI)",
+                      repeats_help=f"rounds per map size (default {DEFAULT_REPEATS}; --quick 1)")
+    repeats = args.repeats or (1 if args.quick else DEFAULT_REPEATS)
+    sizes, ways = (QUICK_SIZES, QUICK_WAYS) if args.quick else (SIZES, WAYS)
+    t_start = time.perf_counter()
+    machine = machine_facts()
+    print("viscoforce maps: svda maps in-process, on 2 workers, by the cost model, by the CLI")
+    print_machine(machine)
+    print("BLAS pinned to one thread: OPENBLAS_NUM_THREADS=1 (this process, the workers, the "
+          f"CLI children); load average at start {machine['loadavg_start']}")
+    from viscoforce.fitting.map_cost import start_method
+
+    args.out.mkdir(parents=True, exist_ok=True)
+    rows: list[dict] = []
+    results: dict = {}
+    with tempfile.TemporaryDirectory(prefix="bench_maps_") as tmp:
+        startup = cli_startup(max(3, repeats), Path(tmp)) if "cli" in ways else None
+        for n in sizes:
+            results[f"{n}x{n}"] = time_size(n, ways, repeats, Path(tmp), rows)
+    print_results(results, startup)
+    judged = judge(results, startup or {"time_median_s": 0.0}, args.quick)
+    print_checks(judged)
+    files = {"json": str(args.out / "maps.json"), "csv": str(args.out / "maps.csv"),
+             "png": str(args.out / "maps.png")}
+    report = {**report_head(SCHEMA, args.quick, machine), "target": TARGET,
+              "settings": {"sizes": list(sizes), "ways": list(ways), "repeats": repeats,
+                           "frequencies": int(OMEGA.size), "noise": NOISE,
+                           "position_m": POSITION, "start_method": start_method(),
+                           "env": {k: os.environ[k] for k in (
+                               "OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS")}},
+              "startup": startup, "results": results, **judged, "files": files,
+              **run_end(t_start)}
+    write_json(report, Path(files["json"]))
+    write_csv(rows, Path(files["csv"]))
+    plot(results, Path(files["png"]))
+    print(f"wrote {files['json']}, {files['csv']}, {files['png']} "
+          f"({report['wall_time_s']:.0f} s, load average at end {report['loadavg_end']})")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
