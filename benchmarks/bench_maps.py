@@ -20,6 +20,11 @@ map, 1 % seeded noise in stiffness and phase and those stderr columns; 30 freque
    ``viscoforce.cli``, ``viscoforce.cli.fitting``, ``viscoforce.fitting.maps`` and
    ``viscoforce.fitting.fit`` is timed too.
 
+3. ``capacity``: what two processes get from the machine at that moment: a pure-Python loop
+   (:data:`SPIN`) alone, then twice at once in two child processes; capacity = 2 x alone /
+   together (2.0 on two free cores, less while other processes use them). Measured once per
+   round, beside the fits, so that the speed-up can be read against it.
+
 Every size is timed ``--repeats`` rounds (default 3; the order of the ways rotates from round to
 round, so that load from other processes spreads over all of them); medians are reported.
 Checks, printed PASS/FAIL:
@@ -85,9 +90,10 @@ NOISE = 0.01
 POSITION = 2e-9
 STARTUP_CODE = ("import viscoforce.cli, viscoforce.cli.fitting, viscoforce.fitting.maps, "
                 "viscoforce.fitting.fit")
+SPIN = 3_000_000  # iterations of the capacity loop (~0.25 s alone on this machine)
 #: Top-level keys of maps.json.
 JSON_KEYS = ("schema", "created", "quick", "machine", "target", "settings", "startup",
-             "results", "checks", "summary", "files", "wall_time_s", "loadavg_end")
+             "capacity", "results", "checks", "summary", "files", "wall_time_s", "loadavg_end")
 
 
 def svda_map(n: int, seed: int = 0):
@@ -145,7 +151,7 @@ def run_api(ds, way: str) -> tuple[float, dict]:
     wall = time.perf_counter() - t0
     attrs = {k: result.attrs[k] for k in (
         "execution", "execution_reason", "expected_time_s", "pixel_cost_estimated_s",
-        "pixel_cost_measured_s", "pixels_in_process", "n_good", "n_fits")}
+        "pixel_cost_measured_s", "pixels_in_process", "cluster_startup_s", "n_good", "n_fits")}
     return wall, attrs
 
 
@@ -181,7 +187,34 @@ def cli_startup(rounds: int, tmp: Path) -> dict:
             "imports_code": STARTUP_CODE}
 
 
-def time_size(n: int, ways: tuple[str, ...], repeats: int, tmp: Path, rows: list[dict]) -> dict:
+def _spin(n: int = SPIN) -> int:
+    total = 0
+    for i in range(n):
+        total += i * i
+    return total
+
+
+def capacity() -> float:
+    """2 x (the loop alone) / (the loop in two processes at once): the machine's 2-process speed-up
+    now."""
+    import multiprocessing
+
+    t0 = time.perf_counter()
+    _spin()
+    alone = time.perf_counter() - t0
+    ctx = multiprocessing.get_context("fork" if "fork" in multiprocessing.get_all_start_methods()
+                                      else "spawn")
+    t0 = time.perf_counter()
+    procs = [ctx.Process(target=_spin) for _ in range(2)]
+    for p in procs:
+        p.start()
+    for p in procs:
+        p.join()
+    return 2 * alone / (time.perf_counter() - t0)
+
+
+def time_size(n: int, ways: tuple[str, ...], repeats: int, tmp: Path, rows: list[dict],
+              capacities: list[float]) -> dict:
     """All ways on the n x n map, ``repeats`` rotated rounds; per way medians and choices."""
     ds = svda_map(n)
     data = tmp / f"svda-{n}x{n}.nc"
@@ -192,6 +225,8 @@ def time_size(n: int, ways: tuple[str, ...], repeats: int, tmp: Path, rows: list
     walls: dict[str, list[float]] = {w: [] for w in ways}
     seen: dict[str, list[dict]] = {w: [] for w in ways}
     for r in range(repeats):
+        if "cluster" in ways:
+            capacities.append(capacity())
         order = ways[r % len(ways):] + ways[:r % len(ways)]
         for way in order:
             if way == "cli":
@@ -202,6 +237,7 @@ def time_size(n: int, ways: tuple[str, ...], repeats: int, tmp: Path, rows: list
             seen[way].append(attrs)
             rows.append({"size": f"{n}x{n}", "pixels": n * n, "round": r, "way": way,
                          "wall_s": wall, "execution": attrs["execution"],
+                         "cluster_startup_s": attrs.get("cluster_startup_s", float("nan")),
                          "loadavg_1min": (load_average() or [None])[0]})
     out = {"pixels": n * n}
     for way in ways:
@@ -210,6 +246,9 @@ def time_size(n: int, ways: tuple[str, ...], repeats: int, tmp: Path, rows: list
                     "time_min_s": min(walls[way]), "runs": len(walls[way]),
                     "executions": sorted({a["execution"] for a in attrs}),
                     "n_good": attrs[0]["n_good"]}
+        if way == "cluster":
+            out[way]["cluster_startup_median_s"] = statistics.median(
+                float(a["cluster_startup_s"]) for a in attrs)
         if way == "auto":
             out[way]["reasons"] = [a["execution_reason"] for a in attrs]
             for key in ("expected_time_s", "pixel_cost_estimated_s", "pixel_cost_measured_s",
@@ -276,6 +315,8 @@ def plot(results: dict, path: Path) -> None:
 
 
 def print_results(results: dict, startup: dict | None) -> None:
+    from viscoforce.fitting.map_cost import start_method
+
     if startup is not None:
         print(f"CLI start-up (the fit command on a 1x2 map): {startup['time_median_s']:.2f} s "
               f"median of {startup['runs']} (a child only importing the fit modules: "
@@ -288,6 +329,9 @@ def print_results(results: dict, startup: dict | None) -> None:
               f"{auto['pixel_cost_estimated_s'] * 1e3:.2f} ms/pixel, measured "
               f"{auto['pixel_cost_measured_s'] * 1e3:.2f} ms/pixel, expected "
               f"{auto['expected_time_s']:.2f} s for the pixels after the probe")
+        if "cluster" in res:
+            print(f"  2-worker cluster start-up + shut-down (start method {start_method()}): "
+                  f"{res['cluster']['cluster_startup_median_s']:.2f} s median")
         if "cli" in res:
             print(f"  CLI chose {' / '.join(res['cli']['executions'])}")
 
@@ -331,11 +375,19 @@ def main(argv: list[str] | None = None) -> int:
     args.out.mkdir(parents=True, exist_ok=True)
     rows: list[dict] = []
     results: dict = {}
+    capacities: list[float] = []
     with tempfile.TemporaryDirectory(prefix="bench_maps_") as tmp:
         startup = cli_startup(max(3, repeats), Path(tmp)) if "cli" in ways else None
         for n in sizes:
-            results[f"{n}x{n}"] = time_size(n, ways, repeats, Path(tmp), rows)
+            results[f"{n}x{n}"] = time_size(n, ways, repeats, Path(tmp), rows, capacities)
+    machine_capacity = ({"median": statistics.median(capacities), "min": min(capacities),
+                         "max": max(capacities), "runs": len(capacities)}
+                        if capacities else None)
     print_results(results, startup)
+    if machine_capacity:
+        print(f"2-process capacity of the machine during the run (2.0 = two free cores): median "
+              f"{machine_capacity['median']:.2f} (min {machine_capacity['min']:.2f}, max "
+              f"{machine_capacity['max']:.2f}, {machine_capacity['runs']} runs)")
     judged = judge(results, startup or {"time_median_s": 0.0}, args.quick)
     print_checks(judged)
     files = {"json": str(args.out / "maps.json"), "csv": str(args.out / "maps.csv"),
@@ -346,7 +398,7 @@ def main(argv: list[str] | None = None) -> int:
                            "position_m": POSITION, "start_method": start_method(),
                            "env": {k: os.environ[k] for k in (
                                "OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS")}},
-              "startup": startup, "results": results, **judged, "files": files,
+              "startup": startup, "capacity": machine_capacity, "results": results, **judged, "files": files,
               **run_end(t_start)}
     write_json(report, Path(files["json"]))
     write_csv(rows, Path(files["csv"]))

@@ -10,8 +10,8 @@ import pytest
 
 from tests._bench import run_benchmark
 
-TOP_KEYS = {"schema", "created", "quick", "machine", "target", "settings", "startup", "results",
-            "checks", "summary", "files", "wall_time_s", "loadavg_end"}
+TOP_KEYS = {"schema", "created", "quick", "machine", "target", "settings", "startup", "capacity",
+            "results", "checks", "summary", "files", "wall_time_s", "loadavg_end"}
 
 
 @pytest.fixture(scope="module")
@@ -30,7 +30,7 @@ def test_writes_the_documented_json(report):
     assert data["settings"]["sizes"] == [4] and data["settings"]["repeats"] == 1
     assert data["settings"]["ways"] == ["in_process", "auto"]
     assert data["target"]["cluster_64_s"] == 10.0 and data["target"]["speedup_64"] == 1.6
-    assert data["startup"] is None  # no CLI with --quick
+    assert data["startup"] is None and data["capacity"] is None  # no CLI, no cluster: --quick
     res = data["results"]["4x4"]
     assert res["pixels"] == 16
     for way in ("in_process", "auto"):
@@ -50,5 +50,5 @@ def test_writes_one_csv_row_per_run_and_the_chart(report):
         rows = list(csv.DictReader(fh))
     assert sorted(r["way"] for r in rows) == ["auto", "in_process"]
     assert set(rows[0]) == {"size", "pixels", "round", "way", "wall_s", "execution",
-                            "loadavg_1min"}
+                            "cluster_startup_s", "loadavg_1min"}
     assert (out / "maps.png").stat().st_size > 0

@@ -90,12 +90,16 @@ def test_no_measured_cost_stays_in_this_process():
     assert plan.workers == 0 and plan.reason == "cost model: no pixel cost measured"
 
 
-def test_the_startup_comes_from_the_start_method():
+def test_the_startup_comes_from_the_start_method_and_the_import():
     assert cluster_startup(2, "fork") < 0.5 < 2.0 < cluster_startup(2, "spawn")
     assert cluster_startup(2, "unknown") == cluster_startup(2, "spawn")
-    # a 256-pixel map of 3 ms pixels: forked workers pay off, fresh interpreters do not
-    assert plan_execution(256, 3e-3, cores=2, method="fork").workers == 2
-    assert plan_execution(256, 3e-3, cores=2, method="spawn").workers == 0
+    assert cluster_startup(2, "fork", imported=False) == pytest.approx(
+        cluster_startup(2, "fork") + map_cost.DISTRIBUTED_IMPORT)
+    # 512 pixels of 3 ms: forked workers pay off once distributed is imported; fresh
+    # interpreters never
+    assert plan_execution(512, 3e-3, cores=2, method="fork", imported=True).workers == 2
+    assert plan_execution(512, 3e-3, cores=2, method="fork", imported=False).workers == 0
+    assert plan_execution(512, 3e-3, cores=2, method="spawn", imported=True).workers == 0
 
 
 def test_this_process_fits_while_fresh_interpreters_start():

@@ -117,8 +117,10 @@ MAP_FLAGS = FlagGroup("maps (several spectra or curves)", (
          "likelihood, slower); a single spectrum auto (default: the profile where the "
          "curvature can mislead), profile (every parameter) or local (no limits)"),
     Flag("--scheduler", None, None, "ADDRESS",
-         "a running dask scheduler (tcp://host:8786); default: a local cluster"),
-    Flag("--workers", integer_type(1), None, "N", "workers of the local cluster (default 2)"),
+         "a running dask scheduler (tcp://host:8786); default: this process or a local "
+         "cluster, whichever the cost model expects to finish sooner"),
+    Flag("--workers", integer_type(1), None, "N",
+         "workers of a local cluster (default: the cost model's choice)"),
 ))
 
 

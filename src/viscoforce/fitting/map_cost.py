@@ -5,7 +5,7 @@ A map's pixels are independent fits, so the wall time of ``r`` pixels of cost ``
 - in this process: ``r·c``;
 - on a local cluster of ``w`` worker processes: ``S(w) + (r − m)·(c + o)/(w·e)``, where ``S(w)``
   is the cluster's start-up and shut-down (:data:`CLUSTER_STARTUP`, by the start method of its
-  processes), ``m`` the pixels this process fits itself while the cluster starts
+  processes, plus :data:`DISTRIBUTED_IMPORT` while dask.distributed is not imported), ``m`` the pixels this process fits itself while the cluster starts
   (``S(w)/(2c)``: it shares the cores with the starting workers; only where the workers start
   as fresh interpreters, :data:`OVERLAP_METHODS`), ``o`` the per-pixel transport
   (:data:`PIXEL_OVERHEAD`) and ``e`` the parallel efficiency (:data:`PARALLEL_EFFICIENCY`: the
@@ -17,7 +17,8 @@ the map itself, by fitting a few pixels spread over it in this process first
 (:func:`probe_indices`; their results are kept); ``S`` and ``o`` are constants measured with
 benchmarks/bench_maps.py (2-core Linux machine, Python 3.11, dask.distributed 2026.8).
 
-Everything here is plain arithmetic on given costs (no clock, no dask): the decisions are
+Everything here is plain arithmetic on given costs (no clock, no dask; the only fact looked up
+is whether dask.distributed is imported already, unless given): the decisions are
 deterministic for given inputs and tested so (tests/test_maps_cost.py).
 """
 
@@ -29,13 +30,18 @@ import sys
 from dataclasses import dataclass
 
 #: Start-up plus shut-down of a local cluster [s] by the start method of its worker processes:
-#: ``(base, per worker)``. "fork" copies this process (viscoforce already imported): 0.1–0.2 s
-#: measured for 2 workers; "spawn"/"forkserver" start fresh interpreters that import
-#: distributed, NumPy, SciPy, lmfit and viscoforce (1.8 s each, run side by side on the cores):
-#: 2.3–3.7 s measured for 2 workers on 2 cores, plus 0.5–1.3 s to shut down.
-CLUSTER_STARTUP: dict[str, tuple[float, float]] = {"fork": (0.15, 0.05),
+#: ``(base, per worker)``, with distributed already imported (:data:`DISTRIBUTED_IMPORT` on top
+#: otherwise). "fork" copies this process (viscoforce already imported): 0.24–0.35 s start and
+#: 0.08–0.12 s shut-down measured for 2 workers (0.12–0.16 s and 0.04–0.10 s for one);
+#: "spawn"/"forkserver" start fresh interpreters that import distributed, NumPy, SciPy, lmfit
+#: and viscoforce (1.8 s each, side by side on the cores): 2.3–3.7 s for 2 workers on 2
+#: cores, plus 0.5–1.3 s to shut down.
+CLUSTER_STARTUP: dict[str, tuple[float, float]] = {"fork": (0.2, 0.1),
                                                    "spawn": (2.0, 1.0),
                                                    "forkserver": (2.0, 1.0)}
+#: Importing dask.distributed into this process, the first time [s]: 0.48–0.63 s measured
+#: (1.0 s under a load of 4 on 2 cores).
+DISTRIBUTED_IMPORT = 0.5
 #: Start methods whose cluster start-up this process spends fitting pixels. Not "fork": its
 #: 0.1 s start-up is the scheduler's and the nannies' event loop in this process, which a
 #: CPU-bound fit here slows (it waits for the GIL at every step): 0.1 s became > 0.5 s.
@@ -103,10 +109,13 @@ def start_method() -> str:
     return "spawn"
 
 
-def cluster_startup(workers: int, method: str) -> float:
-    """Start-up plus shut-down [s] of a local cluster of ``workers`` (:data:`CLUSTER_STARTUP`)."""
+def cluster_startup(workers: int, method: str, *, imported: bool = True) -> float:
+    """Start-up plus shut-down [s] of a local cluster of ``workers`` (:data:`CLUSTER_STARTUP`).
+
+    Without ``imported`` (distributed not yet imported here), :data:`DISTRIBUTED_IMPORT` more.
+    """
     base, each = CLUSTER_STARTUP.get(method, CLUSTER_STARTUP["spawn"])
-    return base + each * workers
+    return base + each * workers + (0.0 if imported else DISTRIBUTED_IMPORT)
 
 
 def expected_in_process(pixels: int, pixel_cost: float) -> float:
@@ -128,8 +137,9 @@ def expected_cluster(pixels: int, pixel_cost: float, workers: int, startup: floa
         workers * PARALLEL_EFFICIENCY)
 
 
-def plan_execution(pixels: int, pixel_cost: float, *, cores: int,
-                   method: str | None = None, startup: float | None = None) -> ExecutionPlan:
+def plan_execution(pixels: int, pixel_cost: float, *, cores: int, method: str | None = None,
+                   startup: float | None = None, imported: bool | None = None
+                   ) -> ExecutionPlan:
     """The fastest way to fit ``pixels`` more of cost ``pixel_cost`` each: here or a cluster.
 
     Parameters
@@ -145,6 +155,9 @@ def plan_execution(pixels: int, pixel_cost: float, *, cores: int,
     startup : float, optional
         Start-up plus shut-down of a cluster [s], instead of :func:`cluster_startup` (the same
         for every worker count).
+    imported : bool, optional
+        Whether dask.distributed is imported in this process already (default: whether it
+        is, in ``sys.modules``).
 
     Returns
     -------
@@ -153,13 +166,14 @@ def plan_execution(pixels: int, pixel_cost: float, *, cores: int,
         faster; on a tie, this process.
     """
     method = start_method() if method is None else method
+    imported = "distributed" in sys.modules if imported is None else imported
     if pixels <= 0:
         return ExecutionPlan(0, pixel_cost, {"in-process": 0.0},
                              "cost model: the probe fitted every pixel")
     options = {"in-process": expected_in_process(pixels, pixel_cost)}
     best, best_time = 0, options["in-process"]
     for w in range(2, min(cores, pixels) + 1):
-        s = cluster_startup(w, method) if startup is None else startup
+        s = cluster_startup(w, method, imported=imported) if startup is None else startup
         t = expected_cluster(pixels, pixel_cost, w, s, overlap=method in OVERLAP_METHODS)
         options[cluster_label(w)] = t
         if t < best_time:

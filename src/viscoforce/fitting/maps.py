@@ -344,7 +344,8 @@ def fit_map(ds: xr.Dataset, model: str, *, modes: int | str = 1, criterion: str 
         included), ``expected_time_s`` [s] (the cost model's expectation; NaN without it),
         ``pixel_cost_estimated_s`` [s] (the probe's per-pixel cost; NaN without a probe),
         ``pixel_cost_measured_s`` [s] (the fits' wall time per pixel, here and in the
-        workers) and ``pixels_in_process`` (pixels fitted in this process).
+        workers), ``pixels_in_process`` (pixels fitted in this process) and
+        ``cluster_startup_s`` [s] (a local cluster's start-up plus shut-down; NaN without one).
 
     Raises
     ------
@@ -399,6 +400,7 @@ class _Run:
         self.bar: Any = None
         self.fit_seconds = 0.0  # wall time of the pixel fits, here and in the workers
         self.here = 0  # pixels fitted in this process
+        self.cluster_seconds = math.nan  # a local cluster's start-up + shut-down (wall)
 
     def fit_here(self, indices: Sequence[int]) -> float:
         """Fit ``indices`` in this process; their wall time [s]."""
@@ -466,7 +468,7 @@ def _execute(run: _Run, scheduler: str | None, workers: int | None) -> dict[str,
             "expected_time_s": plan.expected.get(plan.label, math.nan),
             "pixel_cost_estimated_s": estimate,
             "pixel_cost_measured_s": run.fit_seconds / n if n else math.nan,
-            "pixels_in_process": run.here}
+            "pixels_in_process": run.here, "cluster_startup_s": run.cluster_seconds}
 
 
 def _probe(run: _Run) -> float:
@@ -490,16 +492,21 @@ def _on_local_cluster(run: _Run, workers: int, estimate: float) -> None:
     """Fit what is left on a local cluster; this process fits pixels while it starts.
 
     Only while fresh interpreters start (:data:`~.map_cost.OVERLAP_METHODS`): a forked cluster
-    is up in ~0.1 s unless a fit here keeps its event loop waiting for the GIL.
+    is up in ~0.1 s unless a fit here keeps its event loop waiting for the GIL. The start-up
+    and shut-down wall time goes to ``run.cluster_seconds``.
     """
     from concurrent.futures import ThreadPoolExecutor
 
+    t0 = time.perf_counter()
     if start_method() not in OVERLAP_METHODS:
         started = _start_local(workers)
+        run.cluster_seconds = time.perf_counter() - t0
         try:
             _on_cluster(run, started[1], run.left(), estimate, "the local cluster")
         finally:
+            t0 = time.perf_counter()
             _close_local(started)
+            run.cluster_seconds += time.perf_counter() - t0
         return
     with ThreadPoolExecutor(1, thread_name_prefix="viscoforce-cluster-start") as starter:
         pending = starter.submit(_start_local, workers)
@@ -508,6 +515,7 @@ def _on_local_cluster(run: _Run, workers: int, estimate: float) -> None:
             while queue and not pending.done():
                 run.fit_here([queue.popleft()])
             started = pending.result()
+            run.cluster_seconds = time.perf_counter() - t0
         except BaseException:
             pending.add_done_callback(
                 lambda f: f.exception() is None and _close_local(f.result()))
@@ -517,7 +525,9 @@ def _on_local_cluster(run: _Run, workers: int, estimate: float) -> None:
                 per_pixel = run.fit_seconds / run.here if run.here else estimate
                 _on_cluster(run, started[1], list(queue), per_pixel, "the local cluster")
         finally:
+            t0 = time.perf_counter()
             _close_local(started)
+            run.cluster_seconds += time.perf_counter() - t0
 
 
 def _block_size(pixels: int, workers: int, per_pixel: float) -> int:
