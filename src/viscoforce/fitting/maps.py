@@ -489,7 +489,7 @@ def _probe(run: _Run) -> float:
 
 
 def _on_local_cluster(run: _Run, workers: int, estimate: float) -> None:
-    """Fit what is left on a local cluster; this process fits pixels while it starts.
+    """Fit what is left on a local cluster (:func:`cluster`); this process fits while it starts.
 
     Only while fresh interpreters start (:data:`~.map_cost.OVERLAP_METHODS`): a forked cluster
     is up in ~0.1 s unless a fit here keeps its event loop waiting for the GIL. The start-up
@@ -498,36 +498,30 @@ def _on_local_cluster(run: _Run, workers: int, estimate: float) -> None:
     from concurrent.futures import ThreadPoolExecutor
 
     t0 = time.perf_counter()
-    if start_method() not in OVERLAP_METHODS:
-        started = _start_local(workers)
-        run.cluster_seconds = time.perf_counter() - t0
-        try:
-            _on_cluster(run, started[1], run.left(), estimate, "the local cluster")
-        finally:
-            t0 = time.perf_counter()
-            _close_local(started)
-            run.cluster_seconds += time.perf_counter() - t0
-        return
-    with ThreadPoolExecutor(1, thread_name_prefix="viscoforce-cluster-start") as starter:
-        pending = starter.submit(_start_local, workers)
-        try:
-            queue = deque(run.left())
-            while queue and not pending.done():
-                run.fit_here([queue.popleft()])
-            started = pending.result()
-            run.cluster_seconds = time.perf_counter() - t0
-        except BaseException:
-            pending.add_done_callback(
-                lambda f: f.exception() is None and _close_local(f.result()))
-            raise
-        try:
-            if queue:
-                per_pixel = run.fit_seconds / run.here if run.here else estimate
-                _on_cluster(run, started[1], list(queue), per_pixel, "the local cluster")
-        finally:
-            t0 = time.perf_counter()
-            _close_local(started)
-            run.cluster_seconds += time.perf_counter() - t0
+    manager = cluster(None, workers)
+    queue = deque(run.left())
+    if start_method() in OVERLAP_METHODS:
+        with ThreadPoolExecutor(1, thread_name_prefix="viscoforce-cluster-start") as starter:
+            pending = starter.submit(manager.__enter__)
+            try:
+                while queue and not pending.done():
+                    run.fit_here([queue.popleft()])
+                client = pending.result()
+            except BaseException:  # close the cluster once it is up, then raise
+                pending.add_done_callback(lambda f: f.exception() is None and manager.__exit__(
+                    None, None, None))
+                raise
+    else:
+        client = manager.__enter__()
+    run.cluster_seconds = time.perf_counter() - t0
+    try:
+        if queue:
+            per_pixel = run.fit_seconds / run.here if run.here else estimate
+            _on_cluster(run, client, list(queue), per_pixel, "the local cluster")
+    finally:
+        t0 = time.perf_counter()
+        manager.__exit__(None, None, None)
+        run.cluster_seconds += time.perf_counter() - t0
 
 
 def _block_size(pixels: int, workers: int, per_pixel: float) -> int:
