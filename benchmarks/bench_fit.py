@@ -563,6 +563,9 @@ def bench_map(label: str, ds, model: str, fixed: dict, workers: int, truth: dict
         row.update({"status": f"error: {type(exc).__name__}", "message": str(exc)[:300]})
         print(f"{label:>10} {workers}: FAILED {type(exc).__name__}: {exc}", flush=True)
         return row
+    if "startup_s" not in box:  # the cost model fitted the map in this process: no cluster
+        box.update(startup_s=0.0, teardown_s=0.0, work_s=total,
+                   worker_blas_threads=_blas_threads())
     start = {"startup_s": box["startup_s"], "up_down_s": box["startup_s"] + box["teardown_s"],
              "worker_blas_threads": box["worker_blas_threads"]}
     fit_s = total - start["up_down_s"]

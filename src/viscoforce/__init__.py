@@ -49,6 +49,7 @@ _LAZY = {
     "linear_response": "viscoforce.experiments.linear_response",
     "load": "viscoforce.io.instruments",
     "modulation_spectrum": "viscoforce.experiments.modulation",
+    "stream_spectrum": "viscoforce.experiments.stream",
     "fit_spectrum": "viscoforce.fitting.fit",
     "fit_hold": "viscoforce.fitting.curves",
     "fit_step": "viscoforce.fitting.curves",
