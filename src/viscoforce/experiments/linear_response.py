@@ -39,6 +39,7 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
+import scipy.linalg
 import xarray as xr
 from numpy.typing import ArrayLike, NDArray
 
@@ -163,8 +164,8 @@ class LinearizedState:
                             dec: _Decomposition) -> LinearizedState:
         """The state of a decomposed linearisation: its modes and their load weights."""
         left = np.copysign(dec.q, dec.d)
-        weights = 2.0 * np.pi * (left @ dec.vec) * np.linalg.solve(
-            dec.vec, dec.q.astype(dec.vec.dtype))
+        weights = 2.0 * np.pi * (left @ dec.vec) * scipy.linalg.lu_solve(
+            dec.lu, dec.q.astype(dec.vec.dtype), check_finite=False)
         gap = np.array(dec.sol.gap, dtype=float)
         gap.flags.writeable = False
         lam = np.array(dec.lam, dtype=complex)
@@ -294,6 +295,8 @@ class _Decomposition:
     q: FloatArray
     lam: NDArray[np.complex128]
     vec: NDArray[np.complex128]
+    #: LU factors of ``vec`` (scipy.linalg.lu_factor): V⁻¹ applied without forming it.
+    lu: tuple[NDArray[np.complex128], NDArray[np.intc]]
 
 
 def _decompose(problem: ContactProblem, sol: NewtonResult) -> _Decomposition:
@@ -303,9 +306,11 @@ def _decompose(problem: ContactProblem, sol: NewtonResult) -> _Decomposition:
     d = area[active] * stiff[active]  # D = W s on the nodes that carry a force derivative
     q = np.sqrt(np.abs(d))
     kernel = problem.influence[np.ix_(active, active)] / area[active][None, :]  # A W⁻¹
-    lam, vec = np.linalg.eig(q[:, None] * kernel * np.copysign(q, d)[None, :])
+    lam, vec = scipy.linalg.eig(q[:, None] * kernel * np.copysign(q, d)[None, :],
+                                overwrite_a=True, check_finite=False)
+    vec = np.asarray(vec, dtype=complex)
     return _Decomposition(sol=sol, active=active, d=d, q=q, lam=np.asarray(lam, dtype=complex),
-                          vec=np.asarray(vec, dtype=complex))
+                          vec=vec, lu=scipy.linalg.lu_factor(vec, check_finite=False))
 
 
 # ── the bounded cache of static states ───────────────────────────────────────────────────────────
@@ -579,7 +584,8 @@ class _BiasModes:
     With D = W s and the balanced M' = |D|^½ (A W⁻¹) |D|^½ sign(D) = V Λ V⁻¹ on the nodes where
     s ≠ 0 (as :class:`LinearizedState`), (I + cM)⁻¹ b has active part P (1 + cΛ)⁻¹ Q b_a with
     P = |D|^-½ V, Q = V⁻¹ |D|^½, and inactive part b_i − c A_ia s_a x_a: every solve of the
-    harmonic balance, at every frequency, is two matrix products (module docstring).
+    harmonic balance, at every frequency, is a matrix product and an LU solve with V's factors
+    (module docstring).
     """
 
     d1: FloatArray
@@ -590,7 +596,8 @@ class _BiasModes:
     inactive: NDArray[np.intp]
     lam: NDArray[np.complex128]
     left: NDArray[np.complex128]
-    right: NDArray[np.complex128]
+    q: FloatArray
+    lu: tuple[NDArray[np.complex128], NDArray[np.intc]]
     coupling: FloatArray
     load_weights: FloatArray
 
@@ -603,17 +610,17 @@ class _BiasModes:
         active, q, vec = dec.active, dec.q, dec.vec
         inactive = np.flatnonzero(stiff == 0.0)
         left = vec / q[:, None]
-        right = np.linalg.solve(vec, np.diag(q).astype(vec.dtype))
         coupling = problem.influence[np.ix_(inactive, active)] * stiff[active][None, :]
         return cls(d1=d1, d2=d2, d3=d3, influence=problem.influence, active=active,
-                   inactive=inactive, lam=dec.lam, left=left, right=right,
+                   inactive=inactive, lam=dec.lam, left=left, q=q, lu=dec.lu,
                    coupling=coupling, load_weights=2.0 * np.pi * np.asarray(area, dtype=float))
 
     def solve(self, c: np.ndarray, rhs: np.ndarray) -> np.ndarray:
         """(I + c_f M)⁻¹ rhs[:, f] for every column f (c: one compliance value 2C* per column)."""
         a, i = self.active, self.inactive
         x = np.empty_like(rhs, dtype=complex)
-        x[a] = self.left @ ((self.right @ rhs[a]) / (1.0 + self.lam[:, None] * c[None, :]))
+        modal = scipy.linalg.lu_solve(self.lu, self.q[:, None] * rhs[a], check_finite=False)
+        x[a] = self.left @ (modal / (1.0 + self.lam[:, None] * c[None, :]))
         if i.size:
             x[i] = rhs[i] - c[None, :] * (self.coupling @ x[a])
         return x
