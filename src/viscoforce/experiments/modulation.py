@@ -1080,21 +1080,9 @@ def modulation_spectrum(data: Any, *, curves: int | Iterable[int] | None = None,
                   "quality_summary": notes["summary"]})
     attrs.update(_reference_attrs(basis, height_channel, phase_lag, phase_reference))
     source = str(inp.attrs.get("source", "jpk"))
-    n_contact = int(np.isfinite(z_contact).sum())
-    keep_indent = n_contact > 0 and (n_contact == z_contact.size or source != "simulation")
-    if contact_options is None:
-        attrs["contact_point"] = "not estimated (contact_point=False)"
-    else:
-        missing = [int(c) for c, z in zip(np.asarray(index).tolist(), z_contact, strict=True)
-                   if not math.isfinite(z)]
-        opts = ", ".join(f"{k}={v!r}" for k, v in sorted(contact_options.items())) or "defaults"
-        attrs["contact_point"] = (
-            "approach baseline line + k*sigma rise + power-law refinement "
-            f"(viscoforce.experiments.modulation.find_contact_point, {opts}); found on "
-            f"{n_contact} of {z_contact.size} curves"
-            + (f"; none on curves {missing} (mean_indentation NaN there)" if missing
-               and keep_indent else "")
-            + ("; mean_indentation left out" if not keep_indent else ""))
+    text, keep_indent = contact_point_summary(z_contact, index, source, contact_options)
+    attrs["contact_point"] = text
+    if contact_options is not None:
         if keep_indent:
             attrs["indentation_definition"] = (
                 "mean_indentation = mean tip_position over the lock-in window minus the tip "
@@ -1143,3 +1131,26 @@ def modulation_spectrum(data: Any, *, curves: int | Iterable[int] | None = None,
                         {"units": "1", "long_name": "samples in the lock-in window"}),
         lockin_settle=(w, arrays["settle"], {"units": "s",
                                              "long_name": "time skipped at the segment start"}))
+
+
+def contact_point_summary(z_contact: np.ndarray, curves: Any, source: str,
+                          options: Mapping[str, Any] | None) -> tuple[str, bool]:
+    """``attrs["contact_point"]`` of a spectrum and whether its ``mean_indentation`` is kept.
+
+    ``z_contact``: the contact position per curve (NaN where none was found), ``curves`` their
+    numbers, ``options`` those of :func:`find_contact_point` (None: not estimated). The
+    indentation is kept when some curve has a contact point, and every curve of a simulation.
+    """
+    n_contact = int(np.isfinite(z_contact).sum())
+    keep = n_contact > 0 and (n_contact == z_contact.size or source != "simulation")
+    if options is None:
+        return "not estimated (contact_point=False)", keep
+    missing = [int(c) for c, z in zip(np.asarray(curves).tolist(), z_contact, strict=True)
+               if not math.isfinite(z)]
+    opts = ", ".join(f"{k}={v!r}" for k, v in sorted(options.items())) or "defaults"
+    return ("approach baseline line + k*sigma rise + power-law refinement "
+            f"(viscoforce.experiments.modulation.find_contact_point, {opts}); found on "
+            f"{n_contact} of {z_contact.size} curves"
+            + (f"; none on curves {missing} (mean_indentation NaN there)" if missing and keep
+               else "")
+            + ("; mean_indentation left out" if not keep else "")), keep

@@ -15,7 +15,6 @@ summarises all curves is made again over the whole: the ``quality_summary`` attr
 
 from __future__ import annotations
 
-import math
 from collections.abc import Iterable, Mapping
 from pathlib import Path
 from typing import Any
@@ -24,7 +23,7 @@ import numpy as np
 import xarray as xr
 
 from viscoforce.exceptions import ParameterError
-from viscoforce.experiments.modulation import modulation_spectrum
+from viscoforce.experiments.modulation import contact_point_summary, modulation_spectrum
 from viscoforce.io.curves import _select
 from viscoforce.io.jpk import JPKArchive, read_jpk
 from viscoforce.io.quality import quality_notes
@@ -145,19 +144,9 @@ def _contact_attrs(spec: xr.Dataset, contact_point: bool | Mapping[str, Any]) ->
     options = dict(contact_point) if isinstance(contact_point, Mapping) else {}
     z = (np.asarray(spec["contact_position"].values, dtype=float)
          if "contact_position" in spec.variables else np.full(spec.sizes["curve"], np.nan))
-    n_contact = int(np.isfinite(z).sum())
-    source = str(spec.attrs.get("source", "jpk"))
-    keep = n_contact > 0 and (n_contact == z.size or source != "simulation")
-    missing = [int(c) for c, v in zip(np.asarray(spec["curve"].values).tolist(), z, strict=True)
-               if not math.isfinite(v)]
-    opts = ", ".join(f"{k}={v!r}" for k, v in sorted(options.items())) or "defaults"
-    spec.attrs["contact_point"] = (
-        "approach baseline line + k*sigma rise + power-law refinement "
-        f"(viscoforce.experiments.modulation.find_contact_point, {opts}); found on "
-        f"{n_contact} of {z.size} curves"
-        + (f"; none on curves {missing} (mean_indentation NaN there)" if missing and keep
-           else "")
-        + ("; mean_indentation left out" if not keep else ""))
+    text, keep = contact_point_summary(z, spec["curve"].values,
+                                       str(spec.attrs.get("source", "jpk")), options)
+    spec.attrs["contact_point"] = text
     if not keep:
         for name in _CONTACT_VARIABLES:
             if name in spec.variables:
