@@ -12,19 +12,24 @@ what ``simulate`` writes): the position history is the drive of the exact model.
 from __future__ import annotations
 
 import math
+import warnings
 from typing import Any
 
 import numpy as np
 import xarray as xr
 
-from viscoforce.exceptions import ParameterError
+from viscoforce.exceptions import ConvergenceError, ParameterError
 from viscoforce.fitting.fit import (
     FitData,
+    Outcome,
     add_derived_moduli,
     fit_data,
+    result_dataset,
     validity_note,
     warn_fit,
 )
+from viscoforce.fitting.models import make_model
+from viscoforce.problem import ContactProblem
 from viscoforce.schema import select_curve, validate_curves, validate_trajectory
 
 
@@ -432,15 +437,106 @@ def trajectory_data(trajectory: xr.Dataset) -> tuple[FitData, tuple[np.ndarray, 
             (t, h))
 
 
+#: Tolerance of the step fit's search stage, in units of simulate's default (the fit from its
+#: optimum runs at the default): measured in benchmarks/bench_step.py.
+STEP_SEARCH_TOL = 100.0
+
+
 def fit_step(trajectory: xr.Dataset, *, problem: Any, poisson: float | None = None
              ) -> xr.Dataset:
     """Fit the exact model's response to the trajectory's drive (``step`` model: tau, E0, E_inf).
 
     Identifiability by the local test (a profile would cost a simulation per evaluation).
+
+    Levenberg–Marquardt with the exact Jacobian of the simulated force (forward sensitivities
+    integrated with it: one simulation an iteration, :class:`~viscoforce.fitting.models.
+    StepResponse`, which also repeats a step grid near where it was chosen), in two stages: a
+    search at ``STEP_SEARCH_TOL`` × simulate's default tolerance from the data's guess, then the
+    fit at the default tolerance from the search's optimum. The reported curve, χ², stderr and
+    correlations come from one more simulation at the optimum with the default adaptive steps
+    (the exact model at the default accuracy), not from a repeated grid.
     """
+    from viscoforce.solvers.simulate import DEFAULT_TOL
+
     data, trace = trajectory_data(trajectory)
-    ds = fit_data(data, "step", problem=problem, position_trace=trace, profile=False)
+    fixed = {"problem": problem, "position_trace": trace}
+    search = None
+    if isinstance(problem, ContactProblem):
+        tol = STEP_SEARCH_TOL * DEFAULT_TOL * problem.surface_force.decay_length
+        try:
+            search = _fit_step_stage(data, fixed | {"tol": tol})
+        except ConvergenceError:
+            search = None  # the fit starts from the data's guess instead
+    start = {} if search is None else {"start": search.values}
+    best = _fit_step_stage(data, fixed | start, final=True)
+    ds = result_dataset(best, data, profile=False)
+    ds.attrs["nfev"] = int(best.result.nfev) + (0 if search is None else int(search.result.nfev))
     ds.attrs["validity"] = validity_note("step", ds)
     warn_fit(ds)
     ds = add_derived_moduli(ds, poisson)
     return ds
+
+
+def _fit_step_stage(data: FitData, fixed: dict[str, Any], *, final: bool = False) -> Outcome:
+    """One least-squares fit of the step model with its exact Jacobian (lmfit leastsq + Dfun).
+
+    ``final``: χ², residual and covariance at the optimum from a fresh adaptive simulation.
+    """
+    import lmfit
+
+    from viscoforce.fitting import _params
+    from viscoforce.fitting.fit import _outcome, _residual
+
+    model = make_model("step", **fixed)
+    params = model.internal_guess(data.y, data.x)
+    residual = _residual(model, data)
+    weights = 1.0 if data.weights is None else np.asarray(data.weights, dtype=float)[:, None]
+
+    def jacobian(params: lmfit.Parameters) -> np.ndarray:
+        values, grads = _params.to_reported(model.layout, params.valuesdict())
+        # ∂F/∂v = Σ_name ∂F/∂ln(name) · (∂name/∂v) / name
+        gradient = model.response.log_gradient(data.x, values)
+        columns = [sum(gradient[n] * (grads[n].get(v, 0.0) / values[n]) for n in model.names)
+                   for v, p in params.items() if p.vary]
+        return -weights * np.column_stack(columns)
+
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", RuntimeWarning)
+            res = lmfit.minimize(residual, params, method="leastsq", Dfun=jacobian,
+                                 scale_covar=not data.sigma_known)
+            if final:
+                model.response.reuse_grid = False
+                model.response.forget()
+                _evaluate_at(res, residual(res.params), jacobian(res.params),
+                             scale=not data.sigma_known)
+    except (ValueError, ArithmeticError, ParameterError) as exc:
+        raise ConvergenceError(f"model 'step' could not be fitted: {exc}") from None
+    if not np.isfinite(res.chisqr):
+        raise ConvergenceError("model 'step' could not be fitted: non-finite chi-square")
+    return _outcome(model, res, data)
+
+
+def _evaluate_at(res: Any, residual: np.ndarray, jac: np.ndarray, *, scale: bool) -> None:
+    """Set lmfit's statistics of ``res`` from a residual and its Jacobian at ``res.params``.
+
+    The formulas of lmfit's leastsq: χ², reduced χ², AIC/BIC from n ln(χ²/n), and the
+    covariance (JᵀJ)⁻¹ of the varied parameters, times the reduced χ² when ``scale``.
+    """
+    n, k = residual.size, int(res.nvarys)
+    res.residual = residual
+    res.ndata, res.nfree = n, max(n - k, 1)
+    res.chisqr = float(residual @ residual)
+    res.redchi = res.chisqr / res.nfree
+    neg2_log_likelihood = n * math.log(max(res.chisqr, 1e-250) / n)
+    res.aic = neg2_log_likelihood + 2 * k
+    res.bic = neg2_log_likelihood + math.log(n) * k
+    try:
+        cov = np.linalg.inv(jac.T @ jac) * (res.redchi if scale else 1.0)
+    except np.linalg.LinAlgError:
+        cov = None
+    ok = cov is not None and bool(np.all(np.isfinite(cov)) and np.all(np.diag(cov) > 0))
+    res.covar = cov if ok else None
+    res.errorbars = ok
+    for i, name in enumerate(res.var_names):
+        res.params[name].stderr = float(np.sqrt(cov[i, i])) if ok else None

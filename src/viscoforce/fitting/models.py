@@ -740,20 +740,112 @@ def hertz_guess(tip: Any, z: np.ndarray, f: np.ndarray) -> dict[str, float]:
             "baseline_slope": float(coef[2])}
 
 
+class StepResponse:
+    """The step model's force along one drive, with its exact sensitivities, last run kept.
+
+    Each run integrates the force and its forward sensitivities to the material together
+    (:func:`viscoforce.solvers.simulate.simulate_force`: the force of ``simulate(...,
+    output_kinks=False)``, the sensitivities by back-substitution with each step's Newton
+    factorisation). A least-squares fit asks for the residual and then the Jacobian at the same
+    parameters: the second comes from the kept run, so an iteration costs one simulation instead
+    of one per parameter plus one (finite differences). Each run's Newton solves start from the
+    previous run's gaps moved along their sensitivities (first order in the parameter change),
+    which changes where Newton starts, not the converged force.
+
+    Parameters
+    ----------
+    problem : ContactProblem
+        System and grid (its material is replaced by each evaluation's).
+    drive : SeparationHistory
+        The measured or simulated position history h0(t) [m].
+    tol : float, optional
+        Local error tolerance of the adaptive steps [m] (default that of ``simulate``).
+    """
+
+    #: Largest change of ln E0, ln E_inf or ln τ from where the kept step grid was chosen over
+    #: which a run repeats that grid (otherwise the steps are chosen afresh).
+    REGRID = 0.05
+
+    def __init__(self, problem: ContactProblem, drive: Any, *, tol: float | None = None):
+        self.problem, self.drive, self.tol = problem, drive, tol
+        #: Repeat the step grid of the last adaptive run near its parameters (see class doc).
+        self.reuse_grid = True
+        #: Simulations run (adaptive, on a kept grid) and Newton iterations (bookkeeping).
+        self.runs = self.grid_runs = self.newton = 0
+        self._kept: dict[str, Any] | None = None
+        self._grid: tuple[np.ndarray, np.ndarray] | None = None  # (step times, ln SPEC)
+
+    def forget(self) -> None:
+        """Drop the kept run and grid: the next evaluation is a fresh adaptive simulation."""
+        self._kept = self._grid = None
+
+    @staticmethod
+    def _prony(values: Mapping[str, float]) -> np.ndarray:
+        """ρ = (c_g, c_1, ln τ) = (2/E0, 2/E_inf − 2/E0, ln τ) of an SLS."""
+        e0, e_inf, tau = float(values["E0"]), float(values["E_inf"]), float(values["tau"])
+        return np.array([2.0 / e0, 2.0 / e_inf - 2.0 / e0, math.log(tau)])
+
+    def _run(self, t: np.ndarray, values: Mapping[str, float]) -> tuple[np.ndarray, np.ndarray]:
+        from viscoforce.exceptions import ConvergenceError, GapClosureError
+        from viscoforce.solvers.simulate import simulate_force
+
+        key = (float(values["E0"]), float(values["E_inf"]), float(values["tau"]))
+        kept = self._kept
+        same_t = kept is not None and np.array_equal(kept["t"], t)
+        if same_t and kept["key"] == key:
+            return kept["force"], kept["log_gradient"]
+        rho, logs = self._prony(values), np.log(key)
+        warm = grid = None
+        if same_t:
+            moved = kept["step_gap"] + np.einsum("j,ijn->in", rho - kept["rho"], kept["dgap"])
+            warm = (kept["step_time"], np.maximum(moved, 0.5 * kept["step_gap"]))
+            if (self.reuse_grid and self._grid is not None
+                    and np.max(np.abs(logs - self._grid[1])) <= self.REGRID):
+                grid = self._grid[0]
+        problem = self.problem.with_material(material_from(values, 1))
+        options = {"t_end": float(t[-1]), "t_eval": t, "tol": self.tol, "sensitivities": True}
+        run = None
+        if grid is not None:
+            try:
+                run = simulate_force(problem, self.drive, warm_start=warm, grid=grid, **options)
+                self.grid_runs += 1
+            except (ConvergenceError, GapClosureError):
+                run = None  # the kept grid is too coarse here: choose the steps afresh
+        if run is None:
+            run = simulate_force(problem, self.drive, warm_start=warm, **options)
+            self.runs += 1
+            self._grid = (run.step_time, logs)
+        self.newton += run.newton
+        e0, e_inf, _ = key
+        # ∂F/∂(ln E0, ln E_inf, ln τ) from ∂F/∂ρ
+        d_cg, d_c1, d_tau = run.sensitivity.T
+        log_grad = np.column_stack([(d_c1 - d_cg) * (2.0 / e0), -d_c1 * (2.0 / e_inf), d_tau])
+        self._kept = {"key": key, "t": np.array(t), "force": run.force, "log_gradient": log_grad,
+                      "rho": rho, "step_time": run.step_time, "step_gap": run.step_gap,
+                      "dgap": run.step_gap_sensitivity}
+        return run.force, log_grad
+
+    def force(self, t: np.ndarray, values: Mapping[str, float]) -> np.ndarray:
+        """F(t) [N] for the SLS of ``values`` (``E0``, ``E_inf``, ``tau``)."""
+        return self._run(np.asarray(t, dtype=float), values)[0]
+
+    def log_gradient(self, t: np.ndarray, values: Mapping[str, float]) -> dict[str, np.ndarray]:
+        """∂F/∂ln(name) [N] at ``t`` for each SPEC name (exact for the discrete scheme)."""
+        grad = self._run(np.asarray(t, dtype=float), values)[1]
+        return dict(zip(("E0", "E_inf", "tau"), grad.T, strict=True))
+
+
 def _step_model(spec: ModelSpec) -> FitModel:
     (problem, position_trace) = _need(spec, "problem", "position_trace")
     from viscoforce.experiments.drives import MeasuredTrace
-    from viscoforce.solvers.simulate import simulate
 
     trace_t, trace_h = (np.asarray(a, dtype=float) for a in position_trace)
-    drive = MeasuredTrace(trace_t, trace_h)
-
-    def function(t: np.ndarray, v: Mapping[str, float]) -> np.ndarray:
-        run = simulate(problem.with_material(material_from(v, 1)), drive, t_end=float(t[-1]),
-                       t_eval=np.asarray(t, dtype=float), output_kinks=False, progress=False)
-        return run["force"].values
+    response = StepResponse(problem, MeasuredTrace(trace_t, trace_h), tol=spec.fixed.get("tol"))
 
     def guesser(f: np.ndarray, t: np.ndarray) -> dict[str, float]:
+        start = spec.fixed.get("start")
+        if start is not None:
+            return dict(start)
         from viscoforce.solvers.static import equilibrium_gap
 
         f = np.asarray(f, dtype=float)
@@ -772,7 +864,9 @@ def _step_model(spec: ModelSpec) -> FitModel:
         tau = float(t[i_peak + below[0]] - t[i_peak]) if below.size else float(np.ptp(t)) / 5
         return {"E_inf": e_inf, "E0": max(e0, 1.05 * e_inf), "tau": max(tau, 1e-9)}
 
-    return FitModel(spec, function, _material_layout(1), "t", guesser, _time_window)
+    model = FitModel(spec, response.force, _material_layout(1), "t", guesser, _time_window)
+    model.response = response  # type: ignore[attr-defined]
+    return model
 
 
 #: Most relaxation modes of one model (a fit needs several data points per mode).
@@ -783,7 +877,7 @@ _FIXED: dict[str, tuple[str, ...]] = {
     "exact": ("position", "mean_force", "problem"),
     "contact": ("radius", "tip", "indentation", "drag", "material", "debye_length",
                 "newtonian", "reference_frequency"),
-    "prony": (), "relaxation": (), "step": ("problem", "position_trace"),
+    "prony": (), "relaxation": (), "step": ("problem", "position_trace", "tol", "start"),
     "hertz": ("tip", "contact_window"), "creep": (),
     "ting": ("tip", "position_trace", "material", "drag", "fit_drag", "contact_point",
              "contact_window", "reference_frequency", "newtonian")}
@@ -819,8 +913,18 @@ def check_fixed(name: str, fixed: Mapping[str, Any]) -> dict[str, Any]:
         "newtonian": _require_bool, "reference_frequency": require_positive,
         "tip": lambda n, v: _as_tip(v), "contact_window": _window,
         "position_trace": lambda n, v: v, "fit_drag": _require_bool,
+        "tol": require_positive, "start": _step_start,
         "contact_point": require_finite}
     return {k: (None if v is None else checks[k](k, v)) for k, v in fixed.items()}
+
+
+def _step_start(name: str, value: Any) -> dict[str, float]:
+    """A start of the step model: positive ``E0`` > ``E_inf`` and ``tau`` [SI]."""
+    from viscoforce._validation import require_positive
+
+    if not isinstance(value, Mapping) or set(value) != {"E0", "E_inf", "tau"}:
+        raise ParameterError(f"{name} must map E0, E_inf and tau to values, got {value!r}")
+    return {k: require_positive(f"{name}[{k!r}]", v) for k, v in value.items()}
 
 
 def _as_tip(value: Any):

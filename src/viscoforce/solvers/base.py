@@ -25,10 +25,12 @@ Subclass contract (in the spirit of scipy's OdeSolver):
 from __future__ import annotations
 
 from abc import ABC, abstractmethod
+from collections.abc import Callable
 from dataclasses import dataclass, replace
 from typing import ClassVar
 
 import numpy as np
+import scipy.linalg
 
 from viscoforce._typing import FloatArray, SeparationHistory
 from viscoforce._validation import require_finite, require_instance, require_positive
@@ -59,6 +61,9 @@ class State:
     history : tuple or None
         (time [s], response, gap) of the previous accepted state on the same smooth piece of the
         drive, for multi-point predictors and error estimates; None at the start and after a kink.
+    tangent : Tangent or None
+        Forward sensitivities of this state to the material's Prony data (steppers that support
+        them carry it along; None: not tracked).
     """
 
     time: float
@@ -69,6 +74,7 @@ class State:
     memory: FloatArray
     deformation: FloatArray
     history: tuple[float, FloatArray, FloatArray] | None = None
+    tangent: Tangent | None = None
 
     def without_history(self) -> State:
         """The same state with the history forgotten (used at drive kinks)."""
@@ -78,6 +84,33 @@ class State:
     def u_center(self) -> float:
         """Central deformation u(0) [m]."""
         return float(self.deformation[-1])
+
+
+@dataclass(frozen=True)
+class Tangent:
+    """Forward sensitivities of a :class:`State` to the material's Prony data.
+
+    The k = 1 + 2m parameters, in this order, are ρ = (c_g, c_1 … c_m, ln τ_1 … ln τ_m): the
+    glassy and mode compliances of (†) [1/Pa] and the log creep times. Each array holds
+    ∂(quantity)/∂ρ_j along its first axis, along the same time steps as the state (the exact
+    derivative of the discrete scheme, up to the Newton tolerance).
+
+    Attributes
+    ----------
+    gap : ndarray, shape (k, N)
+        ∂h/∂ρ [m per unit of ρ].
+    pressure : ndarray, shape (k, N)
+        ∂p/∂ρ [Pa per unit of ρ].
+    response : ndarray, shape (k, N + 1)
+        ∂q/∂ρ.
+    memory : ndarray, shape (k, n_modes, N + 1)
+        ∂w_i/∂ρ.
+    """
+
+    gap: FloatArray
+    pressure: FloatArray
+    response: FloatArray
+    memory: FloatArray
 
 
 @dataclass(frozen=True)
@@ -110,13 +143,24 @@ class TimeStepper(ABC):
         self.taus = np.asarray(prony.taus, dtype=float)
         self.influence_aug = np.vstack([problem.influence, problem.center_row[None, :]])
         self.xtol = 1e-6 * problem.surface_force.decay_length
+        #: Optional Newton start by time, ``gap_guess(t) -> gaps or None`` (a fit passes the
+        #: previous evaluation's solution moved along its sensitivities); None: the stepper's own.
+        self.gap_guess: Callable[[float], FloatArray | None] | None = None
 
     def response(self, pressure: FloatArray) -> FloatArray:
         """Q = A p at the nodes and the centre [m·Pa]."""
         return self.influence_aug @ pressure
 
-    def relaxed_state(self, time: float, position: float) -> State:
-        """Static E_inf equilibrium at ``position`` [m]: every mode at rest."""
+    @property
+    def n_sensitivities(self) -> int:
+        """Number k = 1 + 2m of the Prony data ρ = (c_g, c_i, ln τ_i) of :class:`Tangent`."""
+        return 1 + 2 * self.c_modes.size
+
+    def relaxed_state(self, time: float, position: float, *, tangent: bool = False) -> State:
+        """Static E_inf equilibrium at ``position`` [m]: every mode at rest.
+
+        ``tangent=True`` adds its sensitivities to the Prony data (:class:`Tangent`).
+        """
         time = require_finite("time", time)
         position = require_finite("position (h0)", position)
         e_inf = self.problem.material.relaxed_modulus
@@ -124,7 +168,35 @@ class TimeStepper(ABC):
         q = self.response(sol.pressure)
         memory = -self.c_modes[:, None] * q[None, :]
         deformation = -(2.0 / e_inf) * q
-        return State(time, position, sol.gap, sol.pressure, q, memory, deformation)
+        sens = self._relaxed_tangent(sol.factor, sol.gap, q) if tangent else None
+        return State(time, position, sol.gap, sol.pressure, q, memory, deformation,
+                     tangent=sens)
+
+    def _relaxed_tangent(self, factor: tuple, gap: FloatArray, q: FloatArray) -> Tangent:
+        """Sensitivities of the E_inf equilibrium: (I − c_∞ A p′) ∂h = ∂c_∞ · A p, w_i = −c_i q."""
+        m, n = self.c_modes.size, self.problem.grid.size
+        d_modes = np.zeros((self.n_sensitivities, m))  # ∂c_i/∂ρ
+        d_modes[1:1 + m] = np.eye(m)
+        d_coupling = np.zeros(self.n_sensitivities)
+        d_coupling[:1 + m] = 1.0  # c_∞ = c_g + Σ c_i
+        dgap, pressure = self.solve_tangent(factor, gap, d_coupling[:, None] * q[None, :n])
+        response = pressure @ self.influence_aug.T
+        memory = (-d_modes[:, :, None] * q[None, None, :]
+                  - self.c_modes[None, :, None] * response[:, None, :])
+        return Tangent(dgap, pressure, response, memory)
+
+    def solve_tangent(self, factor: tuple, gap: FloatArray, rhs: FloatArray
+                      ) -> tuple[FloatArray, FloatArray]:
+        """(∂h, ∂p = p′(h) ∂h) with (I − c A diag p′(h)) ∂h = rhs for each row of ``rhs`` (k, N).
+
+        The linearisation of the equilibrium h = b + c A p(h) of :mod:`viscoforce.solvers.newton`
+        at its solution ``gap``, by back-substitution with ``factor``, the LU factors of Newton's
+        last Jacobian (``NewtonResult.factor``, taken within the Newton tolerance of ``gap``: the
+        sensitivities are exact to that tolerance, ~1e-6 relative).
+        """
+        slope = self.problem.surface_force.pressure_derivative(gap)
+        dgap = scipy.linalg.lu_solve(factor, rhs.T, check_finite=False).T
+        return dgap, slope[None, :] * dgap
 
     @abstractmethod
     def step(self, state: State, drive: SeparationHistory, dt: float) -> StepOutcome:

@@ -18,6 +18,7 @@ update is below ``xtol`` (max-norm). Otherwise :class:`ConvergenceError` (or
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass
 
 import numpy as np
@@ -48,12 +49,17 @@ class NewtonResult:
         Newton iterations used.
     update_norm : float
         Max-norm of the last Newton update [m].
+    factor : tuple or None
+        LU factorisation (``scipy.linalg.lu_factor``) of the last Newton Jacobian, taken at the
+        iterate before the last update (within ``xtol`` of ``gap``): sensitivities of the
+        solution reuse it.
     """
 
     gap: FloatArray
     pressure: FloatArray
     iterations: int
     update_norm: float
+    factor: tuple[FloatArray, FloatArray] | None = None
 
 
 def solve_gap(problem: ContactProblem, base: FloatArray, coupling: float, initial: FloatArray, *,
@@ -107,13 +113,16 @@ def solve_gap(problem: ContactProblem, base: FloatArray, coupling: float, initia
     res = h - base - coupling * (a_mat @ p)
     norm = float(np.max(np.abs(res)))
     step_norm = np.inf
-    jac = np.empty((n, n))
     for it in range(1, max_iter + 1):
+        jac = np.empty((n, n))
         np.multiply(a_mat, (-coupling) * law.pressure_derivative(h), out=jac)
         jac.flat[:: n + 1] += 1.0
         try:
-            delta = scipy.linalg.solve(jac, -res, overwrite_a=True, check_finite=False)
-        except (scipy.linalg.LinAlgError, ValueError) as exc:
+            with warnings.catch_warnings():
+                warnings.simplefilter("error", scipy.linalg.LinAlgWarning)
+                factor = scipy.linalg.lu_factor(jac, overwrite_a=True, check_finite=False)
+            delta = scipy.linalg.lu_solve(factor, -res, check_finite=False)
+        except (scipy.linalg.LinAlgError, scipy.linalg.LinAlgWarning, ValueError) as exc:
             raise ConvergenceError(f"singular Newton Jacobian{where}: {exc}", time=time,
                                    iterations=it, residual_norm=norm) from None
         step_norm = float(np.max(np.abs(delta)))
@@ -147,7 +156,7 @@ def solve_gap(problem: ContactProblem, base: FloatArray, coupling: float, initia
                 "(add a short-range wall, or use a shallower position or a smaller time step)",
                 time=time, iterations=it, residual_norm=norm)
         if alpha == 1.0 and step_norm <= xtol:
-            return NewtonResult(h, p, it, step_norm)
+            return NewtonResult(h, p, it, step_norm, factor)
     raise ConvergenceError(
         f"Newton did not converge in {max_iter} iterations{where} (last update {step_norm:.3g} m, "
         f"tolerance {xtol:.3g} m); refine the grid or start closer to the solution",

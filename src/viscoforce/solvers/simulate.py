@@ -202,6 +202,146 @@ STEP_ERROR_WARNING = 1e-2
 STEP_ERROR_SAFETY = 1.5
 
 
+@dataclass(frozen=True)
+class ForceResponse:
+    """The force along a drive and, optionally, its sensitivities (:func:`simulate_force`).
+
+    Attributes
+    ----------
+    time : ndarray
+        Output times [s].
+    force : ndarray
+        F(t) [N] at ``time``.
+    sensitivity : ndarray or None
+        ∂F/∂ρ [N per unit of ρ], shape (time, k), ρ = (c_g, c_1 … c_m, ln τ_1 … ln τ_m) the
+        material's Prony data (:class:`~viscoforce.solvers.base.Tangent`); None when not asked.
+    steps, rejected, newton : int
+        Accepted and rejected time steps, Newton iterations.
+    step_time : ndarray
+        End times [s] of the accepted steps (the grid ``simulate_force(..., grid=step_time)``
+        repeats).
+    step_gap : ndarray
+        Nodal gaps h [m] at ``step_time``, shape (steps, N).
+    step_gap_sensitivity : ndarray or None
+        ∂h/∂ρ [m per unit of ρ] at ``step_time``, shape (steps, k, N).
+    """
+
+    time: FloatArray
+    force: FloatArray
+    sensitivity: FloatArray | None
+    steps: int
+    rejected: int
+    newton: int
+    step_time: FloatArray
+    step_gap: FloatArray
+    step_gap_sensitivity: FloatArray | None = None
+
+
+def simulate_force(problem: ContactProblem, drive: SeparationHistory, *, t_eval: FloatArray,
+                   t_end: float | None = None, tol: float | None = None,
+                   sensitivities: bool = False,
+                   warm_start: tuple[FloatArray, FloatArray] | None = None,
+                   grid: FloatArray | None = None) -> ForceResponse:
+    """The force of :func:`simulate` (default stepper) at exactly ``t_eval``, without a Dataset.
+
+    The same time loop, steps and checks as ``simulate(problem, drive, t_end=t_end,
+    t_eval=t_eval, output_kinks=False)``, so the force is the same to the last bit; what it
+    leaves out is the labelled output. ``sensitivities=True`` also integrates the forward
+    sensitivities of the state to the material's Prony data along the same steps (one more
+    factorisation and k back-substitutions a step), which give the exact Jacobian of the force
+    for fits.
+
+    Parameters
+    ----------
+    problem : ContactProblem
+        System, material and grid (covering the drive's deepest position).
+    drive : SeparationHistory
+        Position h0(t) [m].
+    t_eval : array_like
+        Output times [s] in [0, t_end], increasing.
+    t_end : float, optional
+        End time [s]; default the drive's end plus 5 τ_max.
+    tol : float, optional
+        Local error tolerance of the adaptive steps [m]; default 1e-5 × the force's decay length.
+    sensitivities : bool
+        Also return ∂F/∂ρ (:attr:`ForceResponse.sensitivity`).
+    warm_start : (times, gaps), optional
+        Newton starts [m] (shape (len(times), N)) for the steps that end at ``times`` [s] (a fit
+        passes the previous evaluation's gaps moved along their sensitivities). They change
+        where Newton starts, not what it converges to (the same tolerance).
+    grid : array_like, optional
+        Step end times [s] to step along instead of choosing steps (e.g. the ``step_time`` of an
+        earlier run at nearby parameters: the same discretisation, no rejected steps; the step
+        lands on every output and kink as well). No error control: the caller answers for the
+        grid's accuracy.
+
+    Returns
+    -------
+    ForceResponse
+
+    Raises
+    ------
+    GapClosureError, ConvergenceError
+        As :func:`simulate`.
+    """
+    require_instance("problem", problem, ContactProblem)
+    if not isinstance(drive, SeparationHistory):
+        raise ParameterError(f"drive must be a drive (e.g. Triangle), got {describe_value(drive)}")
+    if not isinstance(sensitivities, bool | np.bool_):
+        raise ParameterError(f"sensitivities must be True or False, got {sensitivities!r}")
+    stepper = METHODS[DEFAULT_METHOD](problem)
+    t_end = default_end_time(problem, drive) if t_end is None else require_positive("t_end", t_end)
+    problem.check_covers(float(drive.extent()[0]))
+    t_eval = require_increasing("t_eval", t_eval)
+    if t_eval[0] < 0 or t_eval[-1] > t_end * (1 + 1e-12):
+        raise ParameterError(f"t_eval must lie in [0, t_end = {t_end:g} s]")
+    control = _step_control(problem, stepper, t_end, None, tol, None)
+    if grid is not None:
+        grid = require_increasing("grid", grid)
+        control = _StepControl(True, t_end, control.tol, t_end, t_end)
+    _check_effort(problem, drive, stepper, t_eval, t_end, control, 0)
+    if warm_start is not None:
+        stepper.gap_guess = _gap_guesses(problem, *warm_start)
+    state = stepper.relaxed_state(0.0, float(drive.position(0.0)), tangent=bool(sensitivities))
+    steps: list[tuple[float, State]] = []
+    records, counters = _march(stepper, drive, state, t_eval, t_end, control, None, grid=grid,
+                               every_step=steps)
+    states = [s for _, s in records]
+    threshold = problem.surface_force.decay_length
+    u_center = np.array([s.u_center for s in states])
+    radius = [contact_radius(problem.grid, s.gap, s.position - s.u_center, threshold)
+              for s in states]
+    check_half_space(problem.sphere.radius, u_center, radius, where=f"along {_describe(drive)}",
+                     stacklevel=2)
+    force = problem.load(np.array([s.pressure for s in states]))
+    sensitivity = gap_sensitivity = None
+    if sensitivities:
+        sensitivity = problem.load(np.array([s.tangent.pressure for s in states]))
+        gap_sensitivity = np.array([s.tangent.gap for _, s in steps])
+    return ForceResponse(np.array([t for t, _ in records]), force, sensitivity, counters.steps,
+                         counters.rejected, counters.newton, np.array([t for t, _ in steps]),
+                         np.array([s.gap for _, s in steps]), gap_sensitivity)
+
+
+def _gap_guesses(problem: ContactProblem, times: FloatArray, gaps: FloatArray):
+    """``gap_guess(t)``: the row of ``gaps`` whose time equals t (to 1e-10 of the span), else None."""
+    times = require_increasing("warm_start times", times)
+    gaps = np.asarray(gaps, dtype=float)
+    if gaps.shape != (times.size, problem.grid.size) or not np.all(gaps > 0):
+        raise ParameterError(f"warm_start gaps must be positive with shape ({times.size}, "
+                             f"{problem.grid.size}), got shape {gaps.shape}")
+    span = float(times[-1] - times[0]) or 1.0
+
+    def guess(t: float) -> FloatArray | None:
+        i = int(np.searchsorted(times, t))
+        for j in (i - 1, i):
+            if 0 <= j < times.size and abs(times[j] - t) <= 1e-10 * span:
+                return gaps[j]
+        return None
+
+    return guess
+
+
 def _check_fixed_step_error(ds: xr.Dataset, estimate: float, dt: float) -> None:
     """Record the fixed-step error estimate of a run and warn (AccuracyWarning) above 1 %.
 
@@ -291,10 +431,17 @@ def _checked_initial_state(problem: ContactProblem, stepper: TimeStepper,
 
 
 def _march(stepper: TimeStepper, drive: SeparationHistory, state: State, t_eval: FloatArray,
-           t_end: float, control: _StepControl, bar) -> tuple[list[tuple[float, State]], _Counters]:
-    """The time loop: land on every kink and output, control the step, record the outputs."""
+           t_end: float, control: _StepControl, bar, *, grid: FloatArray | None = None,
+           every_step: list[tuple[float, State]] | None = None
+           ) -> tuple[list[tuple[float, State]], _Counters]:
+    """The time loop: land on every kink and output, control the step, record the outputs.
+
+    ``grid``: more times to land on (with a fixed control of step t_end: the steps of a given
+    grid); ``every_step``: a list that receives (t, state) after every accepted step.
+    """
     kinks = {float(b) for b in np.asarray(drive.breakpoints(), dtype=float) if 0 < b < t_end}
-    stops = np.unique(np.concatenate([t_eval, sorted(kinks), [t_end]]))
+    extra = [] if grid is None else [grid[(grid > 0) & (grid < t_end)]]
+    stops = np.unique(np.concatenate([t_eval, sorted(kinks), [t_end], *extra]))
     outputs = set(t_eval.tolist())
     records: list[tuple[float, State]] = [(0.0, state)] if 0.0 in outputs else []
     t, step = 0.0, control.first_step
@@ -343,6 +490,8 @@ def _march(stepper: TimeStepper, drive: SeparationHistory, state: State, t_eval:
                     step = min(h * min(5.0, max(0.2, factor)), control.max_step)
                 state, steps = outcome.state, steps + 1
                 t = target if h == remaining else t + h
+                if every_step is not None:
+                    every_step.append((t, state))
                 if bar is not None:
                     bar.update(h)
             if target in outputs:
@@ -399,4 +548,4 @@ def _describe(drive: SeparationHistory) -> str:
     return describe() if callable(describe) else type(drive).__name__
 
 
-__all__ = ["simulate", "default_end_time", "DEFAULT_TOL"]
+__all__ = ["simulate", "simulate_force", "ForceResponse", "default_end_time", "DEFAULT_TOL"]

@@ -26,13 +26,22 @@ import scipy.linalg
 
 from viscoforce._typing import FloatArray, SeparationHistory
 from viscoforce.exceptions import GapClosureError, StabilityError
-from viscoforce.solvers.base import State, StepOutcome, TimeStepper
+from viscoforce.solvers.base import State, StepOutcome, Tangent, TimeStepper
 from viscoforce.solvers.newton import solve_gap
 
 
 def _phi(x: FloatArray) -> FloatArray:
     """φ(x) = (1 − e^{−x})/x, accurate for small x."""
     return np.where(x > 1e-300, -np.expm1(-x) / np.where(x > 1e-300, x, 1.0), 1.0)
+
+
+def _dphi(x: FloatArray) -> FloatArray:
+    """φ′(x) = ((1 + x) e^{−x} − 1)/x² (≈ −1/2 + x/3 − x²/8 + x³/30 − x⁴/144 for small x)."""
+    small = x < 1e-2
+    xs = np.where(small, x, 0.0)
+    series = -0.5 + xs / 3.0 - xs**2 / 8.0 + xs**3 / 30.0 - xs**4 / 144.0
+    big = np.where(small, 1.0, x)
+    return np.where(small, series, ((1.0 + big) * np.exp(-big) - 1.0) / big**2)
 
 
 def _psi(x: FloatArray) -> FloatArray:
@@ -56,6 +65,11 @@ class _Exponential(TimeStepper):
     @staticmethod
     def weights(x: FloatArray) -> tuple[FloatArray, FloatArray]:
         """(a, b): weights of the new and old forcing for decay x = dt/τ."""
+        raise NotImplementedError
+
+    @staticmethod
+    def weight_slopes(x: FloatArray) -> tuple[FloatArray, FloatArray]:
+        """(da/dx, db/dx) of :meth:`weights` (for the sensitivities to τ)."""
         raise NotImplementedError
 
     def error_estimate(self, state: State, q_new: FloatArray, dt: float, x: FloatArray) -> float:
@@ -93,15 +107,57 @@ class _Exponential(TimeStepper):
             t_prev, _, gap_prev = state.history
             slope = (state.gap - gap_prev) * (dt / (state.time - t_prev))
             initial = np.maximum(state.gap + slope, 0.5 * state.gap)
+        if self.gap_guess is not None:
+            guess = self.gap_guess(t_new)
+            initial = initial if guess is None else guess
         sol = solve_gap(problem, base, c_eff, initial, xtol=self.xtol, time=t_new)
         q_new = self.response(sol.pressure)
         memory = (decay[:, None] * state.memory
                   - (self.c_modes * a)[:, None] * q_new[None, :]
                   - (self.c_modes * b)[:, None] * state.response[None, :])
         deformation = -self.c_glassy * q_new + memory.sum(axis=0)
+        tangent = None if state.tangent is None else self._step_tangent(
+            state, sol.gap, q_new, sol.factor, x, (decay, a, b))
         new = State(t_new, position, sol.gap, sol.pressure, q_new, memory, deformation,
-                    history=(state.time, state.response, state.gap))
+                    history=(state.time, state.response, state.gap), tangent=tangent)
         return StepOutcome(new, self.error_estimate(state, q_new, dt, x), sol.iterations)
+
+    def _step_tangent(self, state: State, gap: FloatArray, q_new: FloatArray, factor: tuple,
+                      x: FloatArray, coefficients: tuple[FloatArray, FloatArray, FloatArray]
+                      ) -> Tangent:
+        """The step's map differentiated with respect to ρ = (c_g, c_i, ln τ_i) (see Tangent).
+
+        With the step's own coefficients: ∂h solves the step's linearised equilibrium with the
+        right-hand side −∂(carry) + ∂c_eff · A p; then ∂q = A_aug ∂p and the memory update
+        w ← e^{−x} w − c a q_new − c b q_old differentiated term by term (∂x_i/∂ln τ_i = −x_i).
+        """
+        decay, a, b = coefficients
+        tan = state.tangent
+        m, n, k = self.c_modes.size, self.problem.grid.size, self.n_sensitivities
+        c = self.c_modes
+        da_dx, db_dx = self.weight_slopes(x)
+        modes, logs = np.arange(1, 1 + m), np.arange(1 + m, 1 + 2 * m)
+        d_decay = np.zeros((k, m))  # ∂e^{−x_i}/∂ρ
+        d_decay[logs, np.arange(m)] = x * decay
+        d_ca = np.zeros((k, m))  # ∂(c_i a_i)/∂ρ
+        d_ca[modes, np.arange(m)] = a
+        d_ca[logs, np.arange(m)] = -c * da_dx * x
+        d_cb = np.zeros((k, m))  # ∂(c_i b_i)/∂ρ
+        d_cb[modes, np.arange(m)] = b
+        d_cb[logs, np.arange(m)] = -c * db_dx * x
+        d_coupling = d_ca.sum(axis=1)
+        d_coupling[0] += 1.0
+        q_old, w_old = state.response, state.memory
+        # ∂(Σ_i e^{−x_i} w_i − c_i b_i q_old) and the memory terms that do not involve ∂q_new
+        kept = (d_decay[:, :, None] * w_old[None] + decay[None, :, None] * tan.memory
+                - d_cb[:, :, None] * q_old[None, None, :]
+                - (c * b)[None, :, None] * tan.response[:, None, :])
+        rhs = -kept.sum(axis=1)[:, :n] + d_coupling[:, None] * q_new[None, :n]
+        dgap, pressure = self.solve_tangent(factor, gap, rhs)
+        response = pressure @ self.influence_aug.T
+        memory = (kept - d_ca[:, :, None] * q_new[None, None, :]
+                  - (c * a)[None, :, None] * response[:, None, :])
+        return Tangent(dgap, pressure, response, memory)
 
 
 class ExponentialTrapezoidal(_Exponential):
@@ -116,6 +172,12 @@ class ExponentialTrapezoidal(_Exponential):
         phi = _phi(x)
         return 1.0 - phi, phi - np.exp(-x)
 
+    @staticmethod
+    def weight_slopes(x):
+        """Da/dx = −φ′(x), db/dx = φ′(x) + e^{−x}."""
+        dphi = _dphi(x)
+        return -dphi, dphi + np.exp(-x)
+
 
 class ExponentialEuler(_Exponential):
     """First-order exponential integrator (forcing held at its new value)."""
@@ -127,6 +189,11 @@ class ExponentialEuler(_Exponential):
     def weights(x):
         """A = 1 − e^{−x}, b = 0."""
         return -np.expm1(-x), np.zeros_like(x)
+
+    @staticmethod
+    def weight_slopes(x):
+        """Da/dx = e^{−x}, db/dx = 0."""
+        return np.exp(-x), np.zeros_like(x)
 
 
 #: Largest change of the gap in one explicit Euler step, in decay lengths of the surface force.
