@@ -334,6 +334,7 @@ def print_results(results: dict, startup: dict | None) -> None:
                   f"{res['cluster']['cluster_startup_median_s']:.2f} s median")
         if "cli" in res:
             print(f"  CLI chose {' / '.join(res['cli']['executions'])}")
+    sys.stdout.flush()
 
 
 def print_checks(judged: dict) -> None:
@@ -378,12 +379,14 @@ def main(argv: list[str] | None = None) -> int:
     capacities: list[float] = []
     with tempfile.TemporaryDirectory(prefix="bench_maps_") as tmp:
         startup = cli_startup(max(3, repeats), Path(tmp)) if "cli" in ways else None
+        if startup is not None:
+            print_results({}, startup)
         for n in sizes:
             results[f"{n}x{n}"] = time_size(n, ways, repeats, Path(tmp), rows, capacities)
+            print_results({f"{n}x{n}": results[f"{n}x{n}"]}, None)
     machine_capacity = ({"median": statistics.median(capacities), "min": min(capacities),
                          "max": max(capacities), "runs": len(capacities)}
                         if capacities else None)
-    print_results(results, startup)
     if machine_capacity:
         print(f"2-process capacity of the machine during the run (2.0 = two free cores): median "
               f"{machine_capacity['median']:.2f} (min {machine_capacity['min']:.2f}, max "
