@@ -11,6 +11,7 @@ what ``simulate`` writes): the position history is the drive of the exact model.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import warnings
 from typing import Any
@@ -29,6 +30,7 @@ from viscoforce.fitting.fit import (
     warn_fit,
 )
 from viscoforce.fitting.models import make_model
+from viscoforce.fitting.report import carry
 from viscoforce.problem import ContactProblem
 from viscoforce.schema import select_curve, validate_curves, validate_trajectory
 
@@ -382,7 +384,7 @@ def hertz_checks(ds: xr.Dataset, data: FitData, tip: Any) -> xr.Dataset:
     excess = f - (b + slope * (z - c))
     contact = z > c
     peak = float(np.max(excess[contact])) if contact.any() else 0.0
-    out = ds.copy()
+    out = carry(ds, ds.copy())
     if peak > 0:
         rise = abs(slope) * max(c - float(np.min(z)), 0.0) / peak
         out.attrs["precontact_rise"] = rise
@@ -440,6 +442,9 @@ def trajectory_data(trajectory: xr.Dataset) -> tuple[FitData, tuple[np.ndarray, 
 #: Tolerance of the step fit's search stage, in units of simulate's default (the fit from its
 #: optimum runs at the default): measured in benchmarks/bench_step.py.
 STEP_SEARCH_TOL = 100.0
+#: Most samples the search stage fits (evenly spread over the data, both ends kept): every
+#: output time is a step of the simulation, so fewer samples make the search's runs cheaper.
+STEP_SEARCH_POINTS = 25
 
 
 def fit_step(trajectory: xr.Dataset, *, problem: Any, poisson: float | None = None
@@ -451,8 +456,9 @@ def fit_step(trajectory: xr.Dataset, *, problem: Any, poisson: float | None = No
     Levenberg–Marquardt with the exact Jacobian of the simulated force (forward sensitivities
     integrated with it: one simulation an iteration, :class:`~viscoforce.fitting.models.
     StepResponse`, which also repeats a step grid near where it was chosen), in two stages: a
-    search at ``STEP_SEARCH_TOL`` × simulate's default tolerance from the data's guess, then the
-    fit at the default tolerance from the search's optimum. The reported curve, χ², stderr and
+    search on ``STEP_SEARCH_POINTS`` of the samples at ``STEP_SEARCH_TOL`` × simulate's default
+    tolerance from the data's guess, then the fit of all samples at the default tolerance from
+    the search's optimum. The reported curve, χ², stderr and
     correlations come from one more simulation at the optimum with the default adaptive steps
     (the exact model at the default accuracy), not from a repeated grid.
     """
@@ -463,8 +469,14 @@ def fit_step(trajectory: xr.Dataset, *, problem: Any, poisson: float | None = No
     search = None
     if isinstance(problem, ContactProblem):
         tol = STEP_SEARCH_TOL * DEFAULT_TOL * problem.surface_force.decay_length
+        pick = np.unique(np.round(np.linspace(0, data.x.size - 1, STEP_SEARCH_POINTS)
+                                  ).astype(int))
+        coarse = dataclasses.replace(
+            data, x=data.x[pick], y=data.y[pick],
+            weights=None if data.weights is None else data.weights[pick],
+            sigma_dof=None if data.sigma_dof is None else data.sigma_dof[pick])
         try:
-            search = _fit_step_stage(data, fixed | {"tol": tol})
+            search = _fit_step_stage(coarse, fixed | {"tol": tol})
         except ConvergenceError:
             search = None  # the fit starts from the data's guess instead
     start = {} if search is None else {"start": search.values}

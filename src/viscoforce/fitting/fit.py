@@ -82,6 +82,7 @@ from viscoforce.fitting.models import (
     material_from,
     svda_position,
 )
+from viscoforce.fitting.report import attach, carry
 from viscoforce.problem import ContactProblem
 from viscoforce.schema import make_fit_result, validate_spectrum
 from viscoforce.svda import svda_error_estimate, svda_stiffness_kernel
@@ -642,11 +643,11 @@ def result_dataset(outcome: Outcome, data: FitData, *,
     params = {n: (info["values"][n], info["stderr"][n]) for n in model.names}
     extra.update(derived_variables(params, DEFAULT_POISSON))
     attrs.update(derived_attrs(DEFAULT_POISSON))
-    return make_fit_result(params,
+    return attach(make_fit_result(params,
                            correlation=info["correlation"], success=info["success"],
                            redchi=info["redchi"], aic=info["aic"], bic=info["bic"],
                            modes=model.spec.modes, model=model.spec.name, attrs=attrs,
-                           extra=extra, **curves)
+                           extra=extra, **curves), outcome)
 
 
 def _statistics_variables(info: Mapping[str, Any], names: list[str],
@@ -743,8 +744,8 @@ def add_derived_moduli(ds: xr.Dataset, poisson: float | None = None) -> xr.Datas
             f"{n}_young" in ds.variables for n in names if PAPER_CONVENTION.fullmatch(n)):
         return ds  # already derived at this ν (result_dataset derives at the default)
     variables = ds.variables
-    result = ds.assign(derived_variables(
-        {n: (variables[n], variables[f"{n}_stderr"]) for n in names}, nu))
+    result = carry(ds, ds.assign(derived_variables(
+        {n: (variables[n], variables[f"{n}_stderr"]) for n in names}, nu)))
     result.attrs.update(derived_attrs(nu))
     return result
 

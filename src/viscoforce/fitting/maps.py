@@ -242,8 +242,10 @@ def _start_local(workers: int) -> tuple[Any, Any]:
              "distributed.admin.system-monitor.interval": "2s",
              "distributed.worker.multiprocessing-method": start_method()}
     with dask.config.set(quiet):
+        # ":0": any free port for the scheduler's HTTP routes (None still tries 8787 and
+        # warns when another cluster holds it)
         local = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
-                             dashboard_address=None)
+                             dashboard_address=":0")
     try:
         return local, Client(local)
     except BaseException:

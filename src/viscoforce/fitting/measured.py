@@ -45,6 +45,7 @@ from viscoforce.fitting.fit import (
     warn_fit,
 )
 from viscoforce.fitting.models import MAX_AUTO_MODES, check_fixed, make_model
+from viscoforce.fitting.report import carry
 
 #: Criterion margin of the measured-data chooser: a richer candidate is kept only when its
 #: criterion beats every simpler one by more than this (ΔBIC 6: strong evidence).
@@ -189,7 +190,7 @@ def _with_selection(ds: xr.Dataset, kept: list[tuple[str, Outcome, dict[str, Any
     def column(values: list[Any], unit: str, long_name: str) -> tuple[str, Any, dict[str, str]]:
         return ("candidate", np.asarray(values), {"units": unit, "long_name": long_name})
 
-    return ds.assign(
+    return carry(ds, ds.assign(
         selection_label=("candidate", np.asarray([k[0] for k in kept], dtype=str),
                          {"long_name": "candidate material (and modes)"}),
         selection_modes=column([k[1].model.spec.modes for k in kept], "1",
@@ -201,7 +202,7 @@ def _with_selection(ds: xr.Dataset, kept: list[tuple[str, Outcome, dict[str, Any
         selection_redchi=column([float(k[1].result.redchi) for k in kept], "1",
                                 "reduced chi-square of the candidate"),
         selection_pvalue=column([k[1].pvalue for k in kept], "1",
-                                "chi-square p-value of the candidate (NaN: stderr unknown)"))
+                                "chi-square p-value of the candidate (NaN: stderr unknown)")))
 
 
 def _explain(rows: list[dict[str, Any]], chosen: str, criterion: str, best: float) -> str:

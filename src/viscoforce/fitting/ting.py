@@ -85,6 +85,7 @@ from viscoforce.fitting.models import (
     moduli_names,
     tau_names,
 )
+from viscoforce.fitting.report import carry
 from viscoforce.physics.ting import (
     PowerLawRelaxation,
     PronyRelaxation,
@@ -648,7 +649,7 @@ def _describe(ds: xr.Dataset, best: Outcome, data: TingData) -> xr.Dataset:
     kernel = ting_kernel(fixed["material"], values, model.spec.modes,
                          reference_frequency=float(fixed.get("reference_frequency", 1.0)))
     err = ting_error(t, z, c, fixed["tip"], kernel)
-    out = ds.copy()
+    out = carry(ds, ds.copy())
     turning = int(np.argmax(z))
     contact = np.flatnonzero(z[:turning + 1] > c)
     out.attrs.update(
@@ -728,4 +729,4 @@ def add_ting_forms(ds: xr.Dataset, *, t0: float = TING_T0) -> xr.Dataset:
         beta=var(alpha.copy(), "1", "Ting's power-law exponent beta = alpha"),
         beta_stderr=var(s_a.copy(), "1", "standard error of beta"))
     out.attrs["ting_t0"] = t0
-    return out
+    return carry(ds, out)
