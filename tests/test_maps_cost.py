@@ -193,3 +193,22 @@ def test_block_size_aims_at_a_tenth_of_a_second_and_four_tasks_per_worker():
     assert maps._block_size(40, 2, 1e-3) == 5  # 4 tasks per worker
     assert maps._block_size(4096, 2, math.nan) == maps.MAX_BLOCK
     assert maps._block_size(3, 2, 10.0) == 1
+
+
+# ── the CLI leaves the choice to the cost model ─────────────────────────────────────────────────
+
+def test_the_cli_map_fit_uses_the_cost_model(rng, tmp_path, capsys):
+    import xarray as xr
+
+    from viscoforce.cli import main
+
+    path = tmp_path / "map.nc"
+    _svda_map(2, 3, rng).to_netcdf(path)
+    out = tmp_path / "fits.nc"
+    assert main(["fit", str(path), "--model", "svda", "--h0", "2nm", "--json",
+                 "--out", str(out)]) == 0
+    capsys.readouterr()
+    with xr.open_dataset(out) as fits:
+        assert fits.attrs["execution"] == "in-process"  # 6 pixels: the probe fits them all
+        assert fits.attrs["execution_reason"] == "cost model: the probe fitted every pixel"
+        assert fits.attrs["pixels_in_process"] == 6
