@@ -163,3 +163,35 @@ def test_example_figure_is_saved(rng, tmp_path):
     out = tmp_path / "bode.png"
     handle.figure.savefig(out, dpi=80)
     assert out.stat().st_size > 10_000
+
+
+def test_unidentified_values_read_as_bounds_or_not_determined_never_as_huge_errors(rng):
+    """E0 bounded below only, tau not determined: no ``value ± error`` line for either."""
+    fit = _fit(params={"tau": (TAU, 5e-2), "E0": (8e5, 8.6e15), "E_inf": (E_INF, 3e7)})
+    fit = fit.assign(identifiability=("param_i", np.array([3, 1, 0], dtype=np.int8),
+                                      {"flag_values": np.arange(4, dtype=np.int8),
+                                       "flag_meanings": "determined lower_bound_only "
+                                                        "upper_bound_only not_determined"}),
+                     E0_lower=2.1e9, E0_upper=np.nan)
+    text = bode_plot(_spectrum(rng), fit=fit).lines[-1].get_text()
+    assert "tau not determined" in text
+    assert "E0 > 2.1 GPa (bound only)" in text
+    assert "E0 =" not in text and "tau =" not in text and "86240" not in text
+    assert "E_inf = 1.000 ± 0.030 GPa" in text
+
+
+def test_the_box_names_tip_poisson_and_indentation_and_sits_off_the_curve(rng):
+    fit = _fit(attrs={"tip": "sphere, R = 5 um", "poisson": 0.5, "indentation": 5e-7})
+    handle = bode_plot(_spectrum(rng), fit=fit)
+    text = handle.lines[-1].get_text()
+    assert "tip: sphere, R = 5 um" in text and "nu = 0.5" in text
+    assert "indentation 500 nm" in text
+    assert handle.axes[1].get_legend()._loc == 0  # "best": matplotlib places it off the data
+
+
+def test_measured_spectra_are_drawn_in_hz_simulated_in_rad_per_s(rng):
+    measured = _spectrum(rng)  # source "csv"
+    simulated = measured.assign_attrs(source="simulation")
+    assert "[Hz]" in bode_plot(measured).axes[-1].get_xlabel()
+    assert "[rad/s]" in bode_plot(simulated).axes[-1].get_xlabel()
+    assert "[rad/s]" in bode_plot(measured, frequency_unit="rad/s").axes[-1].get_xlabel()

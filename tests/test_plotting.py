@@ -428,7 +428,7 @@ def test_trajectory_plots_reject_bad_options(trajectory, plot, kwargs, match):
     ({"magnitude": ["stiffness"]}, r"magnitude must be one of 'stiffness', 'amplitude', got list"),
     ({"magnitude": {}}, r"magnitude must be one of .* got dict"),
     ({"magnitude": _EMPTY}, r"magnitude must be one of .* got ndarray"),
-    ({"frequency_unit": _EMPTY}, r"frequency_unit must be one of 'rad/s', 'Hz', got ndarray"),
+    ({"frequency_unit": _EMPTY}, r"frequency_unit must be one of 'auto', 'rad/s', 'Hz', got ndarray"),
     ({"frequency_unit": ["Hz"]}, r"frequency_unit must be one of .* got list"),
     ({"markers": _EMPTY}, r"markers must be True, False or None, got ndarray"),
     ({"markers": "o"}, r"markers must be True, False or None, got str 'o'"),

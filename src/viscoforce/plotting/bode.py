@@ -31,7 +31,7 @@ if TYPE_CHECKING:
     from matplotlib.artist import Artist
     from matplotlib.axes import Axes
 
-FrequencyUnit = Literal["rad/s", "Hz"]
+FrequencyUnit = Literal["auto", "rad/s", "Hz"]
 Magnitude = Literal["stiffness", "amplitude"]
 _MAGNITUDE_LABELS = {"stiffness": "stiffness $|F_1|/\\eta$ [N/m]",
                      "amplitude": "relative amplitude $a = |F_1|/\\bar F$"}
@@ -212,30 +212,65 @@ def _quantity(value: float, err: float, unit: str) -> str:
 
 
 def _parameter_text(fit: xr.Dataset) -> str:
-    """The fit's model, each parameter as value ± stderr, redchi (and non-convergence)."""
+    """The fit's model, each parameter, redchi (and non-convergence), then the fixed inputs.
+
+    A determined parameter reads value ± stderr; one the data bound on one side only reads as
+    that bound (``E0 > 2.1 kPa``); one they do not determine reads ``not determined`` (never a
+    value with an error larger than itself). Last, what the moduli rest on: the tip, Poisson's
+    ratio and the indentation, where the fit records them.
+    """
     lines = [f"fit: {' '.join(str(fit.attrs[k]) for k in ('model', 'candidate') if k in fit.attrs)}"]
-    for name in (str(n) for n in fit["param_i"].values):
-        value = float(fit[name].values)
-        err = float(fit[f"{name}_stderr"].values)
-        lines.append(f"{name} = {_quantity(value, err, str(fit[name].attrs['units']))}")
+    names = [str(n) for n in fit["param_i"].values]
+    codes = (np.asarray(fit["identifiability"].values).reshape(-1)
+             if "identifiability" in fit.variables else np.zeros(len(names), dtype=int))
+    for name, code in zip(names, codes, strict=True):
+        unit = str(fit[name].attrs["units"])
+        limit = {1: ("lower", ">"), 2: ("upper", "<")}.get(int(code))
+        if limit and f"{name}_{limit[0]}" in fit.variables and np.isfinite(
+                float(fit[f"{name}_{limit[0]}"].values)):
+            bound = float(fit[f"{name}_{limit[0]}"].values)
+            shown = _quantity(bound, np.nan, unit).replace(" (no stderr)", "")
+            lines.append(f"{name} {limit[1]} {shown} (bound only)")
+        elif int(code) in (1, 2, 3):
+            lines.append(f"{name} not determined")
+        else:
+            value = float(fit[name].values)
+            err = float(fit[f"{name}_stderr"].values)
+            lines.append(f"{name} = {_quantity(value, err, unit)}")
     lines.append(f"redchi = {float(fit['redchi'].values):.3g}")
     if "chi2_pvalue" in fit.variables and np.isfinite(float(fit["chi2_pvalue"].values)):
         lines.append(f"p(chi2) = {float(fit['chi2_pvalue'].values):.2g}")
-    if "identifiability" in fit.variables:
-        names = [str(n) for n in fit["param_i"].values]
-        codes = np.asarray(fit["identifiability"].values).reshape(-1)
-        for name, code in zip(names, codes, strict=True):
-            limit = {1: ("lower", ">"), 2: ("upper", "<")}.get(int(code))
-            if limit and f"{name}_{limit[0]}" in fit.variables:
-                bound = float(fit[f"{name}_{limit[0]}"].values)
-                lines.append(f"only {name} {limit[1]} "
-                             f"{_quantity(bound, np.nan, str(fit[name].attrs['units']))}"
-                             .replace(" (no stderr)", ""))
-            elif int(code) == 3:
-                lines.append(f"{name} not determined")
     if "success" in fit.variables and int(fit["success"].values) == 0:
         lines.append("(did not converge)")
+    lines.extend(_caption_lines(fit.attrs))
     return "\n".join(lines)
+
+
+def _caption_lines(attrs: Mapping[str, Any]) -> list[str]:
+    """The tip, Poisson's ratio and the indentation of a fit's attrs, one short line each."""
+    out = []
+    if "tip" in attrs:
+        out.append(f"tip: {attrs['tip']}")
+    if "poisson" in attrs:
+        out.append(f"nu = {float(attrs['poisson']):g}")
+    depth = attrs.get("indentation", attrs.get("mean_indentation"))
+    if depth is not None and np.isfinite(float(depth)):
+        out.append(f"indentation {format_quantity(float(depth), 'length')}")
+    return out
+
+
+def _parameter_box(ax: Axes, fit: xr.Dataset) -> Artist:
+    """The parameter text as an empty legend's title: placed where it covers the least data.
+
+    Returns the title (a Text); an existing legend of ``ax`` stays.
+    """
+    existing = ax.get_legend()
+    box = ax.legend(handles=[], title=_parameter_text(fit), loc="best", fontsize="small",
+                    title_fontsize="small", framealpha=0.85, alignment="left")
+    box.get_title().set_family("monospace")
+    if existing is not None:
+        ax.add_artist(existing)
+    return box.get_title()
 
 
 def _draw_fit(axes: tuple[Axes, Axes], fit: xr.Dataset, scale: float) -> list[Artist]:
@@ -247,11 +282,7 @@ def _draw_fit(axes: tuple[Axes, Axes], fit: xr.Dataset, scale: float) -> list[Ar
         (line,) = panel.plot(x, np.asarray(fit[name].values, dtype=float), label=label,
                              **FIT_STYLE)
         drawn.append(line)
-    box = axes[1].text(0.02, 0.95, _parameter_text(fit), transform=axes[1].transAxes,
-                       va="top", ha="left", fontsize="small", family="monospace",
-                       bbox={"boxstyle": "round", "facecolor": "white", "alpha": 0.85,
-                             "edgecolor": "0.7"})
-    drawn.append(box)
+    drawn.append(_parameter_box(axes[1], fit))
     return drawn
 
 
@@ -323,7 +354,7 @@ def _on(artist: Artist, ax: Axes) -> bool:
 
 def bode_plot(spectra: xr.Dataset | Mapping[str, xr.Dataset] | Sequence[xr.Dataset], *,
               fit: xr.Dataset | None = None, ax: Sequence[Axes] | None = None,
-              magnitude: Magnitude = "stiffness", frequency_unit: FrequencyUnit = "rad/s",
+              magnitude: Magnitude = "stiffness", frequency_unit: FrequencyUnit = "auto",
               markers: bool | None = None, select: Mapping[str, int] | None = None,
               title: str | None = None, residuals: bool = False,
               modulus: bool = False) -> PlotHandle:
@@ -346,8 +377,10 @@ def bode_plot(spectra: xr.Dataset | Mapping[str, xr.Dataset] | Sequence[xr.Datas
     magnitude : {"stiffness", "amplitude"}
         Upper panel: |F1|/η [N/m] or a = |F1|/F̄. Its axis is logarithmic when every value
         drawn there is positive, else linear.
-    frequency_unit : {"rad/s", "Hz"}
-        Display unit of the frequency axis (ω stays in rad/s inside).
+    frequency_unit : {"auto", "rad/s", "Hz"}
+        Display unit of the frequency axis (ω stays in rad/s inside). "auto" (default): Hz
+        when every spectrum is measured (its ``source`` attribute names an instrument, not
+        ``"simulation"``), as the instrument ran; rad/s for simulated spectra, as the theory.
     markers : bool, optional
         Draw markers (default: with a fit, or for spectra with ≤ 30 points, as measured data
         usually are).
@@ -390,7 +423,7 @@ def bode_plot(spectra: xr.Dataset | Mapping[str, xr.Dataset] | Sequence[xr.Datas
     from matplotlib.axes import Axes
 
     _require_choice("magnitude", magnitude, tuple(_MAGNITUDE_LABELS))
-    _require_choice("frequency_unit", frequency_unit, ("rad/s", "Hz"))
+    _require_choice("frequency_unit", frequency_unit, ("auto", "rad/s", "Hz"))
     markers = _require_flag("markers", markers, allow_none=True)
     title = _require_text("title", title)
     picks = _selection(select)
@@ -432,6 +465,10 @@ def bode_plot(spectra: xr.Dataset | Mapping[str, xr.Dataset] | Sequence[xr.Datas
     else:
         axes = tuple(ax)
         figure = axes[0].figure
+    if frequency_unit == "auto":
+        measured = all(str(ds.attrs.get("source", "simulation")) != "simulation"
+                       for _, ds in items)
+        frequency_unit = "Hz" if measured else "rad/s"
     scale = 1.0 if frequency_unit == "rad/s" else 1.0 / (2.0 * np.pi)
     drawn: list[Artist] = []
     for label, ds in items:
@@ -531,13 +568,9 @@ def fit_curve_plot(fit: xr.Dataset, *, data: tuple[Any, Any] | None = None,
     drawn.append(line)
     if x_name == "tip_position":
         drawn.append(axes.axvline(0.0, color="0.6", lw=0.8, ls=":", label="contact point"))
-    box = axes.text(0.98, 0.95, _parameter_text(fit), transform=axes.transAxes, va="top",
-                    ha="right", fontsize="small", family="monospace",
-                    bbox={"boxstyle": "round", "facecolor": "white", "alpha": 0.85,
-                          "edgecolor": "0.7"})
-    drawn.append(box)
     axes.set_ylabel(y_label)
     axes.legend(loc="lower left" if x_name == "time" else "upper left")
+    drawn.append(_parameter_box(axes, fit))
     if title:
         axes.set_title(title)
     if residual_axes is None:
