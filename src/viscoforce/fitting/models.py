@@ -740,6 +740,35 @@ def hertz_guess(tip: Any, z: np.ndarray, f: np.ndarray) -> dict[str, float]:
             "baseline_slope": float(coef[2])}
 
 
+#: A sample of a position trace lying within this fraction of the trace's largest |h0| of the
+#: straight line through its neighbours is not a corner (:func:`corners`).
+COLLINEAR_RTOL = 1e-12
+
+
+def corners(t: np.ndarray, h: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The samples of a piecewise-linear trace (t, h0) where it bends, and its two ends.
+
+    A sample on the straight line through the kept sample before it and the sample after it (to
+    :data:`COLLINEAR_RTOL` of max |h0|, i.e. to rounding) is dropped: the piecewise-linear
+    interpolant of what is kept is the same function h0(t). A simulated step or triangle keeps
+    its corners only; a measured (noisy) trace keeps every sample. The time loop then restarts
+    its step history only where the drive really has a kink (at each sample of the full trace it
+    restarts at every one: more rejected steps and Newton iterations for the same drive).
+    """
+    t, h = np.asarray(t, dtype=float), np.asarray(h, dtype=float)
+    if t.size < 3:
+        return t, h
+    tol = COLLINEAR_RTOL * float(np.max(np.abs(h)))
+    keep = [0]
+    for i in range(1, t.size - 1):
+        a = keep[-1]
+        line = h[a] + (h[i + 1] - h[a]) * ((t[i] - t[a]) / (t[i + 1] - t[a]))
+        if abs(h[i] - line) > tol:
+            keep.append(i)
+    keep.append(t.size - 1)
+    return t[keep], h[keep]
+
+
 class StepResponse:
     """The step model's force along one drive, with its exact sensitivities, last run kept.
 
@@ -840,7 +869,8 @@ def _step_model(spec: ModelSpec) -> FitModel:
     from viscoforce.experiments.drives import MeasuredTrace
 
     trace_t, trace_h = (np.asarray(a, dtype=float) for a in position_trace)
-    response = StepResponse(problem, MeasuredTrace(trace_t, trace_h), tol=spec.fixed.get("tol"))
+    response = StepResponse(problem, MeasuredTrace(*corners(trace_t, trace_h)),
+                            tol=spec.fixed.get("tol"))
 
     def guesser(f: np.ndarray, t: np.ndarray) -> dict[str, float]:
         start = spec.fixed.get("start")

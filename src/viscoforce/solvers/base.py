@@ -24,6 +24,7 @@ Subclass contract (in the spirit of scipy's OdeSolver):
 
 from __future__ import annotations
 
+import math
 from abc import ABC, abstractmethod
 from collections.abc import Callable
 from dataclasses import dataclass, replace
@@ -31,9 +32,11 @@ from typing import ClassVar
 
 import numpy as np
 import scipy.linalg
+import scipy.linalg.lapack
 
 from viscoforce._typing import FloatArray, SeparationHistory
 from viscoforce._validation import require_finite, require_instance, require_positive
+from viscoforce.exceptions import ConvergenceError
 from viscoforce.problem import ContactProblem
 from viscoforce.solvers.static import equilibrium_gap
 
@@ -146,6 +149,9 @@ class TimeStepper(ABC):
         #: Optional Newton start by time, ``gap_guess(t) -> gaps or None`` (a fit passes the
         #: previous evaluation's solution moved along its sensitivities); None: the stepper's own.
         self.gap_guess: Callable[[float], FloatArray | None] | None = None
+        #: Error tolerance [m] of the adaptive march: a step whose error estimate exceeds it will
+        #: be rejected, so its sensitivities are not computed (inf: always computed).
+        self.tangent_tol = math.inf
 
     def response(self, pressure: FloatArray) -> FloatArray:
         """Q = A p at the nodes and the centre [m·Pa]."""
@@ -195,8 +201,10 @@ class TimeStepper(ABC):
         sensitivities are exact to that tolerance, ~1e-6 relative).
         """
         slope = self.problem.surface_force.pressure_derivative(gap)
-        dgap = scipy.linalg.lu_solve(factor, rhs.T, check_finite=False).T
-        return dgap, slope[None, :] * dgap
+        dgap, info = scipy.linalg.lapack.dgetrs(*factor, rhs.T)  # lu_solve without its wrapper
+        if info != 0:
+            raise ConvergenceError(f"sensitivity back-substitution failed (LAPACK info {info})")
+        return dgap.T, slope[None, :] * dgap.T
 
     @abstractmethod
     def step(self, state: State, drive: SeparationHistory, dt: float) -> StepOutcome:

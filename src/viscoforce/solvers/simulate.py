@@ -299,6 +299,8 @@ def simulate_force(problem: ContactProblem, drive: SeparationHistory, *, t_eval:
     if grid is not None:
         grid = require_increasing("grid", grid)
         control = _StepControl(True, t_end, control.tol, t_end, t_end)
+    else:
+        stepper.tangent_tol = control.tol  # no sensitivities for the steps _march rejects
     _check_effort(problem, drive, stepper, t_eval, t_end, control, 0)
     if warm_start is not None:
         stepper.gap_guess = _gap_guesses(problem, *warm_start)
@@ -487,6 +489,9 @@ def _march(stepper: TimeStepper, drive: SeparationHistory, state: State, t_eval:
                     if ratio > 1.0:
                         step, rejected = h * max(0.2, factor), rejected + 1
                         continue
+                    if state.tangent is not None and outcome.state.tangent is None:
+                        raise RuntimeError("internal: an accepted step lost its sensitivities "
+                                           "(the stepper's tangent_tol is not the march's tol)")
                     step = min(h * min(5.0, max(0.2, factor)), control.max_step)
                 state, steps = outcome.state, steps + 1
                 t = target if h == remaining else t + h

@@ -116,11 +116,13 @@ class _Exponential(TimeStepper):
                   - (self.c_modes * a)[:, None] * q_new[None, :]
                   - (self.c_modes * b)[:, None] * state.response[None, :])
         deformation = -self.c_glassy * q_new + memory.sum(axis=0)
-        tangent = None if state.tangent is None else self._step_tangent(
-            state, sol.gap, q_new, sol.factor, x, (decay, a, b))
+        error = self.error_estimate(state, q_new, dt, x)
+        tangent = None
+        if state.tangent is not None and not error / self.tangent_tol > 1.0:  # the march's test
+            tangent = self._step_tangent(state, sol.gap, q_new, sol.factor, x, (decay, a, b))
         new = State(t_new, position, sol.gap, sol.pressure, q_new, memory, deformation,
                     history=(state.time, state.response, state.gap), tangent=tangent)
-        return StepOutcome(new, self.error_estimate(state, q_new, dt, x), sol.iterations)
+        return StepOutcome(new, error, sol.iterations)
 
     def _step_tangent(self, state: State, gap: FloatArray, q_new: FloatArray, factor: tuple,
                       x: FloatArray, coefficients: tuple[FloatArray, FloatArray, FloatArray]
