@@ -157,7 +157,12 @@ def add_fit(parser: argparse.ArgumentParser) -> None:
     add_outputs(parser, [Output("--out", NETCDF_OR_CSV, "FILE.nc|FILE.csv",
                                 "write the fit result: netCDF (.nc) or a table, one row per "
                                 "curve/pixel with units in the headers (.csv)"),
-                         Output("--plot", FIGURE, "FILE.png", "data and fit (one spectrum/curve)")])
+                         Output("--plot", FIGURE, "FILE.png",
+                                "data and fit (one spectrum/curve), or a map of one fitted "
+                                "variable over the pixels (a map; --plot-variable)")])
+    parser.add_argument("--plot-variable", default=None, metavar="NAME",
+                        help="the variable of a map's --plot (default: the first fitted "
+                             "parameter; any per-pixel variable, e.g. E0_young, redchi)")
     parser.add_argument("--json", action="store_true", help="print one JSON object (SI units)")
     parser.add_argument("--progress", action=argparse.BooleanOptionalAction, default=None,
                         help="progress bar of map fits (default: when stderr is a terminal)")
@@ -693,8 +698,9 @@ def run_fit(args: argparse.Namespace) -> int:
     _check_model(args, kind)
     ds = _select_curve(ds, kind, args.curve)
     is_map = bool(_extra_dims(ds, kind))
-    if is_map and args.plot:
-        raise UsageError("--plot draws one spectrum or curve: add --curve I")
+    if not is_map and getattr(args, "plot_variable", None) is not None:
+        raise UsageError("--plot-variable chooses what a map's --plot shows; this is one "
+                         "spectrum or curve")
     if is_map and args.model == "auto":
         raise UsageError("--model auto fits one spectrum: add --curve I, or name the model "
                          "for the whole map")
@@ -725,7 +731,7 @@ def run_fit(args: argparse.Namespace) -> int:
     elif args.out:
         write_netcdf(result, args.out)
     if args.plot:
-        _plot(ds, kind, result, args)
+        _plot(ds, "map" if is_map else kind, result, args)
     if args.json:
         print_json(info)
         return 0
@@ -935,7 +941,15 @@ def _plot(ds, kind: str, result, args: argparse.Namespace) -> None:
     from viscoforce.cli.model import _save_figure
     from viscoforce.plotting import bode_plot, fit_curve_plot
 
-    if kind == "spectrum":
+    if kind == "map":
+        from viscoforce.exceptions import ParameterError
+        from viscoforce.plotting import map_plot
+
+        try:
+            handle = map_plot(result, args.plot_variable)
+        except ParameterError as exc:
+            raise UsageError(f"--plot-variable: {exc}") from None
+    elif kind == "spectrum":
         handle = bode_plot(ds, fit=result)
     else:
         if kind == "curves":

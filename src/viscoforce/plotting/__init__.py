@@ -17,7 +17,8 @@ value. Axis labels carry the unit.
 
 Modules: :mod:`~viscoforce.plotting._common` (the handle, option checks, display units),
 :mod:`~viscoforce.plotting.trajectories` (loops, profiles, force against time),
-:mod:`~viscoforce.plotting.bode` (spectra, data against fit). matplotlib is imported lazily
+:mod:`~viscoforce.plotting.bode` (spectra, data against fit), :mod:`~viscoforce.plotting.maps`
+(a fitted variable over the map's pixels). matplotlib is imported lazily
 inside the functions, so ``import viscoforce.plotting`` is cheap.
 """
 
@@ -30,6 +31,7 @@ from viscoforce.plotting._common import TimeUnit as TimeUnit
 from viscoforce.plotting.bode import FrequencyUnit as FrequencyUnit
 from viscoforce.plotting.bode import Magnitude as Magnitude
 from viscoforce.plotting.bode import bode_plot, fit_curve_plot
+from viscoforce.plotting.maps import map_plot
 from viscoforce.plotting.trajectories import LOADING_STYLE as LOADING_STYLE
 from viscoforce.plotting.trajectories import STATIC_MARKERS as STATIC_MARKERS
 from viscoforce.plotting.trajectories import UNLOADING_STYLE as UNLOADING_STYLE
@@ -49,4 +51,5 @@ __all__ = [
     "force_time_plot",
     "bode_plot",
     "fit_curve_plot",
+    "map_plot",
 ]
