@@ -3,11 +3,12 @@
 A map's pixels are independent fits, so the wall time of ``r`` pixels of cost ``c`` each is
 
 - in this process: ``r·c``;
-- on a local cluster of ``w`` worker processes: ``S(w) + (r − m)·(c + o)/(w·e)``, where ``S(w)``
-  is the cluster's start-up and shut-down (:data:`CLUSTER_STARTUP`, by the start method of its
-  processes, plus :data:`DISTRIBUTED_IMPORT` while dask.distributed is not imported), ``m`` the pixels this process fits itself while the cluster starts
-  (``S(w)/(2c)``: it shares the cores with the starting workers; only where the workers start
-  as fresh interpreters, :data:`OVERLAP_METHODS`), ``o`` the per-pixel transport
+- on a local cluster of ``w`` worker processes: ``S(w) + (r − m)·(c + o)/(w·e)``, where
+  ``S(w)`` is the cluster's start-up and shut-down (:data:`CLUSTER_STARTUP`, by the start
+  method of its processes, plus :data:`DISTRIBUTED_IMPORT` while dask.distributed is not
+  imported), ``m`` the pixels this process fits itself while the cluster starts (``S(w)/(2c)``:
+  it shares the cores with the starting workers; only where the workers start as fresh
+  interpreters, :data:`OVERLAP_METHODS`), ``o`` the per-pixel transport
   (:data:`PIXEL_OVERHEAD`) and ``e`` the parallel efficiency (:data:`PARALLEL_EFFICIENCY`: the
   scheduler and result collection in this process take a share of the cores).
 
