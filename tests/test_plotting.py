@@ -451,3 +451,16 @@ def test_bode_plot_accepts_a_pair_of_axes_and_a_numpy_bool():
     handle = bode_plot(_spectrum(), ax=list(pair), markers=np.True_, title="t")
     assert handle.axes == (pair[0], pair[1])
     plt.close("all")
+
+
+def test_loops_say_which_branch_is_loading(trajectory):
+    """Each branch carries an arrowhead along the drive, and a corner key names the styles."""
+    handle = hysteresis_plot(trajectory)
+    ax = handle.axes[0]
+    arrows = [a for a in ax.texts if getattr(a, "arrow_patch", None) is not None]
+    assert len(arrows) == len(handle.lines)  # one per branch
+    tip, tail = arrows[0].xy, arrows[0].xyann
+    assert tip[0] < tail[0]  # the approach runs towards smaller h0 (loading)
+    assert handle.lines[0].get_linestyle() == "-"
+    assert len(arrows) == 2 and arrows[1].xy[0] > arrows[1].xyann[0]  # retraction: unloading
+    assert any("solid: loading (approach)" in t.get_text() for t in ax.texts)

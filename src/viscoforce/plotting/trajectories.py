@@ -149,7 +149,28 @@ def _draw_branches(ax: Axes, x: FloatArray, y: FloatArray, runs: list[tuple[int,
                      label=label if k == 0 and label is not None else "_nolegend_", **kw)
         color = line.get_color()
         lines.append(line)
+        _direction_arrow(ax, x[start:stop + 1], y[start:stop + 1], color)
     return lines
+
+
+def _direction_arrow(ax: Axes, x: FloatArray, y: FloatArray, color: Any) -> None:
+    """An arrowhead half-way along a branch, pointing the way the drive went."""
+    ok = np.flatnonzero(np.isfinite(x) & np.isfinite(y))
+    if ok.size < 3:
+        return
+    middle = 0.5 * (np.min(x[ok]) + np.max(x[ok]))  # half-way along the position axis
+    k = int(np.argmin(np.abs(x[ok] - middle)))
+    i, j = ok[max(k - 1, 0)], ok[min(k + 1, ok.size - 1)]
+    if (x[i], y[i]) == (x[j], y[j]):
+        return
+    ax.annotate("", xy=(x[j], y[j]), xytext=(x[i], y[i]),
+                arrowprops={"arrowstyle": "-|>", "color": color, "lw": 0, "mutation_scale": 16})
+
+
+def _branch_key(ax: Axes) -> None:
+    """A corner note on what the linestyles mean (the arrows show the way the drive went)."""
+    ax.text(0.99, 0.01, "solid: loading (approach)   dashed: unloading (retraction)",
+            transform=ax.transAxes, ha="right", va="bottom", fontsize="x-small", color="0.35")
 
 
 def _static_curves(statics: Mapping[str, Any] | None) -> list[tuple[str, FloatArray, FloatArray]]:
@@ -248,6 +269,7 @@ def hysteresis_plot(trajectory: xr.Dataset, *, ax: Axes | None = None,
         axes.set_yscale("log")
     axes.set_xlabel(_POSITION_LABEL)
     axes.set_ylabel(f"force $F$ [{unit}]")
+    _branch_key(axes)
     return PlotHandle(figure, (axes,), tuple(lines))
 
 
@@ -301,6 +323,7 @@ def contact_radius_plot(trajectory: xr.Dataset, *, ax: Axes | None = None,
     lines += _draw_statics(axes, curves, scale)
     axes.set_xlabel(_POSITION_LABEL)
     axes.set_ylabel(f"contact radius $a$ [{unit}]")
+    _branch_key(axes)
     return PlotHandle(figure, (axes,), tuple(lines))
 
 
