@@ -12,7 +12,8 @@ What is proved here:
   relative (measured 3-8e-6: the two paths discretise the drive differently, both at the default
   tolerance), and on a noisy trace to 0.05 of the stderr with stderr equal to 1 % (measured
   0.001 stderr and 3e-4);
-- its reported curve is one adaptive simulation at the default tolerance at the fitted values.
+- its reported curve is one adaptive simulation at the default tolerance at the fitted values
+  (to 1e-9: its Newton solves start from the previous run's solution).
 """
 
 from __future__ import annotations
@@ -194,4 +195,5 @@ def test_the_reported_curve_is_one_adaptive_simulation_at_the_fitted_values(deep
     material = StandardLinearSolid(float(new["E0"]), float(new["E_inf"]), float(new["tau"]))
     run = simulate_force(deep.with_material(material), MeasuredTrace(*corners(t, h)),
                          t_end=t[-1], t_eval=t)
-    np.testing.assert_array_equal(new["fit_force"].values, run.force)
+    # the same adaptive steps; Newton started elsewhere (warm), converged to the same tolerance
+    np.testing.assert_allclose(new["fit_force"].values, run.force, rtol=1e-9)

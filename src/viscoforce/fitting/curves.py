@@ -480,7 +480,8 @@ def fit_step(trajectory: xr.Dataset, *, problem: Any, poisson: float | None = No
         except ConvergenceError:
             search = None  # the fit starts from the data's guess instead
     start = {} if search is None else {"start": search.values}
-    best = _fit_step_stage(data, fixed | start, final=True)
+    best = _fit_step_stage(data, fixed | start, final=True,
+                           warm=None if search is None else search.model.response)
     ds = result_dataset(best, data, profile=False)
     ds.attrs["nfev"] = int(best.result.nfev) + (0 if search is None else int(search.result.nfev))
     ds.attrs["validity"] = validity_note("step", ds)
@@ -489,10 +490,12 @@ def fit_step(trajectory: xr.Dataset, *, problem: Any, poisson: float | None = No
     return ds
 
 
-def _fit_step_stage(data: FitData, fixed: dict[str, Any], *, final: bool = False) -> Outcome:
+def _fit_step_stage(data: FitData, fixed: dict[str, Any], *, final: bool = False,
+                    warm: Any = None) -> Outcome:
     """One least-squares fit of the step model with its exact Jacobian (lmfit leastsq + Dfun).
 
     ``final``: χ², residual and covariance at the optimum from a fresh adaptive simulation.
+    ``warm``: a StepResponse whose last run gives the first run's Newton starts.
     """
     import lmfit
 
@@ -500,6 +503,8 @@ def _fit_step_stage(data: FitData, fixed: dict[str, Any], *, final: bool = False
     from viscoforce.fitting.fit import _outcome, _residual
 
     model = make_model("step", **fixed)
+    if warm is not None:
+        model.response.warm_from(warm)
     params = model.internal_guess(data.y, data.x)
     residual = _residual(model, data)
     weights = 1.0 if data.weights is None else np.asarray(data.weights, dtype=float)[:, None]

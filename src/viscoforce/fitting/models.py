@@ -805,8 +805,20 @@ class StepResponse:
         self._grid: tuple[np.ndarray, np.ndarray] | None = None  # (step times, ln SPEC)
 
     def forget(self) -> None:
-        """Drop the kept run and grid: the next evaluation is a fresh adaptive simulation."""
-        self._kept = self._grid = None
+        """Drop the kept result and grid: the next evaluation is a fresh adaptive simulation.
+
+        Only the Newton starts (the last run's gaps and their sensitivities) are kept.
+        """
+        self._grid = None
+        if self._kept is not None:
+            self._kept = {k: v for k, v in self._kept.items() if k in self._WARM}
+
+    def warm_from(self, other: StepResponse) -> None:
+        """Take the Newton starts of ``other``'s last run (same drive; e.g. the search stage's)."""
+        if other._kept is not None:
+            self._kept = {k: other._kept[k] for k in self._WARM}
+
+    _WARM = ("rho", "step_time", "step_gap", "dgap")
 
     @staticmethod
     def _prony(values: Mapping[str, float]) -> np.ndarray:
@@ -820,15 +832,15 @@ class StepResponse:
 
         key = (float(values["E0"]), float(values["E_inf"]), float(values["tau"]))
         kept = self._kept
-        same_t = kept is not None and np.array_equal(kept["t"], t)
+        same_t = kept is not None and "t" in kept and np.array_equal(kept["t"], t)
         if same_t and kept["key"] == key:
             return kept["force"], kept["log_gradient"]
         rho, logs = self._prony(values), np.log(key)
         warm = grid = None
-        if same_t:
+        if kept is not None:  # Newton starts by step time: the outputs need not be the same
             moved = kept["step_gap"] + np.einsum("j,ijn->in", rho - kept["rho"], kept["dgap"])
             warm = (kept["step_time"], np.maximum(moved, 0.5 * kept["step_gap"]))
-            if (self.reuse_grid and self._grid is not None
+            if (same_t and self.reuse_grid and self._grid is not None
                     and np.max(np.abs(logs - self._grid[1])) <= self.REGRID):
                 grid = self._grid[0]
         problem = self.problem.with_material(material_from(values, 1))
