@@ -445,6 +445,9 @@ STEP_SEARCH_TOL = 100.0
 #: Most samples the search stage fits (evenly spread over the data, both ends kept): every
 #: output time is a step of the simulation, so fewer samples make the search's runs cheaper.
 STEP_SEARCH_POINTS = 25
+#: leastsq tolerances of the search (it only has to land where the fit converges in a few
+#: iterations; the fit itself runs at lmfit's defaults, 1.5e-8).
+STEP_SEARCH_LM = {"ftol": 1e-5, "xtol": 1e-5}
 
 
 def fit_step(trajectory: xr.Dataset, *, problem: Any, poisson: float | None = None
@@ -476,7 +479,7 @@ def fit_step(trajectory: xr.Dataset, *, problem: Any, poisson: float | None = No
             weights=None if data.weights is None else data.weights[pick],
             sigma_dof=None if data.sigma_dof is None else data.sigma_dof[pick])
         try:
-            search = _fit_step_stage(coarse, fixed | {"tol": tol})
+            search = _fit_step_stage(coarse, fixed | {"tol": tol}, lm=STEP_SEARCH_LM)
         except ConvergenceError:
             search = None  # the fit starts from the data's guess instead
     start = {} if search is None else {"start": search.values}
@@ -491,11 +494,12 @@ def fit_step(trajectory: xr.Dataset, *, problem: Any, poisson: float | None = No
 
 
 def _fit_step_stage(data: FitData, fixed: dict[str, Any], *, final: bool = False,
-                    warm: Any = None) -> Outcome:
+                    warm: Any = None, lm: dict[str, float] | None = None) -> Outcome:
     """One least-squares fit of the step model with its exact Jacobian (lmfit leastsq + Dfun).
 
     ``final``: χ², residual and covariance at the optimum from a fresh adaptive simulation.
-    ``warm``: a StepResponse whose last run gives the first run's Newton starts.
+    ``warm``: a StepResponse whose last run gives the first run's Newton starts; ``lm``:
+    tolerances of leastsq (default lmfit's).
     """
     import lmfit
 
@@ -521,7 +525,7 @@ def _fit_step_stage(data: FitData, fixed: dict[str, Any], *, final: bool = False
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", RuntimeWarning)
             res = lmfit.minimize(residual, params, method="leastsq", Dfun=jacobian,
-                                 scale_covar=not data.sigma_known)
+                                 scale_covar=not data.sigma_known, **(lm or {}))
             if final:
                 model.response.reuse_grid = False
                 model.response.forget()
