@@ -1,4 +1,4 @@
-"""The bundled data_examples/: each file loads, recovers the truth it was made from, and regenerates.
+"""The shipped example data (viscoforce.data): each file loads, recovers its truth, and regenerates.
 
 Tolerances are in standard errors of the data (|value − truth| < Z_MAX·stderr, Z_MAX = 4: the
 chance that one of the ~20 compared values of a correct file exceeds it is ~1e-3), except where
@@ -17,6 +17,8 @@ import numpy as np
 import pytest
 import xarray as xr
 
+from viscoforce.data import example_names, example_path
+from viscoforce.exceptions import ParameterError
 from viscoforce.experiments.linear_response import linear_stiffness
 from viscoforce.experiments.modulation import modulation_spectrum
 from viscoforce.fitting import fit_spectrum
@@ -26,7 +28,7 @@ from viscoforce.io.instruments import load_instrument
 from viscoforce.io.jpk import read_jpk
 from viscoforce.schema import validate_spectrum
 
-EXAMPLES_DIR = Path(__file__).resolve().parents[1] / "data_examples"
+EXAMPLES_DIR = example_path()
 Z_MAX = 4.0
 
 
@@ -54,6 +56,25 @@ def test_every_generated_file_is_bundled_small_and_documented():
         assert path.stat().st_size < 300_000, name
         assert f"`{name}`" in readme, name
     assert "`real/modulation-map.jpk-force-map`" in readme
+
+
+def test_example_path_names_every_shipped_file_and_refuses_others():
+    names = example_names()
+    assert {*me.EXAMPLES, "README.md", "make_examples.py", "real/LICENSE", "real/SOURCE.md",
+            "real/modulation-map.jpk-force-map"} == set(names)
+    assert example_path("real/modulation-map.jpk-force-map").is_file()
+    assert example_path() == EXAMPLES_DIR and EXAMPLES_DIR.is_absolute()
+    with pytest.raises(ParameterError, match=r"no example named '\.\./__init__\.py'; the examples "
+                                             r"are: README\.md, "):
+        example_path("../__init__.py")
+
+
+def test_the_repository_link_is_the_package_folder():
+    """``data_examples/`` in the repository (benchmarks, docs, older notes) is the same folder."""
+    link = Path(__file__).resolve().parents[1] / "data_examples"
+    if not link.exists():
+        pytest.skip("not run from a repository checkout")
+    assert link.resolve() == EXAMPLES_DIR.resolve()
 
 
 def test_approach_retract_trace_reads():

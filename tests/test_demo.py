@@ -4,14 +4,15 @@ from __future__ import annotations
 
 import importlib.util
 import json
-from pathlib import Path
 
 import pytest
 
 from viscoforce.cli import main
-from viscoforce.cli.demo import REAL, SYNTHETIC, SYNTHETIC_TRUTH
+from viscoforce.cli._args import UsageError
+from viscoforce.cli.demo import REAL, SYNTHETIC, SYNTHETIC_TRUTH, find_examples
+from viscoforce.data import example_path
 
-EXAMPLES = Path(__file__).resolve().parents[1] / "data_examples"
+EXAMPLES = example_path()
 
 
 def test_demo_truth_is_the_one_the_example_was_made_with():
@@ -23,11 +24,22 @@ def test_demo_truth_is_the_one_the_example_was_made_with():
     assert SYNTHETIC_TRUTH["h0"] == module.H0
 
 
-@pytest.mark.skipif(not (EXAMPLES / SYNTHETIC).is_file() or not (EXAMPLES / REAL).is_file(),
-                    reason="bundled example data missing")
-def test_demo_writes_its_figures_and_recovers_the_truth(tmp_path, capsys):
+def test_the_demo_finds_the_shipped_data_or_says_what_is_missing(tmp_path, capsys):
+    assert find_examples() == EXAMPLES
+    assert (EXAMPLES / SYNTHETIC).is_file() and (EXAMPLES / REAL).is_file()
+    assert find_examples(str(EXAMPLES)) == EXAMPLES
+    with pytest.raises(UsageError, match=rf"cannot find the example data in --data {tmp_path}: "
+                                         rf"{SYNTHETIC}, {REAL} missing; give the folder"):
+        find_examples(str(tmp_path))
+    assert main(["demo", "--out", str(tmp_path / "out"), "--data", str(tmp_path)]) == 2
+    assert "cannot find the example data" in capsys.readouterr().err
+
+
+def test_demo_writes_its_figures_and_recovers_the_truth(tmp_path, capsys, monkeypatch):
+    """From an empty folder, without --data: the copy inside the package is found."""
+    monkeypatch.chdir(tmp_path)
     out = tmp_path / "demo"
-    assert main(["demo", "--out", str(out), "--data", str(EXAMPLES)]) == 0
+    assert main(["demo", "--out", str(out)]) == 0
     text = capsys.readouterr().out
     assert "chose 1 mode(s)" in text and "tip radius 10 µm assumed" in text
     for name in ("bode_synthetic.png", "loop.png", "bode_real.png"):

@@ -60,6 +60,7 @@ _LAZY = {
     "contact_radius_plot": "viscoforce.plotting", "profile_plot": "viscoforce.plotting",
     "force_time_plot": "viscoforce.plotting", "fit_curve_plot": "viscoforce.plotting",
     "map_plot": "viscoforce.plotting",
+    "example_path": "viscoforce.data",
 }
 #: Public names whose attribute in the module differs (``vf.load`` is ``load_instrument``).
 _RENAMED = {"load": "load_instrument"}

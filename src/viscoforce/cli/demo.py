@@ -22,9 +22,9 @@ from viscoforce.cli._args import DIRECTORY, Output, UsageError, add_outputs
 
 __all__ = ["SUBCOMMANDS", "find_examples"]
 
-#: The bundled files (in ``data_examples/``) the demo reads.
+#: The example files the demo reads (shipped in the package: :func:`viscoforce.data.example_path`).
 SYNTHETIC = "sls_modulation.jpk-force"
-#: Its truth (``data_examples/make_examples.py``: TRUE_SLS at H0 with the paper's system).
+#: Its truth (``examples/make_examples.py``: TRUE_SLS at H0 with the paper's system).
 SYNTHETIC_TRUTH = {"E0": 5e9, "E_inf": 1e9, "tau": 5e-3, "h0": -5e-9}
 REAL = "real/modulation-map.jpk-force-map"
 #: Tip radius assumed for the real file (the file does not say).
@@ -32,15 +32,24 @@ REAL_TIP_RADIUS = 10e-6
 
 
 def find_examples(given: str | None = None) -> Path:
-    """The ``data_examples`` folder: ``given``, ./data_examples, or the one beside the sources."""
-    candidates = [Path(given)] if given else [
-        Path.cwd() / "data_examples", Path(__file__).resolve().parents[3] / "data_examples"]
-    for folder in candidates:
-        if (folder / SYNTHETIC).is_file() and (folder / REAL).is_file():
-            return folder
-    raise UsageError("cannot find the bundled example data (data_examples/ with "
-                     f"{SYNTHETIC} and {REAL}); run the demo from the repository folder or give "
-                     "--data DIR")
+    """The folder of the example files: ``given`` (``--data DIR``), else the package's own copy.
+
+    The package's copy is found by :mod:`importlib.resources`, so the demo runs from any folder
+    once viscoforce is installed (in the repository, ``data_examples/`` links to it).
+    """
+    from viscoforce.data import example_path
+
+    folder = Path(given) if given else example_path()
+    missing = [name for name in (SYNTHETIC, REAL) if not (folder / name).is_file()]
+    if missing:
+        if given:
+            where, fix = (f"--data {given}", "give the folder that holds them, or leave --data out "
+                          "to use the copy shipped inside viscoforce")
+        else:
+            where, fix = f"the installed package ({folder})", "reinstall viscoforce"
+        raise UsageError(f"cannot find the example data in {where}: {', '.join(missing)} missing; "
+                         f"{fix}")
+    return folder
 
 
 def add_demo(parser: argparse.ArgumentParser) -> None:
@@ -48,8 +57,8 @@ def add_demo(parser: argparse.ArgumentParser) -> None:
     add_outputs(parser, [Output("--out", DIRECTORY, "DIR",
                                 "folder for the figures and results (default viscoforce-demo)")])
     parser.add_argument("--data", default=None, metavar="DIR",
-                        help="the data_examples folder (default: ./data_examples or the "
-                             "repository's)")
+                        help="a folder holding the example files (default: the copy shipped "
+                             "inside viscoforce)")
 
 
 def _show(name: str, value: float, err: float, unit: str, truth: float | None = None) -> str:
