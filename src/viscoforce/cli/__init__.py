@@ -60,6 +60,7 @@ COMMANDS: tuple[Command, ...] = (
     Command("load", "analysis", "instrument file to curves or a modulation spectrum"),
     Command("fit", "fitting", "fit a model to a spectrum, a curve or a map of them"),
     Command("bode", "fitting", "Bode plot of a spectrum, with a fitted model"),
+    Command("view", "view", "interactive viewer of a fitted map: an HTML page or a local server"),
     Command("demo", "demo", "load, demodulate, fit and plot the bundled example data"),
 )
 
