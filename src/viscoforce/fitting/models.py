@@ -794,6 +794,9 @@ class StepResponse:
     #: Largest change of ln E0, ln E_inf or ln τ from where the kept step grid was chosen over
     #: which a run repeats that grid (otherwise the steps are chosen afresh).
     REGRID = 0.05
+    #: Largest such change over which the last run's gaps, moved along their sensitivities, are
+    #: better Newton starts than the stepper's own extrapolation in time.
+    WARM = 0.3
 
     def __init__(self, problem: ContactProblem, drive: Any, *, tol: float | None = None):
         self.problem, self.drive, self.tol = problem, drive, tol
@@ -818,7 +821,7 @@ class StepResponse:
         if other._kept is not None:
             self._kept = {k: other._kept[k] for k in self._WARM}
 
-    _WARM = ("rho", "step_time", "step_gap", "dgap")
+    _WARM = ("rho", "logs", "step_time", "step_gap", "dgap")
 
     @staticmethod
     def _prony(values: Mapping[str, float]) -> np.ndarray:
@@ -837,7 +840,8 @@ class StepResponse:
             return kept["force"], kept["log_gradient"]
         rho, logs = self._prony(values), np.log(key)
         warm = grid = None
-        if kept is not None:  # Newton starts by step time: the outputs need not be the same
+        if kept is not None and np.max(np.abs(logs - kept["logs"])) <= self.WARM:
+            # Newton starts by step time (the outputs need not be the same)
             moved = kept["step_gap"] + np.einsum("j,ijn->in", rho - kept["rho"], kept["dgap"])
             warm = (kept["step_time"], np.maximum(moved, 0.5 * kept["step_gap"]))
             if (same_t and self.reuse_grid and self._grid is not None
@@ -862,7 +866,8 @@ class StepResponse:
         d_cg, d_c1, d_tau = run.sensitivity.T
         log_grad = np.column_stack([(d_c1 - d_cg) * (2.0 / e0), -d_c1 * (2.0 / e_inf), d_tau])
         self._kept = {"key": key, "t": np.array(t), "force": run.force, "log_gradient": log_grad,
-                      "rho": rho, "step_time": run.step_time, "step_gap": run.step_gap,
+                      "rho": rho, "logs": logs, "step_time": run.step_time,
+                      "step_gap": run.step_gap,
                       "dgap": run.step_gap_sensitivity}
         return run.force, log_grad
 
