@@ -19,7 +19,10 @@ Subclass contract (in the spirit of scipy's OdeSolver):
 * set the class attributes ``name``, ``order`` (local error O(dt^{order+1})) and ``adaptive``
   (whether ``StepOutcome.error`` is a usable local-error estimate [m]);
 * raise :class:`~viscoforce.exceptions.StabilityError` or
-  :class:`~viscoforce.exceptions.GapClosureError` instead of returning a non-finite state.
+  :class:`~viscoforce.exceptions.GapClosureError` instead of returning a non-finite state;
+* optionally carry :attr:`State.tangent` (forward sensitivities to the Prony data, used by fits:
+  :func:`~viscoforce.solvers.simulate.simulate_force`); the exponential steppers do, explicit
+  Euler returns states without it.
 """
 
 from __future__ import annotations
