@@ -71,10 +71,14 @@ def test_example_path_names_every_shipped_file_and_refuses_others():
 
 def test_the_repository_link_is_the_package_folder():
     """``data_examples/`` in the repository (benchmarks, docs, older notes) is the same folder."""
-    link = Path(__file__).resolve().parents[1] / "data_examples"
+    repo = Path(__file__).resolve().parents[1]
+    link = repo / "data_examples"
     if not link.exists():
         pytest.skip("not run from a repository checkout")
-    assert link.resolve() == EXAMPLES_DIR.resolve()
+    assert link.resolve() == (repo / "src" / "viscoforce" / "data" / "examples").resolve()
+    # installed editable or not, the package holds the same files
+    assert sorted(p.relative_to(link.resolve()).as_posix() for p in link.resolve().rglob("*")
+                  if p.is_file() and "__pycache__" not in p.parts) == list(example_names())
 
 
 def test_approach_retract_trace_reads():
