@@ -258,7 +258,7 @@ def _json(capsys, argv):
 
 
 def test_cli_auto_reports_the_explanation(capsys, tmp_path):
-    out = _json(capsys, ["spectrum", "--h0", "10nm", "--eta", "0.01nm", "--omega", "100",
+    out = _json(capsys, ["spectrum", "--h0", "10nm", "--eta", "0.01nm", "--omega", "100rad/s",
                          "--method", "auto", "--json"])
     assert out["method"] == "svda" and "svda is the cheapest" in out["explanation"]
     assert out["estimated_error"] <= ACCURACY
@@ -274,7 +274,7 @@ def test_cli_auto_reports_the_explanation(capsys, tmp_path):
 def test_cli_linear_at_large_eta_warns_in_the_note(capsys):
     with warnings.catch_warnings():
         warnings.simplefilter("error")
-        out = _json(capsys, ["spectrum", "--h0=-5nm", "--eta", "1nm", "--omega", "2e4",
+        out = _json(capsys, ["spectrum", "--h0=-5nm", "--eta", "1nm", "--omega", "2e4rad/s",
                              "--json"])
     assert "kappa*eta = 1" in out["note"] and "time-domain" in out["note"]
 

@@ -146,8 +146,8 @@ def test_trace_reader_errors(tmp_path):
 
 def test_spectrum_json_contract_and_plot(capsys, tmp_path):
     png = tmp_path / "bode.png"
-    out = run_json(capsys, ["spectrum", "--h0", "2nm", "--eta", "0.1nm", "--omega-range", "10",
-                            "1e5", "7", "--json", "--plot", str(png)])
+    out = run_json(capsys, ["spectrum", "--h0", "2nm", "--eta", "0.1nm", "--omega-range", "10rad/s",
+                            "1e5rad/s", "7", "--json", "--plot", str(png)])
     for key in ("omega", "amplitude", "stiffness", "phase_deg", "mean_force", "method"):
         assert key in out
     assert out["method"] == "linear" and len(out["omega"]) == 7
@@ -160,22 +160,22 @@ def test_spectrum_methods_and_auto(capsys):
     svda = run_json(capsys, ["spectrum", "--h0", "2nm", "--eta", "0.1nm", "--omega", "1kHz",
                              "--method", "svda", "--json"])
     assert svda["method"] == "svda"
-    auto = run_json(capsys, ["spectrum", "--h0", "2nm", "--eta", "0.01nm", "--omega", "100",
-                             "1000", "--method", "auto", "--json"])
+    auto = run_json(capsys, ["spectrum", "--h0", "2nm", "--eta", "0.01nm", "--omega", "100rad/s",
+                             "1000rad/s", "--method", "auto", "--json"])
     assert auto["method"] == "linear" and "kappa*eta" in auto["explanation"]
-    td = run_json(capsys, ["spectrum", "--h0", "2nm", "--eta", "0.01nm", "--omega", "1000",
+    td = run_json(capsys, ["spectrum", "--h0", "2nm", "--eta", "0.01nm", "--omega", "1000rad/s",
                            "--method", "time-domain", "--periods", "2", "--json"])
-    lin = run_json(capsys, ["spectrum", "--h0", "2nm", "--eta", "0.01nm", "--omega", "1000",
+    lin = run_json(capsys, ["spectrum", "--h0", "2nm", "--eta", "0.01nm", "--omega", "1000rad/s",
                             "--json"])
     assert td["stiffness"][0] == pytest.approx(lin["stiffness"][0], rel=1e-3)
 
 
 @pytest.mark.parametrize(("argv", "message"), [
     (["spectrum", "--h0", "2nm", "--eta", "0.1nm"], "give either --omega"),
-    (["spectrum", "--h0", "2nm", "--eta", "0.1nm", "--omega-range", "100", "10", "5"],
+    (["spectrum", "--h0", "2nm", "--eta", "0.1nm", "--omega-range", "100rad/s", "10rad/s", "5"],
      "0 < LO < HI"),
-    (["spectrum", "--h0", "2nm", "--eta", "0.1nm", "--omega", "-5"], "omega must be > 0"),
-    (["spectrum", "--h0", "2nm", "--eta", "-1nm", "--omega", "5"], "eta must be > 0"),
+    (["spectrum", "--h0", "2nm", "--eta", "0.1nm", "--omega", "-5rad/s"], "omega must be > 0"),
+    (["spectrum", "--h0", "2nm", "--eta", "-1nm", "--omega", "5rad/s"], "eta must be > 0"),
 ])
 def test_spectrum_user_errors(capsys, argv, message):
     assert main(argv) == 2
@@ -190,7 +190,7 @@ def test_cli_guards_and_linear_note(capsys):
     assert main(["static", "--h0", "-5", "--E", "1e9"]) == 2
     assert "forget a unit" in capsys.readouterr().err
     # η = 1 nm at ω = 20/τ: the finite-amplitude bias is ~37 % by harmonic balance (9 % measured)
-    out = run_json(capsys, ["spectrum", "--h0=-5nm", "--eta", "1nm", "--omega", "2e4", "--json"])
+    out = run_json(capsys, ["spectrum", "--h0=-5nm", "--eta", "1nm", "--omega", "2e4rad/s", "--json"])
     assert "time-domain" in out["note"]
 
 
@@ -289,16 +289,20 @@ def no_compute(monkeypatch):
 
 
 @pytest.mark.parametrize(("argv", "message"), [
-    ([*SPECTRUM, "--omega-range", "10", "1e5", "1Hz"],
+    ([*SPECTRUM, "--omega-range", "10rad/s", "1e5rad/s", "1Hz"],
      "argument --omega-range: expected a plain integer >= 1 (no unit, no decimal point), got '1Hz'"),
-    ([*SPECTRUM, "--omega-range", "10", "1e5", "2.5"], "expected a plain integer >= 1"),
-    ([*SPECTRUM, "--omega-range", "10", "1e5", "0"], "must be an integer >= 1, got 0"),
-    ([*SPECTRUM, "--omega-range", "0", "1e5", "5"], "needs 0 < LO < HI"),
-    ([*SPECTRUM, "--omega-range", "10", "1e5", "10000001"],
+    ([*SPECTRUM, "--omega-range", "10rad/s", "1e5rad/s", "2.5"], "expected a plain integer >= 1"),
+    ([*SPECTRUM, "--omega-range", "10rad/s", "1e5rad/s", "0"], "must be an integer >= 1, got 0"),
+    ([*SPECTRUM, "--omega-range", "0rad/s", "1e5rad/s", "5"], "needs 0 < LO < HI"),
+    ([*SPECTRUM, "--omega-range", "10rad/s", "1e5rad/s", "10000001"],
      "frequencies: about 1e+07 needed, beyond the limit of 1e+07; refused before computing"),
-    ([*SPECTRUM, "--omega", "1", "-2kHz", "--periods", "0"],
+    ([*SPECTRUM, "--omega", "1rad/s", "-2kHz", "--periods", "0"],
      "argument --periods: must be an integer >= 1, got 0"),
-    ([*SPECTRUM, "--omega", "1", "--jobs", "1.5"], "argument --jobs: expected a plain integer"),
+    ([*SPECTRUM, "--omega", "1rad/s", "--jobs", "1.5"], "argument --jobs: expected a plain integer"),
+    ([*SPECTRUM, "--omega", "1rad/s", "--workers", "0"], "argument --workers: must be an integer"),
+    ([*SPECTRUM, "--omega", "100"], "argument --omega: 100 has no unit: write 100Hz (f = 100 Hz, "
+                                    "ω = 628 rad/s) or 100rad/s (ω = 100 rad/s, f = 15.9 Hz)"),
+    ([*SPECTRUM, "--omega-range", "1", "1kHz", "5"], "argument --omega-range: 1 has no unit"),
     ([*SIMULATE, "--samples", "2.5"], "argument --samples: expected a plain integer >= 2"),
     ([*SIMULATE, "--samples", "20000000"],
      "argument --samples: output samples: about 2e+07 needed, beyond the limit of 1e+07"),
@@ -317,19 +321,19 @@ def test_omega_list_count_is_bounded(capsys, monkeypatch, no_compute):
     from viscoforce import _limits
 
     monkeypatch.setattr(_limits, "MAX_SAMPLES", 3)
-    assert main([*SPECTRUM, "--omega", "1", "2", "3", "4"]) == 2
+    assert main([*SPECTRUM, "--omega", "1Hz", "2Hz", "3Hz", "4Hz"]) == 2
     assert "frequencies: about 4 needed, beyond the limit of 3" in capsys.readouterr().err
 
 
 @pytest.mark.parametrize(("command", "outputs", "message"), [
     (SIMULATE, ["--plot", "{d}/out.xyz"], "unsupported figure format '.xyz'; supported: "),
-    (SPECTRUM + ["--omega", "1"], ["--plot", "{d}"], "is a directory; give a file name"),
+    (SPECTRUM + ["--omega", "1Hz"], ["--plot", "{d}"], "is a directory; give a file name"),
     (SIMULATE, ["--plot", "{d}/name"], "no file extension to choose the figure format"),
     (SIMULATE, ["--plot", "{d}/x", "--out", "{d}/x"], "the same file as"),
-    (SPECTRUM + ["--omega", "1"], ["--plot", "{d}/x.png", "--out", "{d}/x.png"],
+    (SPECTRUM + ["--omega", "1Hz"], ["--plot", "{d}/x.png", "--out", "{d}/x.png"],
      "the same file as"),
     (SIMULATE, ["--out", "{d}/missing/run.nc"], "missing' does not exist"),
-    (SPECTRUM + ["--omega", "1"], ["--plot", "{d}/missing/bode.png"], "missing' does not exist"),
+    (SPECTRUM + ["--omega", "1Hz"], ["--plot", "{d}/missing/bode.png"], "missing' does not exist"),
     (SIMULATE, ["--out", "{d}/run.csv"], "a netCDF file name must end in .nc"),
     (["static", "--h0", "2nm", "--E", "1e9"], ["--out", "{d}/s.h5"], "must end in .nc"),
     (["static", "--h0", "2nm", "--E", "1e9"], ["--out", "{d}"], "is a directory"),
@@ -391,7 +395,7 @@ def test_spectrum_auto_is_the_library_choice(capsys):
     from viscoforce.experiments.choice import choose_spectrum
 
     assert not hasattr(model, "_choose_spectrum_method")
-    argv = ["spectrum", "--h0", "2nm", "--eta", "0.01nm", "--omega", "100", "--method", "auto"]
+    argv = ["spectrum", "--h0", "2nm", "--eta", "0.01nm", "--omega", "100rad/s", "--method", "auto"]
     out = run_json(capsys, [*argv, "--json"])
     args = _build_parser(_requested(argv))[0].parse_args(argv)
     problem = model.problem_from_args(args, model.material_from_args(args), args.h0 - args.eta)

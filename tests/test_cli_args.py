@@ -240,18 +240,21 @@ def parse_omega(argv):
 def test_omega_range_reads_quantities_and_a_plain_count():
     assert parse_omega(["--omega-range", "1Hz", "1kHz", "5"]).omega_range == (
         exact(TWO_PI), exact(1000 * TWO_PI), 5)
-    assert parse_omega(["--omega-range", "10", "1e5", "1"]).omega_range == (10.0, 1e5, 1)
+    assert parse_omega(["--omega-range", "10rad/s", "1e5rad/s", "1"]).omega_range == (
+        10.0, 1e5, 1)
 
 
 @pytest.mark.parametrize(("argv", "message"), [
-    (["--omega-range", "10", "100", "1Hz"], r"argument --omega-range: expected a plain integer"),
-    (["--omega-range", "10", "100", "2.5"], r"argument --omega-range: expected a plain integer"),
-    (["--omega-range", "10", "100", "0"], r"must be an integer >= 1, got 0"),
-    (["--omega-range", "100", "10", "5"], r"needs 0 < LO < HI, got LO = 100 rad/s, HI = 10 rad/s"),
-    (["--omega-range", "-1", "10", "5"], r"needs 0 < LO < HI"),
-    (["--omega-range", "10", "10", "5"], r"needs 0 < LO < HI"),
-    (["--omega-range", "1nm", "10", "5"], r"expected an angular frequency"),
-    (["--omega-range", "10", "100", str(_limits.MAX_SAMPLES + 1)],
+    (["--omega-range", "10Hz", "100Hz", "1Hz"], r"argument --omega-range: expected a plain integer"),
+    (["--omega-range", "10Hz", "100Hz", "2.5"], r"argument --omega-range: expected a plain integer"),
+    (["--omega-range", "10Hz", "100Hz", "0"], r"must be an integer >= 1, got 0"),
+    (["--omega-range", "100rad/s", "10rad/s", "5"],
+     r"needs 0 < LO < HI, got LO = 100 rad/s, HI = 10 rad/s"),
+    (["--omega-range", "-1Hz", "10Hz", "5"], r"needs 0 < LO < HI"),
+    (["--omega-range", "10Hz", "10Hz", "5"], r"needs 0 < LO < HI"),
+    (["--omega-range", "1nm", "10Hz", "5"], r"expected an angular frequency"),
+    (["--omega-range", "10", "100Hz", "5"], r"argument --omega-range: 10 has no unit: write 10Hz"),
+    (["--omega-range", "10Hz", "100Hz", str(_limits.MAX_SAMPLES + 1)],
      r"frequencies: about 1e\+07 needed, beyond the limit of 1e\+07; refused before computing"),
 ])
 def test_omega_range_errors(argv, message, capsys):
@@ -277,7 +280,8 @@ def test_value_options_lists_single_and_multi_value_options():
     parser = argparse.ArgumentParser()
     add_flags(parser, SYSTEM_FLAGS)
     parser.add_argument("--json", action="store_true")
-    assert value_options(parser) == ({"--R", "--P", "--Pw", "--z0", "--debye-length"}, set())
+    assert value_options(parser) == ({"--radius", "--R", "--pressure", "--P", "--wall-pressure",
+                                      "--Pw", "--z0", "--debye-length"}, set())
 
 
 # --------------------------------------------------------------------------------------------
@@ -285,10 +289,16 @@ def test_value_options_lists_single_and_multi_value_options():
 # --------------------------------------------------------------------------------------------
 
 def test_shared_tables_hold_the_contract_flags_and_paper_defaults():
-    assert [f.flag for f in SYSTEM_FLAGS.flags] == ["--R", "--P", "--Pw", "--z0", "--debye-length"]
+    assert [f.flag for f in SYSTEM_FLAGS.flags] == ["--radius", "--pressure", "--wall-pressure",
+                                                    "--z0", "--debye-length"]
+    # the SPEC's CLI contract spellings keep working beside the long names
+    assert [f.aliases for f in SYSTEM_FLAGS.flags][:3] == [("--R",), ("--P",), ("--Pw",)]
+    assert [f.dest for f in SYSTEM_FLAGS.flags][:3] == ["R", "P", "Pw"]
     assert [f.default for f in SYSTEM_FLAGS.flags] == [PAPER.R, PAPER.P, PAPER.Pw, PAPER.z0,
                                                        PAPER.debye_length]
-    assert [f.flag for f in MATERIAL_FLAGS.flags] == ["--E", "--E0", "--E-inf", "--tau", "--prony"]
+    assert [f.flag for f in MATERIAL_FLAGS.flags] == ["--modulus", "--E0", "--E-inf", "--tau",
+                                                      "--prony"]
+    assert MATERIAL_FLAGS.flags[0].aliases == ("--E",) and MATERIAL_FLAGS.flags[0].dest == "E"
     assert [f.flag for f in NUMERICS_FLAGS.flags] == ["--grid-spacing", "--outer-radius"]
     assert "(default 10um)" in SYSTEM_FLAGS.flags[0].help
     assert "E0=10GPa" in MATERIAL_FLAGS.title

@@ -39,12 +39,16 @@ def test_demo_writes_its_figures_and_recovers_the_truth(tmp_path, capsys, monkey
     """From an empty folder, without --data: the copy inside the package is found."""
     monkeypatch.chdir(tmp_path)
     out = tmp_path / "demo"
-    assert main(["demo", "--out", str(out)]) == 0
-    text = capsys.readouterr().out
+    assert main(["demo", "--out-dir", str(out), "--json"]) == 0
+    captured = capsys.readouterr()
+    text = captured.err  # with --json the narrative goes to stderr, stdout is the JSON object
     assert "chose 1 mode(s)" in text and "tip radius 10 µm assumed" in text
     for name in ("bode_synthetic.png", "loop.png", "bode_real.png"):
         assert (out / name).stat().st_size > 10_000
     report = json.loads((out / "demo.json").read_text())
+    printed = json.loads(captured.out)
+    assert printed["out_dir"] == str(out) and str(out / "demo.json") in printed["written"]
+    assert printed["synthetic"]["E0"] == pytest.approx(report["synthetic"]["E0"])
     for name in ("E0", "E_inf", "tau"):
         value, err = report["synthetic"][name]
         assert abs(value - SYNTHETIC_TRUTH[name]) < 4 * err, name

@@ -22,7 +22,15 @@ from collections.abc import Sequence
 from typing import NamedTuple
 
 from viscoforce import __version__
-from viscoforce.cli._args import check_outputs, normalize_negative_args, value_options
+from viscoforce.cli._args import (
+    UsageError,
+    check_outputs,
+    name_flag_in_error,
+    name_typed_option,
+    normalize_negative_args,
+    typed_flags,
+    value_options,
+)
 from viscoforce.exceptions import (
     AccuracyWarning,
     DataWarning,
@@ -60,7 +68,7 @@ COMMANDS: tuple[Command, ...] = (
     Command("load", "analysis", "instrument file to curves or a modulation spectrum"),
     Command("fit", "fitting", "fit a model to a spectrum, a curve or a map of them"),
     Command("bode", "fitting", "Bode plot of a spectrum, with a fitted model"),
-    Command("view", "view", "interactive viewer of a fitted map: an HTML page or a local server"),
+    Command("view", "view", "interactive viewer of a fitted map: an HTML page or a server"),
     Command("demo", "demo", "load, demodulate, fit and plot the bundled example data"),
 )
 
@@ -76,10 +84,20 @@ def _requested(argv: Sequence[str]) -> Command | None:
     return None
 
 
+class _Parser(argparse.ArgumentParser):
+    """An argparse parser whose errors name the spelling of an option the user typed."""
+
+    #: The command line as given (set by :func:`main`).
+    argv_: Sequence[str] = ()
+
+    def error(self, message: str):  # noqa: D102 - argparse's
+        super().error(name_typed_option(message, self.argv_))
+
+
 def _build_parser(command: Command | None) -> tuple[argparse.ArgumentParser,
                                                     argparse.ArgumentParser | None]:
     """The parser, with the flags of ``command`` only (the other commands are names and help)."""
-    parser = argparse.ArgumentParser(prog="viscoforce", description=_DESCRIPTION)
+    parser = _Parser(prog="viscoforce", description=_DESCRIPTION)
     parser.add_argument("--version", action="version", version=f"viscoforce {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="command", required=True)
     selected = None
@@ -116,7 +134,10 @@ def _run(args: argparse.Namespace) -> int:
             check_outputs(args)
             return int(args.run_(args))
     except (ViscoforceError, OSError) as exc:
-        print(f"viscoforce {name}: error: {_message(exc)}", file=sys.stderr)
+        text = _message(exc)
+        if isinstance(exc, ViscoforceError) and not isinstance(exc, UsageError):
+            text = name_flag_in_error(text, getattr(args, "typed_", {}))
+        print(f"viscoforce {name}: error: {text}", file=sys.stderr)
         return 2
     except Exception as exc:  # a bug: say so, with the traceback for the report
         print(f"viscoforce {name}: internal error ({type(exc).__name__}: {exc}); please report "
@@ -142,6 +163,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     """
     argv = list(sys.argv[1:] if argv is None else argv)
     parser, selected = _build_parser(_requested(argv))
+    for p in (parser, selected):
+        if p is not None:
+            p.argv_ = argv
     single, multi = value_options(parser, *([selected] if selected is not None else []))
     try:
         args, extra = parser.parse_known_args(normalize_negative_args(argv, single, multi))
@@ -149,4 +173,5 @@ def main(argv: Sequence[str] | None = None) -> int:
             (selected or parser).error(f"unrecognized arguments: {' '.join(extra)}")
     except SystemExit as exc:  # argparse printed the help, the version or its error message
         return 0 if exc.code is None else exc.code if isinstance(exc.code, int) else 2
+    args.typed_ = typed_flags(selected, argv) if selected is not None else {}
     return _run(args)

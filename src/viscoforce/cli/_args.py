@@ -19,6 +19,7 @@
 from __future__ import annotations
 
 import argparse
+import math
 import os
 import re
 from collections.abc import Callable, Iterable, Sequence
@@ -39,6 +40,7 @@ __all__ = [
     "NETCDF",
     "NETCDF_OR_CSV",
     "NUMERICS_FLAGS",
+    "PARAMETER_FLAGS",
     "SYSTEM_FLAGS",
     "Flag",
     "FlagGroup",
@@ -51,10 +53,16 @@ __all__ = [
     "check_output_paths",
     "check_outputs",
     "figure_formats",
+    "format_names",
+    "frequency_type",
     "integer_type",
+    "name_flag_in_error",
+    "name_typed_option",
     "normalize_negative_args",
     "quantity_type",
     "real_type",
+    "typed_flags",
+    "unitless_frequency_message",
     "value_options",
 ]
 
@@ -113,6 +121,92 @@ def quantity_type(dimension: str) -> Callable[[str], float]:
     -5e-09
     """
     return _QuantityType(dimension)
+
+
+class _FrequencyType(_QuantityType):
+    """argparse ``type=`` callable returned by :func:`frequency_type`."""
+
+    def __call__(self, text: str) -> float:
+        stripped = text.strip()
+        try:
+            bare = float(stripped)
+        except ValueError:
+            bare = None
+        if bare is not None and math.isfinite(bare):
+            raise argparse.ArgumentTypeError(unitless_frequency_message(stripped, bare))
+        other = "angular_frequency" if self.dimension == "frequency" else "frequency"
+        try:
+            return parse_quantity(text, self.dimension)
+        except UnitError as exc:  # rad/s for a frequency: accepted, converted
+            try:
+                value = parse_quantity(text, other)
+            except (UnitError, ParameterError):
+                raise argparse.ArgumentTypeError(str(exc)) from exc
+            return value / (2 * math.pi) if self.dimension == "frequency" else value
+        except ParameterError as exc:
+            raise argparse.ArgumentTypeError(str(exc)) from exc
+
+    def __repr__(self) -> str:
+        return f"frequency_type({self.dimension!r})"
+
+
+def unitless_frequency_message(text: str, value: float) -> str:
+    """Why a frequency without a unit is refused: its two readings, spelled out.
+
+    Parameters
+    ----------
+    text : str
+        The number as typed (``"100"``).
+    value : float
+        Its value.
+
+    Returns
+    -------
+    str
+        ``"100 has no unit: write 100Hz (f = 100 Hz, ω = 628 rad/s) or 100rad/s (ω = 100 rad/s,
+        f = 15.9 Hz)"``.
+    """
+    two_pi = 2 * math.pi
+
+    def f(x: float) -> str:
+        return format_quantity(x, "frequency")
+
+    def w(x: float) -> str:
+        return format_quantity(x, "angular_frequency")
+
+    return (f"{text} has no unit: write {text}Hz (f = {f(value)}, ω = {w(two_pi * value)}) "
+            f"or {text}rad/s (ω = {w(value)}, f = {f(value / two_pi)})")
+
+
+def frequency_type(dimension: str = "angular_frequency") -> Callable[[str], float]:
+    """Make an argparse ``type=`` callable for a frequency flag: a unit is required.
+
+    A bare number is ambiguous (Hz or rad/s, a factor 2π apart) and refused with both readings
+    spelled out (:func:`unitless_frequency_message`); ``100Hz``, ``1kHz``, ``628rad/s`` are read
+    whatever the flag's own dimension (Hz ↔ rad/s converted).
+
+    Parameters
+    ----------
+    dimension : str
+        ``"angular_frequency"`` (the value in rad/s) or ``"frequency"`` (the value in Hz).
+
+    Returns
+    -------
+    callable
+        ``f(text) -> float`` (rad/s or Hz); bad input raises
+        :class:`argparse.ArgumentTypeError`.
+
+    Examples
+    --------
+    >>> frequency_type()("100rad/s")
+    100.0
+    >>> round(frequency_type("frequency")("628.3185307179587rad/s"), 9)
+    100.0
+    """
+    if dimension not in ("angular_frequency", "frequency"):
+        raise ParameterError(f"dimension must be 'angular_frequency' or 'frequency', got "
+                             f"{dimension!r}")
+    return _FrequencyType(dimension)
 
 
 _INTEGER_RE = re.compile(r"[+-]?[0-9]+")
@@ -230,7 +324,7 @@ class OmegaList(argparse.Action):
 
 
 class OmegaRange(argparse.Action):
-    """``--omega-range LO HI N``: quantities 0 < LO < HI and a plain integer 1 <= N <= MAX_SAMPLES.
+    """``--omega-range LO HI N``: frequencies 0 < LO < HI (with units) and an integer 1 <= N <= MAX_SAMPLES.
 
     Stores the tuple ``(lo, hi, n)`` [rad/s, rad/s, 1]; the count is checked before any array is
     built.
@@ -239,7 +333,7 @@ class OmegaRange(argparse.Action):
     def __call__(self, parser: argparse.ArgumentParser, namespace: argparse.Namespace,
                  values: Any, option_string: str | None = None) -> None:
         lo_text, hi_text, n_text = values
-        omega = quantity_type("angular_frequency")
+        omega = frequency_type("angular_frequency")
         try:
             lo, hi = omega(lo_text), omega(hi_text)
             n = integer_type(1)(n_text)
@@ -370,6 +464,9 @@ class Flag(NamedTuple):
         Whether the flag must be given.
     dest : str or None
         Attribute name in the namespace (default: argparse's, ``debye_length``).
+    aliases : tuple of str
+        Other spellings that keep working (``("--R",)`` beside ``--radius``: the SPEC's CLI
+        contract names are never removed).
     """
 
     flag: str
@@ -379,6 +476,7 @@ class Flag(NamedTuple):
     help: str
     required: bool = False
     dest: str | None = None
+    aliases: tuple[str, ...] = ()
 
 
 @dataclass(frozen=True)
@@ -408,8 +506,8 @@ def add_flags(parser: argparse.ArgumentParser, group: FlagGroup) -> None:
     target = parser if group.title is None else parser.add_argument_group(group.title)
     for f in group.flags:
         extra = {} if f.dest is None else {"dest": f.dest}
-        target.add_argument(f.flag, type=_type(f.dimension), default=f.default, metavar=f.metavar,
-                            help=f.help, required=f.required, **extra)
+        target.add_argument(f.flag, *f.aliases, type=_type(f.dimension), default=f.default,
+                            metavar=f.metavar, help=f.help, required=f.required, **extra)
 
 
 def _paper(value: float, dimension: str) -> str:
@@ -418,12 +516,14 @@ def _paper(value: float, dimension: str) -> str:
 
 #: System flags of every physics command (defaults: the paper's values, :data:`PAPER`).
 SYSTEM_FLAGS = FlagGroup("system (defaults: the paper's values)", (
-    Flag("--R", "length", PAPER.R, "LENGTH",
-         f"sphere radius R (default {_paper(PAPER.R, 'length')})"),
-    Flag("--P", "pressure", PAPER.P, "PRESSURE",
-         f"double-layer pressure scale P (default {_paper(PAPER.P, 'pressure')})"),
-    Flag("--Pw", "pressure", PAPER.Pw, "PRESSURE",
-         f"soft-wall pressure Pw (default {_paper(PAPER.Pw, 'pressure')})"),
+    Flag("--radius", "length", PAPER.R, "LENGTH",
+         f"sphere radius R (default {_paper(PAPER.R, 'length')})", dest="R", aliases=("--R",)),
+    Flag("--pressure", "pressure", PAPER.P, "PRESSURE",
+         f"double-layer pressure scale P (default {_paper(PAPER.P, 'pressure')})", dest="P",
+         aliases=("--P",)),
+    Flag("--wall-pressure", "pressure", PAPER.Pw, "PRESSURE",
+         f"soft-wall pressure Pw (default {_paper(PAPER.Pw, 'pressure')})", dest="Pw",
+         aliases=("--Pw",)),
     Flag("--z0", "length", PAPER.z0, "LENGTH",
          f"soft-wall length z0 (default {_paper(PAPER.z0, 'length')})"),
     Flag("--debye-length", "length", PAPER.debye_length, "LENGTH",
@@ -434,8 +534,9 @@ SYSTEM_FLAGS = FlagGroup("system (defaults: the paper's values)", (
 MATERIAL_FLAGS = FlagGroup(
     f"material (default: the paper's E0={_paper(PAPER.E0, 'pressure')}, "
     f"E_inf={_paper(PAPER.E_inf, 'pressure')}, tau={_paper(PAPER.tau, 'time')})", (
-        Flag("--E", "pressure", None, "PRESSURE",
-             "purely elastic modulus (paper convention 2/E = sum (1-nu^2)/E_i)"),
+        Flag("--modulus", "pressure", None, "PRESSURE",
+             "purely elastic modulus E (paper convention 2/E = sum (1-nu^2)/E_i)", dest="E",
+             aliases=("--E",)),
         Flag("--E0", "pressure", None, "PRESSURE",
              "instantaneous modulus of the standard linear solid"),
         Flag("--E-inf", "pressure", None, "PRESSURE",
@@ -479,12 +580,15 @@ class Output(NamedTuple):
         requires of the path).
     metavar, help : str
         As shown by ``--help``.
+    aliases : tuple of str
+        Other spellings that keep working (``demo --out`` beside ``--out-dir``).
     """
 
     flag: str
     kind: str
     metavar: str
     help: str
+    aliases: tuple[str, ...] = ()
 
 
 def add_outputs(parser: argparse.ArgumentParser, outputs: Sequence[Output]) -> None:
@@ -498,8 +602,16 @@ def add_outputs(parser: argparse.ArgumentParser, outputs: Sequence[Output]) -> N
         The flags (default None: not written).
     """
     for o in outputs:
-        parser.add_argument(o.flag, default=None, metavar=o.metavar, help=o.help)
+        parser.add_argument(o.flag, *o.aliases, default=None, metavar=o.metavar, help=o.help,
+                            dest=_dest(o.flag))
     parser.set_defaults(outputs_=tuple(outputs))
+
+
+def format_names() -> str:
+    """The instrument formats ``--format`` takes, from the registry (``"jpk, csv-curves, ..."``)."""
+    from viscoforce.io.instruments import FORMATS
+
+    return ", ".join(f.name for f in FORMATS)
 
 
 def figure_formats() -> tuple[str, ...]:
@@ -590,17 +702,22 @@ def check_outputs(args: argparse.Namespace) -> None:
         Parsed arguments (without declared outputs nothing is checked).
     """
     outputs: Sequence[Output] = getattr(args, "outputs_", ())
-    check_output_paths((o.flag, getattr(args, _dest(o.flag)), o.kind) for o in outputs)
+    typed = getattr(args, "typed_", {})
+
+    def shown(o: Output) -> str:  # the spelling the user typed
+        return typed.get(_dest(o.flag), (o.flag,))[0]
+
+    check_output_paths((shown(o), getattr(args, _dest(o.flag)), o.kind) for o in outputs)
     written = {_dest(o.flag) for o in outputs}
-    inputs = [text for key, value in vars(args).items() if key not in written
-              for text in _strings(value)]
+    inputs = [text for key, value in vars(args).items()
+              if key not in written and not key.endswith("_") for text in _strings(value)]
     for o in outputs:
         target = getattr(args, _dest(o.flag))
         if target is None or o.kind == DIRECTORY or not Path(target).exists():
             continue
         for source in inputs:
             if same_file(target, source):
-                raise UsageError(f"{o.flag} {target} is an input of this command ({source}): "
+                raise UsageError(f"{shown(o)} {target} is an input of this command ({source}): "
                                  "writing it would destroy the data; give another file name")
 
 
@@ -611,3 +728,113 @@ def _strings(value: object) -> list[str]:
     if isinstance(value, list | tuple):
         return [s for v in value for s in _strings(v)]
     return []
+
+
+# ── the flag the user typed ──────────────────────────────────────────────────────────────────────
+
+#: Library parameter names that are not the name of the flag that sets them: name → (the dests
+#: that may have set it, in order of preference; the words shown instead of the name).
+PARAMETER_FLAGS: dict[str, tuple[tuple[str, ...], str]] = {
+    "deepest_position": (("h0", "to", "from_"), "the deepest position"),
+    "position": (("h0",), "the position"),
+    "radius": (("R",), "the radius"),
+    "rise_time": (("duration",), "the rise time"),
+    "n_jobs": (("jobs",), "the number of workers"),
+    "reference_frequency": (("reference_frequency",), "the reference frequency"),
+}
+
+_ALTERNATIVES_RE = re.compile(r"argument ((?:--?[\w-]+/)+--?[\w-]+)")
+_LEADING_NAME_RE = re.compile(r"([A-Za-z_][A-Za-z0-9_]*)(?=[ \[(:]|$)")
+
+
+def typed_flags(parser: argparse.ArgumentParser, argv: Sequence[str]
+                ) -> dict[str, tuple[str, str | None]]:
+    """Which spelling of each option the user typed, and its value as typed.
+
+    Parameters
+    ----------
+    parser : argparse.ArgumentParser
+        The command's parser (its actions give the option strings and dests).
+    argv : sequence of str
+        The tokens as given (before :func:`normalize_negative_args`).
+
+    Returns
+    -------
+    dict
+        dest → (option string as typed, value text or None for a flag without one value); the
+        last occurrence wins, as in argparse.
+    """
+    by_option = {o: a for a in parser._actions for o in a.option_strings}
+    tokens = list(argv)
+    out: dict[str, tuple[str, str | None]] = {}
+    for i, token in enumerate(tokens):
+        if token == "--":
+            break
+        name, eq, value = token.partition("=")
+        action = by_option.get(name)
+        if action is None:
+            continue
+        if not eq:
+            value = tokens[i + 1] if action.nargs is None and i + 1 < len(tokens) else None
+        out[action.dest] = (name, value if action.nargs is None else None)
+    return out
+
+
+def name_typed_option(message: str, argv: Sequence[str]) -> str:
+    """Rewrite argparse's ``argument --radius/--R: ...`` as ``argument --R: ...`` if ``--R`` was typed.
+
+    Parameters
+    ----------
+    message : str
+        An argparse error message.
+    argv : sequence of str
+        The tokens as given.
+
+    Returns
+    -------
+    str
+        The message with each ``A/B`` option list reduced to the spelling found in ``argv``
+        (unchanged where none of them is).
+    """
+    typed = {t.partition("=")[0] for t in argv}
+
+    def pick(match: re.Match[str]) -> str:
+        options = match[1].split("/")
+        chosen = next((o for o in options if o in typed), None)
+        return f"argument {chosen}" if chosen else match[0]
+
+    return _ALTERNATIVES_RE.sub(pick, message)
+
+
+def name_flag_in_error(message: str, typed: dict[str, tuple[str, str | None]]) -> str:
+    """A library error about a parameter, told in terms of the flag the user typed.
+
+    ``deepest_position must be >= -0.1 R ..., got -0.005`` after ``--h0 -5mm`` becomes
+    ``--h0 -5mm: the deepest position must be >= ...``; ``radius (R) must be > 0`` after
+    ``--radius 0`` becomes ``--radius 0: radius (R) must be > 0``. A message whose leading name
+    no typed flag sets is returned unchanged.
+
+    Parameters
+    ----------
+    message : str
+        The error text.
+    typed : dict
+        :func:`typed_flags` of the command line.
+
+    Returns
+    -------
+    str
+        The message, prefixed with ``FLAG VALUE:`` when a typed flag set the parameter named.
+    """
+    match = _LEADING_NAME_RE.match(message)
+    if match is None:
+        return message
+    name = match[1]
+    dests, words = PARAMETER_FLAGS.get(name, ((name,), None))
+    dest = next((d for d in dests if d in typed), None)
+    if dest is None:
+        return message
+    option, value = typed[dest]
+    if words is not None:
+        message = words + message[match.end():]
+    return f"{option}{'' if value is None else ' ' + value}: {message}"

@@ -18,6 +18,8 @@ from viscoforce.cli._args import (
     UsageError,
     add_flags,
     add_outputs,
+    format_names,
+    frequency_type,
     quantity_type,
 )
 from viscoforce.cli._output import print_json, print_written
@@ -25,27 +27,37 @@ from viscoforce.cli._output import print_json, print_written
 __all__ = ["SUBCOMMANDS", "open_streamable", "phase_lag_type", "streamed_spectrum"]
 
 _PAIR_RE = re.compile(r"^\s*(?P<f>[^=:]+?)\s*[=:]\s*(?P<deg>[-+0-9.eE]+)\s*$")
-_FREQUENCY = quantity_type("frequency")
+_FREQUENCY = frequency_type("frequency")
 
 
 def phase_lag_type(text: str) -> float | tuple[float, float]:
     """``--phase-lag`` value: degrees (``14``) or a frequency=degrees pair (``300Hz=14``).
 
-    Returns a float (one lag for every frequency) or a (frequency [Hz], degrees) pair.
+    Returns a float (one lag for every frequency) or a (frequency [Hz], degrees) pair. The
+    frequency needs its unit (``300=14`` is refused with its two readings).
     """
     match = _PAIR_RE.match(text)
     try:
         if match is None:
             return float(text)
-        return (_FREQUENCY(match["f"]), float(match["deg"]))
-    except (ValueError, argparse.ArgumentTypeError):
+        frequency = _FREQUENCY(match["f"])
+    except argparse.ArgumentTypeError as exc:
+        raise argparse.ArgumentTypeError(f"{text}: the frequency {exc}") from None
+    except ValueError:
+        raise argparse.ArgumentTypeError(
+            f"expected degrees (e.g. 14) or FREQUENCY=DEGREES pairs (e.g. 300Hz=14), got "
+            f"{text!r}") from None
+    try:
+        return (frequency, float(match["deg"]))
+    except ValueError:
         raise argparse.ArgumentTypeError(
             f"expected degrees (e.g. 14) or FREQUENCY=DEGREES pairs (e.g. 300Hz=14), got "
             f"{text!r}") from None
 
 
 LOAD_FLAGS = FlagGroup(None, (
-    Flag("--format", None, None, "NAME", "file format (default: detected from the content)"),
+    Flag("--format", None, None, "NAME",
+         f"file format: {format_names()} (default: detected from the content)"),
     Flag("--spring-constant", "stiffness", None, "STIFFNESS",
          "cantilever spring constant, e.g. 0.1N/m (for files without calibration)"),
     Flag("--sensitivity", "sensitivity", None, "SENSITIVITY",

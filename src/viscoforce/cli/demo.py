@@ -54,11 +54,15 @@ def find_examples(given: str | None = None) -> Path:
 
 def add_demo(parser: argparse.ArgumentParser) -> None:
     """Flags of ``viscoforce demo``."""
-    add_outputs(parser, [Output("--out", DIRECTORY, "DIR",
-                                "folder for the figures and results (default viscoforce-demo)")])
+    add_outputs(parser, [Output("--out-dir", DIRECTORY, "DIR",
+                                "folder for the figures and results (default viscoforce-demo; "
+                                "--out DIR: the old spelling)", aliases=("--out",))])
     parser.add_argument("--data", default=None, metavar="DIR",
                         help="a folder holding the example files (default: the copy shipped "
                              "inside viscoforce)")
+    parser.add_argument("--json", action="store_true",
+                        help="print one JSON object (SI units): the numbers of demo.json and the "
+                             "files written (the narrative goes to stderr)")
 
 
 def _show(name: str, value: float, err: float, unit: str, truth: float | None = None) -> str:
@@ -215,14 +219,26 @@ def _real(folder: Path, out: Path, report: dict[str, Any]) -> None:
 
 def run_demo(args: argparse.Namespace) -> int:
     """Load, demodulate, fit and plot a synthetic and a real file."""
+    import contextlib
+    import sys
+
+    from viscoforce.cli._output import print_json
+
     folder = find_examples(args.data)
-    out = Path(args.out or "viscoforce-demo")
+    out = Path(args.out_dir or "viscoforce-demo")
     out.mkdir(parents=True, exist_ok=True)
     report: dict[str, Any] = {}
-    fit, problem, _ = _synthetic(folder, out, report)
-    _loop(fit, problem, out, report)
-    _real(folder, out, report)
+    # with --json, stdout holds the JSON object alone: the narrative goes to stderr
+    with contextlib.redirect_stdout(sys.stderr) if args.json else contextlib.nullcontext():
+        fit, problem, _ = _synthetic(folder, out, report)
+        _loop(fit, problem, out, report)
+        _real(folder, out, report)
     write_text(out / "demo.json", json.dumps(report, indent=2) + "\n")
+    written = [str(out / name) for name in ("bode_synthetic.png", "loop.png", "bode_real.png",
+                                            "demo.json")]
+    if args.json:
+        print_json({**report, "out_dir": str(out), "written": written})
+        return 0
     print(f"wrote {out}/bode_synthetic.png, loop.png, bode_real.png, demo.json")
     return 0
 

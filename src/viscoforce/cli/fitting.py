@@ -22,6 +22,8 @@ from viscoforce.cli._args import (
     UsageError,
     add_flags,
     add_outputs,
+    format_names,
+    frequency_type,
     integer_type,
     real_type,
 )
@@ -72,8 +74,8 @@ FIT_FLAGS = FlagGroup("model", (
     Flag("--material", None, None, "sls|prony|power-law|structural",
          "material of the contact model (default sls; --model auto on measured data: compare "
          "only this family)"),
-    Flag("--reference-frequency", "frequency", None, "FREQ",
-         "contact --material structural: f_ref of E_ref (default 1Hz)"),
+    Flag("--reference-frequency", frequency_type("frequency"), None, "FREQ",
+         "contact --material structural: f_ref of E_ref, with its unit (default 1Hz)"),
     Flag("--weights", choice_type(*_WEIGHTS, what="--weights"), None, "stderr|relative",
          "fit weights: the data's stderr (default when present) or relative 1/|k*|"),
     Flag("--drag", "drag", None, "DRAG", "hydrodynamic drag B of the contact model (i*omega*B)"),
@@ -97,10 +99,10 @@ def _tip_type(text: str):
 #: The system flags of fit and bode: --R without a default (measured data need the tip; the
 #: theory's models take the paper's 10 µm when it is not given), --tip and --poisson.
 FIT_SYSTEM_FLAGS = FlagGroup(SYSTEM_FLAGS.title, (
-    Flag("--R", "length", None, "LENGTH",
+    Flag("--radius", "length", None, "LENGTH",
          "the paper's sphere radius R (paraboloidal profile; svda/exact/step default 10 µm; "
-         "measured data: give --R or --tip)"),
-    *(f for f in SYSTEM_FLAGS.flags if f.flag != "--R"),
+         "measured data: give --radius or --tip)", dest="R", aliases=("--R",)),
+    *(f for f in SYSTEM_FLAGS.flags if f.dest != "R"),
     Flag("--tip", _tip_type, None, "SHAPE:SIZE",
          "tip of the contact and hertz models: sphere:R | paraboloid:R | cone:HALF_ANGLE | "
          "pyramid:HALF_ANGLE (four-sided, Bilodeau) | flat:RADIUS (angles in degrees; default "
@@ -134,10 +136,11 @@ def _add_fit_flags(parser: argparse.ArgumentParser, *, required: bool, batch: bo
         parser.add_argument("data", metavar="DATA",
                             help="spectrum or curves: an instrument file, a netCDF file or a CSV")
     parser.add_argument("--format", default=None, metavar="NAME",
-                        help="instrument file format (default: detected)")
-    parser.add_argument("--model", choices=_MODELS, required=required, default=None,
+                        help=f"instrument file format: {format_names()} (default: detected)")
+    parser.add_argument("--model", *(() if required else ("--fit",)), choices=_MODELS,
+                        required=required, default=None, dest="model",
                         help="model of the SPEC table" if required else
-                             "fit this model and draw it over the data")
+                             "fit this model and draw it over the data (--fit: the same)")
     add_flags(parser, FIT_FLAGS)
     parser.add_argument("--no-newtonian", action="store_true",
                         help="ting --material structural: Ting's pure power law (no mu)")
@@ -168,14 +171,45 @@ def add_fit(parser: argparse.ArgumentParser) -> None:
                         help="progress bar of map fits (default: when stderr is a terminal)")
 
 
+class _BodeOut(argparse.Action):
+    """bode ``--out``: a data file (.nc, .csv); an image name is the old spelling of ``--plot``."""
+
+    def __call__(self, parser: argparse.ArgumentParser, namespace: argparse.Namespace,
+                 values: Any, option_string: str | None = None) -> None:
+        from pathlib import Path
+
+        if Path(values).suffix.lower() in (".nc", ".csv"):
+            namespace.out = values
+        else:  # --out bode.png (before --plot existed): the figure
+            namespace.out_figure_ = values
+            if namespace.plot is None:
+                namespace.plot = values
+
+
+#: bode's outputs: the figure, and the data (``--out`` is parsed by :class:`_BodeOut`).
+_BODE_OUTPUTS = (
+    Output("--plot", FIGURE, "FILE.png", "write the Bode plot"),
+    Output("--out", NETCDF_OR_CSV, "FILE.nc|FILE.csv",
+           "write the data: the fit result with --model (netCDF, or a CSV table), else the "
+           "spectrum drawn (netCDF); an image name (--out bode.png) still means --plot "
+           "(deprecated spelling)"))
+
+
 def add_bode(parser: argparse.ArgumentParser) -> None:
     """Flags of ``viscoforce bode``."""
     _add_fit_flags(parser, required=False)
-    parser.set_defaults(model=None)
-    parser.add_argument("--modulus", action="store_true",
+    parser.set_defaults(model=None, out_figure_=None)
+    parser.add_argument("--moduli", "--modulus", action="store_true", dest="modulus",
                         help="add a panel of Young's storage and loss moduli (needs --tip, or a "
-                             "spectrum loaded with --tip)")
-    add_outputs(parser, [Output("--out", FIGURE, "FILE.png", "the Bode plot")])
+                             "spectrum loaded with --tip; --modulus: the old spelling)")
+    plot, out = _BODE_OUTPUTS
+    add_outputs(parser, [plot])
+    parser.add_argument(out.flag, action=_BodeOut, default=None, metavar=out.metavar,
+                        help=out.help)
+    parser.set_defaults(outputs_=_BODE_OUTPUTS)
+    parser.add_argument("--json", action="store_true",
+                        help="print one JSON object (SI units): the files written, the spectrum "
+                             "(omega, stiffness, phase_deg) and the fit (as fit --json)")
 
 
 # ── data ────────────────────────────────────────────────────────────────────────────────────────
@@ -967,8 +1001,14 @@ def _plot(ds, kind: str, result, args: argparse.Namespace) -> None:
 
 def run_bode(args: argparse.Namespace) -> int:
     """Bode plot of a spectrum (one curve of a map with ``--curve``), with a fit if asked."""
-    if not args.out:
-        raise UsageError("bode needs --out FILE.png")
+    if args.out_figure_ is not None and args.plot != args.out_figure_:
+        raise UsageError(f"--out {args.out_figure_} is the old spelling of --plot: give one "
+                         "figure name")
+    if not args.plot and not args.out:
+        raise UsageError("bode needs --plot FILE.png (the figure) or --out FILE.nc (the data)")
+    if args.out and args.out.lower().endswith(".csv") and args.model is None:
+        raise UsageError(f"--out {args.out}: a CSV table holds a fit result (give --model); "
+                         "the spectrum is written as netCDF (.nc)")
     ds = read_data(args.data, args.format)
     kind = _kind(ds)
     if kind != "spectrum":
@@ -992,9 +1032,22 @@ def run_bode(args: argparse.Namespace) -> int:
 
         ds = add_complex_modulus(ds, args.tip, poisson=args.poisson)
     measured_data = str(ds.attrs.get("source", "simulation")) != "simulation"
-    _save_figure(bode_plot(ds, fit=fit, modulus=args.modulus,
-                           frequency_unit="Hz" if measured_data else "rad/s"), args.out)
-    print_written(args.out)
+    if args.out and args.out.lower().endswith(".csv"):
+        write_table(fit, args.out)
+    elif args.out:
+        write_netcdf(ds if fit is None else fit, args.out)
+    if args.plot:
+        _save_figure(bode_plot(ds, fit=fit, modulus=args.modulus,
+                               frequency_unit="Hz" if measured_data else "rad/s"), args.plot)
+    if args.json:
+        print_json({"plot": args.plot, "out": args.out,
+                    "omega": ds["omega"].values, "stiffness": ds["stiffness"].values,
+                    "phase_deg": ds["phase"].values,
+                    "fit": None if fit is None else _single_json(fit)})
+        return 0
+    if fit is not None:
+        _print_single(_single_json(fit))
+    print_written(args.plot, args.out)
     return 0
 
 

@@ -30,8 +30,8 @@ from viscoforce.cli._args import (
     UsageError,
     add_flags,
     add_outputs,
+    frequency_type,
     integer_type,
-    quantity_type,
     real_type,
 )
 from viscoforce.cli._output import print_json, print_table, print_written
@@ -107,8 +107,9 @@ def _save_figure(handle, path: str) -> None:
 STATIC_FLAGS = FlagGroup(None, (
     Flag("--h0", "length", None, "LENGTH",
          "apex position h0 (may be negative, e.g. --h0=-5nm or --h0 -5nm)", required=True),
-    Flag("--E", "pressure", None, "PRESSURE",
-         "elastic modulus E in the paper's convention (2/E = sum (1-nu^2)/E_i)", required=True),
+    Flag("--modulus", "pressure", None, "PRESSURE",
+         "elastic modulus E in the paper's convention (2/E = sum (1-nu^2)/E_i)", required=True,
+         dest="E", aliases=("--E",)),
     Flag("--contact-threshold", "length", None, "LENGTH",
          "gap below which surfaces count as in contact (default 1/kappa)"),
 ))
@@ -168,8 +169,9 @@ DRIVE_FLAGS = FlagGroup("drive", (
     Flag("--speed", "speed", None, "SPEED", "drive speed (ramp, triangle), e.g. 5um/s"),
     Flag("--h0", "length", None, "LENGTH", "sine mean position"),
     Flag("--eta", "length", None, "LENGTH", "sine amplitude"),
-    Flag("--omega", "angular_frequency", None, "FREQ",
-         "sine angular frequency (rad/s, or e.g. 100Hz)"),
+    Flag("--omega", frequency_type(), None, "FREQ",
+         "sine frequency with its unit: 100Hz (f) or 628rad/s (omega); a bare number is "
+         "refused"),
     Flag("--periods", real_type(1.0), 10.0, "N", "sine periods, a finite number >= 1 (default 10)"),
     Flag("--trace", None, None, "FILE.csv",
          "measured trace: CSV with 'time (s)' and 'position (nm)' columns"),
@@ -317,19 +319,22 @@ SPECTRUM_FLAGS = FlagGroup(None, (
 TIME_DOMAIN_FLAGS = FlagGroup("time-domain method", (
     Flag("--periods", integer_type(1), 4, "N",
          "demodulated periods after settling (default 4)"),
-    Flag("--jobs", integer_type(1), 1, "N", "worker processes (default 1)"),
+    Flag("--workers", integer_type(1), 1, "N", "worker processes (default 1)", dest="jobs",
+         aliases=("--jobs",)),
 ))
 
 
 def add_spectrum(parser: argparse.ArgumentParser) -> None:
     """Flags of ``viscoforce spectrum``."""
     add_flags(parser, SPECTRUM_FLAGS)
-    parser.add_argument("--omega", type=quantity_type("angular_frequency"), nargs="+",
+    parser.add_argument("--omega", type=frequency_type(), nargs="+",
                         action=OmegaList, default=None, metavar="FREQ",
-                        help="angular frequencies (rad/s, or with Hz/kHz)")
+                        help="frequencies with their unit: 100Hz (f), 628rad/s (omega), 1kHz; a "
+                             "bare number is refused")
     parser.add_argument("--omega-range", nargs=3, action=OmegaRange, default=None,
                         metavar=("LO", "HI", "N"),
-                        help="N log-spaced frequencies from LO to HI (N a plain integer >= 1)")
+                        help="N log-spaced frequencies from LO to HI (LO, HI with units, e.g. "
+                             "1Hz 1kHz; N a plain integer >= 1)")
     parser.add_argument("--method", default="linear",
                         choices=["linear", "time-domain", "svda", "svda-ode", "contact", "auto"],
                         help="exact frequency-domain (default), time-domain simulation + "
