@@ -4,11 +4,13 @@ from __future__ import annotations
 
 import importlib.util
 import json
+import shlex
 
 import pytest
 
 from viscoforce.cli import main
 from viscoforce.cli._args import UsageError
+from viscoforce.cli._examples import EXAMPLES as HELP_EXAMPLES
 from viscoforce.cli.demo import REAL, SYNTHETIC, SYNTHETIC_TRUTH, find_examples
 from viscoforce.data import example_path
 
@@ -39,7 +41,9 @@ def test_demo_writes_its_figures_and_recovers_the_truth(tmp_path, capsys, monkey
     """From an empty folder, without --data: the copy inside the package is found."""
     monkeypatch.chdir(tmp_path)
     out = tmp_path / "demo"
-    assert main(["demo", "--out-dir", str(out), "--json"]) == 0
+    example = HELP_EXAMPLES["demo"][1]  # the --help example, verbatim
+    assert example == "viscoforce demo --out-dir demo --json"
+    assert main(shlex.split(example)[1:]) == 0
     captured = capsys.readouterr()
     text = captured.err  # with --json the narrative goes to stderr, stdout is the JSON object
     assert "chose 1 mode(s)" in text and "tip radius 10 µm assumed" in text
@@ -47,7 +51,7 @@ def test_demo_writes_its_figures_and_recovers_the_truth(tmp_path, capsys, monkey
         assert (out / name).stat().st_size > 10_000
     report = json.loads((out / "demo.json").read_text())
     printed = json.loads(captured.out)
-    assert printed["out_dir"] == str(out) and str(out / "demo.json") in printed["written"]
+    assert printed["out_dir"] == "demo" and "demo/demo.json" in printed["written"]
     assert printed["synthetic"]["E0"] == pytest.approx(report["synthetic"]["E0"])
     for name in ("E0", "E_inf", "tau"):
         value, err = report["synthetic"][name]

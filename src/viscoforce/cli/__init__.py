@@ -31,6 +31,7 @@ from viscoforce.cli._args import (
     typed_flags,
     value_options,
 )
+from viscoforce.cli._examples import epilog
 from viscoforce.exceptions import (
     AccuracyWarning,
     DataWarning,
@@ -102,7 +103,8 @@ def _build_parser(command: Command | None) -> tuple[argparse.ArgumentParser,
     sub = parser.add_subparsers(dest="command", metavar="command", required=True)
     selected = None
     for c in COMMANDS:
-        p = sub.add_parser(c.name, help=c.help, description=c.help)
+        p = sub.add_parser(c.name, help=c.help, description=c.help, epilog=epilog(c.name),
+                           formatter_class=argparse.RawDescriptionHelpFormatter)
         if c is command:
             module = importlib.import_module(f"{__name__}.{c.module}")
             add_arguments, run = module.SUBCOMMANDS[c.name]
