@@ -25,6 +25,7 @@ import numpy as np
 import pytest
 import xarray as xr
 
+from tests._bench import run_main
 from tests.test_modulation import synthetic
 from viscoforce.exceptions import ParameterError
 from viscoforce.experiments import modulation
@@ -265,6 +266,5 @@ def test_split_half_benchmark_script_runs(tmp_path):
     assert report["frequencies_hz"] == [1.0, 3.0, 10.0, 30.0, 100.0, 300.0]
     assert all(0.5 <= z <= 2.0 for z in report["rms_z"]["new"])
     assert all(z > 1.8 for z in report["rms_z"]["white"])
-    missing = subprocess.run([sys.executable, str(script), "--path", str(tmp_path / "none")],
-                             capture_output=True, text=True, check=False)
-    assert missing.returncode == 2 and "no file" in missing.stderr
+    code, _, err = run_main("split_half.py", "--path", str(tmp_path / "none"))  # in-process
+    assert code == 2 and "no file" in err

@@ -3,8 +3,8 @@
 from __future__ import annotations
 
 import dataclasses
+import importlib.util
 import json
-import os
 import subprocess
 import sys
 
@@ -297,12 +297,15 @@ def test_force_time_plot_of_a_ramp():
 # ── notebooks/paper_figures.py ──────────────────────────────────────────────────────────────────
 
 
-def test_paper_figures_quick(tmp_path):
-    script = REPO / "notebooks" / "paper_figures.py"
-    env = {**os.environ, "MPLBACKEND": "Agg"}
-    done = subprocess.run([sys.executable, str(script), "--quick", "--out", str(tmp_path)],
-                          capture_output=True, text=True, env=env, check=False)
-    assert done.returncode == 0, done.stderr
+def test_paper_figures_quick(tmp_path, capsys):
+    """``python notebooks/paper_figures.py --quick``: its main() in this process (the script's
+    ``__main__`` block is ``sys.exit(main())``), without an interpreter start and imports."""
+    spec = importlib.util.spec_from_file_location("_paper_figures_script",
+                                                  REPO / "notebooks" / "paper_figures.py")
+    script = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(script)
+    assert script.main(["--quick", "--out", str(tmp_path)]) == 0
+    stdout = capsys.readouterr().out
     for name in ("fig1", "fig2", "fig5", "fig6", "fig7", "fig8"):
         png = (tmp_path / f"{name}.png").read_bytes()
         assert png[:8] == b"\x89PNG\r\n\x1a\n" and len(png) > 20_000
@@ -317,7 +320,7 @@ def test_paper_figures_quick(tmp_path):
     assert peaks == sorted(peaks)  # faster drives give larger peak forces (paper Fig. 5)
     works = [r["hysteresis_work_J"] for r in results["fig8"]["runs"]]
     assert all(w > 0 for w in works)
-    assert "Fig.1 tau=1 ms" in done.stdout
+    assert "Fig.1 tau=1 ms" in stdout
 
 
 # ── inputs are checked against the schema ───────────────────────────────────────────────────────
