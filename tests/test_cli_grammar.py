@@ -162,3 +162,25 @@ def test_every_command_has_json(capsys):
     for command in COMMANDS:
         assert main([command.name, "--help"]) == 0
         assert "--json" in capsys.readouterr().out, command.name
+
+
+# ── one formatter ────────────────────────────────────────────────────────────────────────────────
+
+def test_numbers_print_with_units_and_three_significant_digits():
+    from viscoforce.cli._output import format_estimate, format_value
+
+    assert format_value(3691245895633.2104, "Pa") == "3.69e+03 GPa"
+    assert format_estimate(4.97e9, 37.3e6, "Pa") == "4.97 GPa ± 37.3 MPa"
+    assert format_estimate(5.0474e-3, 73.5e-6, "s") == "5.05 ms ± 73.5 µs"
+    assert format_estimate(0.575, float("nan"), "1") == "0.575 (no stderr)"
+    assert format_value(2.21, "Pa s") == "2.21 Pa s" and format_value(None, "Pa") == "n/a"
+
+
+def test_fit_summaries_use_the_formatter(capsys, tmp_path):
+    assert main(["fit", SPECTRUM_CSV, "--model", "exact", "--h0=-5nm"]) == 0
+    text = capsys.readouterr().out
+    assert "E0       = 4.94 GPa ± 51 MPa" in text and "tau      = 5.05 ms ± 73.5 µs" in text
+    assert main(["fit", str(example_path("sls_spectrum_map.nc")), "--model", "exact",
+                 "--h0=-5nm"]) == 0
+    text = capsys.readouterr().out
+    assert "E0       median 4.26 GPa, IQR 3.57 GPa .. 5.13 GPa" in text

@@ -1,4 +1,9 @@
-"""What the commands print: strict JSON (SI units) and aligned human-readable tables."""
+"""What the commands print: strict JSON (SI units), and numbers for humans with their units.
+
+Every number a command prints for humans goes through :func:`format_value` (a value with a
+prefixed unit, 3 significant digits) or :func:`format_estimate` (``4.97 GPa ± 37.3 MPa``), so the
+fit, map, batch and demo summaries read alike.
+"""
 
 from __future__ import annotations
 
@@ -9,7 +14,8 @@ from typing import Any
 
 from viscoforce.units import format_quantity
 
-__all__ = ["json_safe", "print_json", "print_table", "print_written"]
+__all__ = ["DIGITS", "format_estimate", "format_value", "json_safe", "print_json", "print_table",
+           "print_written"]
 
 
 def json_safe(obj: Any) -> Any:
@@ -68,3 +74,52 @@ def print_written(*paths: str | None) -> None:
     for path in paths:
         if path:
             print(f"wrote {path}")
+
+
+#: Significant digits of every number printed for humans.
+DIGITS = 3
+
+#: Dataset unit strings (``attrs["units"]``) → the dimension of :mod:`viscoforce.units`.
+_UNIT_DIMENSIONS = {"Pa": "pressure", "s": "time", "N": "force", "N/m": "stiffness", "m": "length",
+                    "N s/m": "drag", "N*s/m": "drag", "Hz": "frequency",
+                    "rad/s": "angular_frequency", "m/s": "speed"}
+
+
+def format_value(value: float | None, unit: str, digits: int = DIGITS) -> str:
+    """A value for humans: ``3.69 TPa`` style where the unit's dimension is known.
+
+    Parameters
+    ----------
+    value : float or None
+        The value in the SI ``unit``; None or NaN prints ``n/a``.
+    unit : str
+        Its unit as a dataset writes it (``"Pa"``, ``"s"``, ``"1"``, ``"Pa s^beta"`` ...).
+    digits : int
+        Significant digits (default :data:`DIGITS`).
+
+    Returns
+    -------
+    str
+        A prefixed unit for the dimensions :mod:`viscoforce.units` knows (:func:`format_quantity`),
+        else the number and the unit as given (none for ``"1"``).
+    """
+    if value is None or value != value:
+        return "n/a"
+    if unit in _UNIT_DIMENSIONS:
+        return format_quantity(value, _UNIT_DIMENSIONS[unit], digits=digits)
+    return f"{value:.{digits}g} {'' if unit in ('1', '') else unit}".rstrip()
+
+
+def format_estimate(value: float | None, stderr: float | None, unit: str,
+                    digits: int = DIGITS) -> str:
+    """``value ± stderr`` with units, both with ``digits`` significant digits.
+
+    Returns
+    -------
+    str
+        ``"4.97 GPa ± 37.3 MPa"``; ``"4.97 GPa (no stderr)"`` when the stderr is missing.
+    """
+    text = format_value(value, unit, digits)
+    if stderr is None or stderr != stderr:
+        return f"{text} (no stderr)"
+    return f"{text} ± {format_value(stderr, unit, digits)}"

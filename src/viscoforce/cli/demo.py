@@ -66,15 +66,11 @@ def add_demo(parser: argparse.ArgumentParser) -> None:
 
 
 def _show(name: str, value: float, err: float, unit: str, truth: float | None = None) -> str:
-    from viscoforce.units import format_quantity
+    from viscoforce.cli._output import format_estimate, format_value
 
-    dimension = {"s": "time", "Pa": "pressure"}.get(unit)
-    unit = "" if unit == "1" else unit
-    text = (format_quantity(value, dimension) if dimension else f"{value:.4g} {unit}".rstrip())
-    spread = (format_quantity(err, dimension) if dimension else f"{err:.2g} {unit}".rstrip())
-    line = f"  {name:<6} = {text} ± {spread}"
+    line = f"  {name:<6} = {format_estimate(value, err, unit)}"
     if truth is not None:
-        line += f"   (truth {format_quantity(truth, dimension) if dimension else truth})"
+        line += f"   (truth {format_value(truth, unit)})"
     return line
 
 
@@ -151,6 +147,7 @@ def _loop(fit, problem, out: Path, report: dict[str, Any]) -> None:
 def _real(folder: Path, out: Path, report: dict[str, Any]) -> None:
     import warnings
 
+    from viscoforce.cli._output import format_value
     from viscoforce.cli.model import _save_figure
     from viscoforce.experiments.modulation import modulation_spectrum
     from viscoforce.fitting.fit import bound_text, fit_spectrum
@@ -204,9 +201,8 @@ def _real(folder: Path, out: Path, report: dict[str, Any]) -> None:
     for name, p in summary["params"].items():
         if p["median"] is not None:
             unit = str(whole[name].attrs["units"])
-            unit = "" if unit == "1" else f" {unit}"
-            print(f"     median {name} = {p['median']:.4g}{unit} (IQR {p['q25']:.3g} – "
-                  f"{p['q75']:.3g}{unit}; good pixels)")
+            print(f"     median {name} = {format_value(p['median'], unit)} (IQR "
+                  f"{format_value(p['q25'], unit)} – {format_value(p['q75'], unit)}; good pixels)")
     _save_figure(bode_plot(one, fit=fit, frequency_unit="Hz", residuals=True,
                            title=f"real JPK map, curve 0: data and {fit.attrs['candidate']} "
                                  "contact fit"),

@@ -27,7 +27,13 @@ from viscoforce.cli._args import (
     integer_type,
     real_type,
 )
-from viscoforce.cli._output import print_json, print_written
+from viscoforce.cli._output import (
+    DIGITS,
+    format_estimate,
+    format_value,
+    print_json,
+    print_written,
+)
 from viscoforce.physics.paper import PAPER
 
 __all__ = ["SUBCOMMANDS", "modes_type", "read_data"]
@@ -509,19 +515,9 @@ def fit_one(args: argparse.Namespace, ds, kind: str):
 
 # ── fit ─────────────────────────────────────────────────────────────────────────────────────────
 
-_DIMENSIONS = {"Pa": "pressure", "s": "time", "N": "force", "N/m": "stiffness", "m": "length",
-               "N s/m": "drag"}
-
-
-def show_value(value: float | None, unit: str, digits: int = 4) -> str:
-    """A parameter value for humans, with a prefixed unit where the dimension is known."""
-    from viscoforce.units import format_quantity
-
-    if value is None or value != value:
-        return "n/a"
-    if unit in _DIMENSIONS:
-        return format_quantity(value, _DIMENSIONS[unit], digits=digits)
-    return f"{value:.{digits}g} {'' if unit == '1' else unit}".rstrip()
+def show_value(value: float | None, unit: str, digits: int = DIGITS) -> str:
+    """A parameter value for humans (:func:`~viscoforce.cli._output.format_value`)."""
+    return format_value(value, unit, digits)
 
 
 def _single_json(result) -> dict[str, Any]:
@@ -613,9 +609,7 @@ def _print_single(info: dict[str, Any]) -> None:
           f"{info['redchi']:.4g}, {fit_text}, AIC {info['aic']:.4g}, BIC {info['bic']:.4g}")
     for name, p in info["params"].items():
         unit = parameter_units(name)
-        value = show_value(p["value"], unit, 5)
-        err = "(no stderr)" if p["stderr"] != p["stderr"] else f"± {show_value(p['stderr'], unit, 3)}"
-        line = f"  {name:<8} = {value} {err}"
+        line = f"  {name:<8} = {format_estimate(p['value'], p['stderr'], unit)}"
         if "report_as" in p:
             line += f"   -> report as {p['report_as']} ({info.get('identifiability_method', '')})"
         print(line)
@@ -626,8 +620,7 @@ def _print_single(info: dict[str, Any]) -> None:
         for name, p in info["derived"].items():
             base = name if name in ("ting_E0", "beta") else name.rsplit("_", 1)[0]
             unit = parameter_units(base)
-            print(f"  {name:<12} = {show_value(p['value'], unit, 4)} ± "
-                  f"{show_value(p['stderr'], unit, 3)}")
+            print(f"  {name:<12} = {format_estimate(p['value'], p['stderr'], unit)}")
     if "tip" in info:
         print(f"  tip: {info['tip']}")
     if info["at_bound"]:
@@ -657,14 +650,14 @@ def _print_map(info: dict[str, Any]) -> None:
         for name, p in block["params"].items():
             unit = parameter_units(name)
             print(f"    {name:<8} median {show_value(p['median'], unit)}, IQR "
-                  f"{show_value(p['q25'], unit, 3)} .. {show_value(p['q75'], unit, 3)}")
+                  f"{show_value(p['q25'], unit)} .. {show_value(p['q75'], unit)}")
     if info.get("derived"):
         print(f"  Young's and shear moduli (Poisson's ratio {info['poisson']:g}), the pixels of "
               f"{info['modes']} mode(s):")
         for name, p in info["derived"].items():
             unit = parameter_units(name.rsplit("_", 1)[0])
             print(f"    {name:<12} median {show_value(p['median'], unit)}, IQR "
-                  f"{show_value(p['q25'], unit, 3)} .. {show_value(p['q75'], unit, 3)}")
+                  f"{show_value(p['q25'], unit)} .. {show_value(p['q75'], unit)}")
 
 
 def _fit_recording(run, *args: Any, **kwargs: Any):
@@ -936,7 +929,7 @@ def run_batch(args: argparse.Namespace, paths: list[str]) -> int:
             except ViscoforceError:
                 unit = ""
             print(f"  {name:<14} median {show_value(p['median'], unit)}, IQR "
-                  f"{show_value(p['q25'], unit, 3)} .. {show_value(p['q75'], unit, 3)} "
+                  f"{show_value(p['q25'], unit)} .. {show_value(p['q75'], unit)} "
                   f"({p['n']} fits)")
         for entry in files:
             if "error" in entry:
