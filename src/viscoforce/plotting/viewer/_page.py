@@ -74,6 +74,17 @@ const where = dims.map((d) => d + ' ' + p[d]).join(', ');
 title.text = '<b>pixel ' + i + '</b> (' + where + '): quality ' + p.quality_name;
 """
 
+_ON_DOUBLE_TAP = """
+const d = map_data.data;
+for (let i = 0; i < d.x.length; i++) {
+  if (Math.abs(cb_obj.x - d.x[i]) <= d.width[i] / 2 &&
+      Math.abs(cb_obj.y - d.y[i]) <= d.height[i] / 2) {
+    map_data.selected.indices = [i];
+    break;
+  }
+}
+"""
+
 _ON_PARAMETER = """
 const name = select.value;
 map_data.data = Object.assign({}, map_data.data, {value: colour.data[name]});
@@ -85,7 +96,7 @@ bar.color_mapper = mapper;
 bar.title = labels[name];
 histogram_data.data = {left: hist.data[name + '_left'], right: hist.data[name + '_right'],
                        count: hist.data[name + '_count']};
-histogram.xaxis[0].axis_label = labels[name];
+hist_axis.axis_label = labels[name];
 """
 
 _EXPORT_CSV = _READ_ISLAND + """
@@ -200,6 +211,10 @@ def report_html(view: MapView, *, csv_name: str = "viscoforce-map.csv") -> str:
                             selection_line_color="red", selection_line_width=2,
                             nonselection_fill_alpha=0.75)
     map_fig.select_one(TapTool).mode = "replace"
+    # Bokeh takes a second click within 300 ms of the first for a double tap, wherever it
+    # falls, and the tap tool ignores it: select the pixel under a double tap too, so that quick
+    # clicks from pixel to pixel (a user's or a test's) always select
+    map_fig.js_on_event("doubletap", CustomJS(args={"map_data": map_data}, code=_ON_DOUBLE_TAP))
     map_fig.add_tools(HoverTool(renderers=[renderer], tooltips=[
         ("pixel", "@pixel"), ("x, y", "@x{0.00}, @y{0.00}"), ("value", "@value{0.000 a}"),
         ("quality", "@quality")]))
@@ -279,7 +294,7 @@ def report_html(view: MapView, *, csv_name: str = "viscoforce-map.csv") -> str:
         "linear_mapper": linear_mapper, "log_mapper": log_mapper, "bar": bar,
         "ranges": {n: list(r) for n, r in ranges.items()}, "labels": labels,
         "log": dict(view.log), "hist": hist, "histogram_data": histogram_data,
-        "histogram": histogram}, code=_ON_PARAMETER))
+        "hist_axis": histogram.xaxis[0]}, code=_ON_PARAMETER))
     on_select = CustomJS(args={
         "map_data": map_data, "store": store, "fit_store": fit_store, "bode_data": bode_data,
         "fit_data": fit_data, "frequency": frequency, "fit_frequency": fit_frequency,
