@@ -207,10 +207,26 @@ def _real(folder: Path, out: Path, report: dict[str, Any]) -> None:
                            title=f"real JPK map, curve 0: data and {fit.attrs['candidate']} "
                                  "contact fit"),
                  str(out / "bode_real.png"))
-    report["real"] = {"seconds": elapsed, "candidate": str(fit.attrs["candidate"]),
+    viewer = _viewer(whole, spec, out, {"radius": REAL_TIP_RADIUS, **material})
+    report["real"] = {"seconds": elapsed, "viewer": viewer, "candidate": str(fit.attrs["candidate"]),
                       "redchi": float(fit["redchi"]), "chi2_pvalue": float(fit["chi2_pvalue"]),
                       "explanation": str(fit.attrs["explanation"]), "map": summary, **{
         n: [float(fit[n]), float(fit[f"{n}_stderr"])] for n in fit["param_i"].values}}
+
+
+def _viewer(whole, spec, out: Path, fixed: dict[str, Any]) -> str | None:
+    """The real map's viewer page (map_viewer.html; None, with a note, without Bokeh)."""
+    try:
+        from viscoforce.plotting.viewer import best_fit_curves, map_view, report_html
+    except ImportError as exc:  # bokeh missing: the rest of the demo stands
+        print(f"   note: map_viewer.html not written ({exc}; pip install bokeh)")
+        return None
+    curves = best_fit_curves(whole, spec, **fixed)
+    path = out / "map_viewer.html"
+    write_text(path, report_html(map_view(whole, spec, curves, title=(
+        f"real JPK map ({spec.sizes['curve']} curves): {whole.attrs['model']} model"))))
+    print(f"   viewer of the map: {path} (open it in a browser; click a pixel)")
+    return str(path)
 
 
 def run_demo(args: argparse.Namespace) -> int:
@@ -232,10 +248,13 @@ def run_demo(args: argparse.Namespace) -> int:
     write_text(out / "demo.json", json.dumps(report, indent=2) + "\n")
     written = [str(out / name) for name in ("bode_synthetic.png", "loop.png", "bode_real.png",
                                             "demo.json")]
+    if report["real"]["viewer"]:
+        written.insert(3, report["real"]["viewer"])
     if args.json:
         print_json({**report, "out_dir": str(out), "written": written})
         return 0
-    print(f"wrote {out}/bode_synthetic.png, loop.png, bode_real.png, demo.json")
+    print(f"wrote {out}/bode_synthetic.png, loop.png, bode_real.png, "
+          + ("map_viewer.html, " if report["real"]["viewer"] else "") + "demo.json")
     return 0
 
 
