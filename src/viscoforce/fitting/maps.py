@@ -160,7 +160,8 @@ def _or_reason(build: Callable[[], FitData]) -> FitData | str:
 
 
 def fit_block(items: Sequence[FitData | str], model: str, modes: int | str, criterion: str,
-              fixed: dict[str, Any], *, profile: bool = False) -> list[dict[str, Any]]:
+              fixed: dict[str, Any], *, profile: bool = False,
+              omega: np.ndarray | None = None) -> list[dict[str, Any]]:
     """Fit each pixel of a block; a failure becomes ``{"success": False, "message": …}``.
 
     Parameters
@@ -179,12 +180,16 @@ def fit_block(items: Sequence[FitData | str], model: str, modes: int | str, crit
     profile : bool
         Profile-likelihood identifiability per pixel (:func:`~.fit.summary`), else the local
         test.
+    omega : numpy.ndarray, optional
+        The map's frequencies [rad/s] (spectrum models): each pixel's best-fit k* there, as
+        ``fit_k`` (flagged points included, so the curve has no gaps).
 
     Returns
     -------
     list of dict
-        Per pixel :func:`~.fit.summary` plus ``modes`` and ``names``; ``message`` is the data's
-        notes (points left out, stderr fallbacks) followed by the optimiser's message.
+        Per pixel :func:`~.fit.summary` plus ``modes`` and ``names`` (and ``fit_k``); ``message``
+        is the data's notes (points left out, stderr fallbacks) followed by the optimiser's
+        message.
     """
     out = []
     for data in items:
@@ -212,6 +217,11 @@ def fit_block(items: Sequence[FitData | str], model: str, modes: int | str, crit
         info["message"] = "; ".join([*notes, info["message"]])
         info["modes"] = best.model.spec.modes
         info["names"] = best.model.names
+        if omega is not None:
+            try:
+                info["fit_k"] = np.asarray(best.evaluate(omega), dtype=complex)
+            except (ViscoforceError, ValueError, ArithmeticError):
+                pass  # no curve for this pixel (its values and stderr stand)
         out.append(info)
     return out
 
@@ -374,6 +384,8 @@ def fit_map(ds: xr.Dataset, model: str, *, modes: int | str = 1, criterion: str 
     items, dims, layout = pixel_data(ds, model, segment=segment)
     n = len(items)
     run = _Run(items, model, modes, criterion, fixed, profile)
+    if model in SPECTRUM_MODELS:  # the best-fit spectra come with the map (viscoforce view)
+        run.omega = np.asarray(ds["omega"].values, dtype=float)
     with _progress_bar(n, model, progress) as bar:
         run.bar = bar
         execution = _execute(run, scheduler, workers)
@@ -381,7 +393,7 @@ def fit_map(ds: xr.Dataset, model: str, *, modes: int | str = 1, criterion: str 
                for r in run.results]
     out = add_derived_moduli(
         _assemble(results, dims, layout, model, criterion if modes == "auto" else None, n,
-                  profile=profile), poisson)
+                  profile=profile, omega=run.omega), poisson)
     out.attrs.update(execution)
     if model == "ting" and fixed.get("material") == "structural":
         from viscoforce.fitting.ting import add_ting_forms
@@ -398,6 +410,7 @@ class _Run:
                  criterion: str, fixed: dict[str, Any], profile: bool) -> None:
         self.items, self.model, self.modes = items, model, modes
         self.criterion, self.fixed, self.profile = criterion, fixed, profile
+        self.omega: np.ndarray | None = None  # where the best-fit spectra are evaluated
         self.results: list[dict[str, Any] | None] = [None] * len(items)
         self.bar: Any = None
         self.fit_seconds = 0.0  # wall time of the pixel fits, here and in the workers
@@ -408,7 +421,7 @@ class _Run:
         """Fit ``indices`` in this process; their wall time [s]."""
         t0 = time.perf_counter()
         block = fit_block([self.items[i] for i in indices], self.model, self.modes,
-                          self.criterion, self.fixed, profile=self.profile)
+                          self.criterion, self.fixed, profile=self.profile, omega=self.omega)
         seconds = time.perf_counter() - t0
         self.store(indices, block, seconds)
         self.here += len(indices)
@@ -543,7 +556,8 @@ def _on_cluster(run: _Run, client: Any, left: list[int], per_pixel: float, where
     blocks = [left[start:start + size] for start in range(0, len(left), size)]
     shared = client.scatter(run.fixed, broadcast=True) if run.fixed else run.fixed
     futures = {client.submit(_fit_block_shared, [run.items[i] for i in block], run.model,
-                             run.modes, run.criterion, shared, run.profile, pure=False): block
+                             run.modes, run.criterion, shared, run.profile, run.omega,
+                             pure=False): block
                for block in blocks}
     for future in as_completed(futures):
         block = futures[future]
@@ -569,11 +583,11 @@ def _first_line(exc: BaseException) -> str:
 
 
 def _fit_block_shared(items: Sequence[FitData | str], model: str, modes: int | str,
-                      criterion: str, fixed: dict[str, Any], profile: bool = False
-                      ) -> tuple[list[dict[str, Any]], float]:
+                      criterion: str, fixed: dict[str, Any], profile: bool = False,
+                      omega: np.ndarray | None = None) -> tuple[list[dict[str, Any]], float]:
     """:func:`fit_block` in a worker, with its wall time [s]."""
     t0 = time.perf_counter()
-    return fit_block(items, model, modes, criterion, fixed, profile=profile), \
+    return fit_block(items, model, modes, criterion, fixed, profile=profile, omega=omega), \
         time.perf_counter() - t0
 
 
@@ -604,7 +618,7 @@ def _identifiability(result: dict[str, Any]) -> dict[str, int]:
 
 def _assemble(results: list[dict[str, Any]], dims: tuple[str, ...], layout: dict[str, Any],
               model: str, criterion: str | None, n: int, *,
-              profile: bool = False) -> xr.Dataset:
+              profile: bool = False, omega: np.ndarray | None = None) -> xr.Dataset:
     names: list[str] = []
     for r in results:
         for name in r.get("names", ()):
@@ -677,9 +691,21 @@ def _assemble(results: list[dict[str, Any]], dims: tuple[str, ...], layout: dict
         data[k] = (dims, stats[k].reshape(shape), {"units": "1", "long_name": long_name})
     data["modes"] = (dims, modes.reshape(shape), {"units": "1",
                                                    "long_name": "number of relaxation modes"})
+    if omega is not None and any("fit_k" in r for r in results):
+        k = np.full((n, omega.size), np.nan, dtype=complex)
+        for i, r in enumerate(results):
+            if "fit_k" in r:
+                k[i] = r["fit_k"]
+        order = (*dims, "omega")
+        data["fit_stiffness"] = (order, np.abs(k).reshape((*shape, omega.size)), {
+            "units": "N/m", "long_name": "best-fit dynamic stiffness at the data's frequencies"})
+        data["fit_phase"] = (order, np.degrees(np.angle(k)).reshape((*shape, omega.size)), {
+            "units": "degree", "long_name": "best-fit phase at the data's frequencies"})
     coords: dict[str, Any] = {
         name: value if isinstance(value, tuple) else (name, value)
         for name, value in layout["coords"].items() if name not in data}
+    if omega is not None and "fit_stiffness" in data:
+        coords["omega"] = ("omega", omega, {"units": "rad/s", "long_name": "angular frequency"})
     coords.update({"param_i": ("param_i", names), "param_j": ("param_j", names)})
     attrs = {"model": model, "n_fits": n, "n_failed": int(n - success.sum()),
              "n_good": int((quality == 0).sum()), "quality_rule": QUALITY_RULE,
