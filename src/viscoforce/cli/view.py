@@ -9,7 +9,9 @@ prints its URL and runs until Ctrl-C.
 from __future__ import annotations
 
 import argparse
+import signal
 import sys
+import threading
 from pathlib import Path
 from typing import Any
 
@@ -151,6 +153,10 @@ def serve_html(html: str, *, port: int = 0, info: dict[str, Any] | None = None) 
     else:
         print(f"serving the viewer at {url} (Ctrl-C stops)")
     sys.stdout.flush()
+    if threading.current_thread() is threading.main_thread():
+        # Ctrl-C must stop it even when it was started with SIGINT ignored (a background job
+        # of a shell script, a test runner's worker): Python then installs no handler itself
+        signal.signal(signal.SIGINT, signal.default_int_handler)
     try:
         server.serve_forever()
     except KeyboardInterrupt:
