@@ -19,7 +19,7 @@ import statistics
 import time
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
-from datetime import datetime, timezone
+from datetime import UTC, datetime
 from pathlib import Path
 
 import numpy as np
@@ -197,7 +197,7 @@ def print_machine(machine: dict) -> None:
 
 def report_head(schema: str, quick: bool, machine: dict) -> dict:
     """The first four entries of every JSON report: schema, creation time (UTC), quick, machine."""
-    return {"schema": schema, "created": datetime.now(timezone.utc).isoformat(timespec="seconds"),
+    return {"schema": schema, "created": datetime.now(UTC).isoformat(timespec="seconds"),
             "quick": quick, "machine": machine}
 
 

@@ -35,7 +35,7 @@ import argparse  # noqa: E402
 import json  # noqa: E402
 import math  # noqa: E402
 import sys  # noqa: E402
-from datetime import datetime, timezone  # noqa: E402
+from datetime import UTC, datetime  # noqa: E402
 from pathlib import Path  # noqa: E402
 
 import numpy as np  # noqa: E402
@@ -130,7 +130,7 @@ def main(argv: list[str] | None = None) -> int:
         "(sensor bandwidth, deflection chain, cantilever inertia and hydrodynamics) needs a "
         "hard-surface reference measured with the same settings (--phase-reference).")
     report = {
-        "schema": SCHEMA, "created": datetime.now(timezone.utc).isoformat(timespec="seconds"),
+        "schema": SCHEMA, "created": datetime.now(UTC).isoformat(timespec="seconds"),
         "viscoforce": viscoforce.__version__, "file": path.name, "frequencies_hz": freqs,
         "sensor_vs_piezo_lag_deg": {
             "median": [lag_median[f] for f in freqs],

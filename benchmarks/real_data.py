@@ -99,7 +99,7 @@ import warnings  # noqa: E402
 from collections import Counter  # noqa: E402
 from collections.abc import Callable, Iterator  # noqa: E402
 from contextlib import contextmanager  # noqa: E402
-from datetime import datetime, timezone  # noqa: E402
+from datetime import UTC, datetime  # noqa: E402
 from pathlib import Path  # noqa: E402
 from typing import Any  # noqa: E402
 
@@ -1385,7 +1385,7 @@ def main(argv: list[str] | None = None) -> int:
         print()
         print(coverage["markdown"])
         print()
-    report = {"schema": SCHEMA, "created": datetime.now(timezone.utc).isoformat(timespec="seconds"),
+    report = {"schema": SCHEMA, "created": datetime.now(UTC).isoformat(timespec="seconds"),
               "quick": args.quick, "machine": facts, "data_dir": str(args.data),
               "radius_m": RADIUS, "datasets": datasets, "coverage": coverage,
               "markdown": table,

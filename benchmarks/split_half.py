@@ -42,7 +42,7 @@ import math  # noqa: E402
 import platform  # noqa: E402
 import sys  # noqa: E402
 import time  # noqa: E402
-from datetime import datetime, timezone  # noqa: E402
+from datetime import UTC, datetime  # noqa: E402
 from pathlib import Path  # noqa: E402
 
 import numpy as np  # noqa: E402
@@ -160,7 +160,7 @@ def main(argv: list[str] | None = None) -> int:
     print(f"lock-in per segment (best of {timing['rounds']}, CPU time): "
           f"{timing['with_residual_spectrum']:.0f} us with the residual-spectrum errors, "
           f"{timing['white_only']:.0f} us white only (+{timing['increase_percent']:.0f} %)")
-    report = {"schema": SCHEMA, "created": datetime.now(timezone.utc).isoformat(timespec="seconds"),
+    report = {"schema": SCHEMA, "created": datetime.now(UTC).isoformat(timespec="seconds"),
               "machine": facts, "file": str(args.path), **result,
               "cost_us_per_segment": timing}
     args.out.write_text(json.dumps(report, indent=2) + "\n")

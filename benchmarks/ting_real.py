@@ -45,7 +45,7 @@ import json  # noqa: E402
 import math  # noqa: E402
 import time  # noqa: E402
 import warnings  # noqa: E402
-from datetime import datetime, timezone  # noqa: E402
+from datetime import UTC, datetime  # noqa: E402
 from pathlib import Path  # noqa: E402
 
 import numpy as np  # noqa: E402
@@ -382,7 +382,7 @@ def main(argv: list[str] | None = None) -> int:
         f"At the loading time ({loading * 1e3:.0f} ms), where the data constrain E(t): "
         f"{curve0['modulus_at_loading_time']['ours_young']:.0f} Pa here, "
         f"{curve0['modulus_at_loading_time']['pyfmrheo_young']:.0f} Pa from PyFMRheo's values."]
-    report = {"schema": SCHEMA, "created": datetime.now(timezone.utc).isoformat(timespec="seconds"),
+    report = {"schema": SCHEMA, "created": datetime.now(UTC).isoformat(timespec="seconds"),
               "viscoforce": viscoforce.__version__, "file": args.path.name,
               "settings": {"tip": TIP, "poisson": POISSON, "drag": DRAG,
                            "material": "structural without mu (Ting's power law), t0 = 1 s"},
