@@ -7,6 +7,7 @@ import warnings
 import numpy as np
 import pytest
 
+from viscoforce.exceptions import ParameterError
 from viscoforce.fitting.maps import fit_map
 from viscoforce.fitting.models import make_model
 from viscoforce.schema import make_spectrum
@@ -49,3 +50,25 @@ def test_a_pixel_without_data_has_no_curve():
 
     assert fit_block(["no data"], "prony", 1, "bic", {}, omega=OMEGA) == [
         {"success": False, "message": "no data"}]
+
+
+def test_reports_on_request_keep_each_pixels_lmfit_report(spectra, tmp_path):
+    import xarray as xr
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        plain = fit_map(spectra, "prony", scheduler="synchronous", progress=False)
+        fits = fit_map(spectra, "prony", scheduler="synchronous", progress=False, reports=True)
+    assert "fit_report" not in plain
+    text = str(fits["fit_report"][1, 0].values)
+    assert "[[Variables]]" in text and "tau_1:" in text
+    tau = float(fits["tau_1"][1, 0])
+    import re
+
+    shown = float(re.search(r"\n\s+tau_1:\s+(\S+)", text).group(1))
+    assert shown == pytest.approx(tau, rel=1e-5)  # the pixel's own value
+    fits.to_netcdf(tmp_path / "fits.nc")
+    with xr.open_dataset(tmp_path / "fits.nc") as back:
+        assert str(back["fit_report"][1, 0].values) == text  # files keep it
+    with pytest.raises(ParameterError, match="reports must be True or False"):
+        fit_map(spectra, "prony", scheduler="synchronous", progress=False, reports="yes")

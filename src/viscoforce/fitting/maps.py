@@ -65,6 +65,7 @@ from viscoforce.fitting.map_cost import (
     start_method,
 )
 from viscoforce.fitting.models import SPECTRUM_MODELS
+from viscoforce.fitting.report import fit_report
 from viscoforce.schema import validate_fit_result, validate_spectrum
 from viscoforce.schema.fit import SUCCESS_FLAGS, parameter_units
 
@@ -161,7 +162,7 @@ def _or_reason(build: Callable[[], FitData]) -> FitData | str:
 
 def fit_block(items: Sequence[FitData | str], model: str, modes: int | str, criterion: str,
               fixed: dict[str, Any], *, profile: bool = False,
-              omega: np.ndarray | None = None) -> list[dict[str, Any]]:
+              omega: np.ndarray | None = None, reports: bool = False) -> list[dict[str, Any]]:
     """Fit each pixel of a block; a failure becomes ``{"success": False, "message": …}``.
 
     Parameters
@@ -183,6 +184,8 @@ def fit_block(items: Sequence[FitData | str], model: str, modes: int | str, crit
     omega : numpy.ndarray, optional
         The map's frequencies [rad/s] (spectrum models): each pixel's best-fit k* there, as
         ``fit_k`` (flagged points included, so the curve has no gaps).
+    reports : bool
+        Each pixel's lmfit report (:func:`viscoforce.fitting.report.fit_report`) as ``report``.
 
     Returns
     -------
@@ -222,6 +225,11 @@ def fit_block(items: Sequence[FitData | str], model: str, modes: int | str, crit
                 info["fit_k"] = np.asarray(best.evaluate(omega), dtype=complex)
             except (ViscoforceError, ValueError, ArithmeticError):
                 pass  # no curve for this pixel (its values and stderr stand)
+        if reports:
+            try:
+                info["report"] = fit_report(best)
+            except (ViscoforceError, ValueError, ArithmeticError) as exc:
+                info["report"] = f"no lmfit report: {str(exc).splitlines()[0]}"
         out.append(info)
     return out
 
@@ -300,7 +308,7 @@ def cluster(scheduler: str | None = None, workers: int | None = None) -> Iterato
 def fit_map(ds: xr.Dataset, model: str, *, modes: int | str = 1, criterion: str = "bic",
             scheduler: str | None = None, workers: int | None = None, progress: bool = True,
             segment: int | None = None, identifiability: str = "local",
-            poisson: float | None = None, **fixed: Any) -> xr.Dataset:
+            poisson: float | None = None, reports: bool = False, **fixed: Any) -> xr.Dataset:
     """Fit every pixel and return the results over the data's extra dims.
 
     Pixels are the spectra over the extra dims (spectrum models) or the curves (``relaxation``,
@@ -334,6 +342,9 @@ def fit_map(ds: xr.Dataset, model: str, *, modes: int | str = 1, criterion: str 
         How each parameter's identifiability is judged: ``"local"`` (stderr > |value|, none,
         or at a bound) costs nothing; ``"profile"`` walks the profile likelihood (several refits
         per parameter and pixel) and adds the 2σ limits ``<name>_lower``, ``<name>_upper``.
+    reports : bool
+        Keep each pixel's lmfit report (:func:`lmfit.fit_report`, with the SPEC names) as the
+        text variable ``fit_report`` (one more ``leastsq`` per pixel; default False).
     **fixed
         The model's fixed inputs (:func:`~viscoforce.fitting.models.make_model`).
 
@@ -379,6 +390,8 @@ def fit_map(ds: xr.Dataset, model: str, *, modes: int | str = 1, criterion: str 
                              f"{', '.join(map(repr, IDENTIFIABILITY_METHODS))}, got "
                              f"{identifiability!r}")
     profile = identifiability == "profile"
+    if not isinstance(reports, bool):
+        raise ParameterError(f"reports must be True or False, got {reports!r}")
     check_workers(workers)
     fixed = check_fixed(model, fixed)
     items, dims, layout = pixel_data(ds, model, segment=segment)
@@ -386,6 +399,7 @@ def fit_map(ds: xr.Dataset, model: str, *, modes: int | str = 1, criterion: str 
     run = _Run(items, model, modes, criterion, fixed, profile)
     if model in SPECTRUM_MODELS:  # the best-fit spectra come with the map (viscoforce view)
         run.omega = np.asarray(ds["omega"].values, dtype=float)
+    run.reports = reports
     with _progress_bar(n, model, progress) as bar:
         run.bar = bar
         execution = _execute(run, scheduler, workers)
@@ -411,6 +425,7 @@ class _Run:
         self.items, self.model, self.modes = items, model, modes
         self.criterion, self.fixed, self.profile = criterion, fixed, profile
         self.omega: np.ndarray | None = None  # where the best-fit spectra are evaluated
+        self.reports = False  # each pixel's lmfit report
         self.results: list[dict[str, Any] | None] = [None] * len(items)
         self.bar: Any = None
         self.fit_seconds = 0.0  # wall time of the pixel fits, here and in the workers
@@ -421,7 +436,8 @@ class _Run:
         """Fit ``indices`` in this process; their wall time [s]."""
         t0 = time.perf_counter()
         block = fit_block([self.items[i] for i in indices], self.model, self.modes,
-                          self.criterion, self.fixed, profile=self.profile, omega=self.omega)
+                          self.criterion, self.fixed, profile=self.profile, omega=self.omega,
+                          reports=self.reports)
         seconds = time.perf_counter() - t0
         self.store(indices, block, seconds)
         self.here += len(indices)
@@ -557,7 +573,7 @@ def _on_cluster(run: _Run, client: Any, left: list[int], per_pixel: float, where
     shared = client.scatter(run.fixed, broadcast=True) if run.fixed else run.fixed
     futures = {client.submit(_fit_block_shared, [run.items[i] for i in block], run.model,
                              run.modes, run.criterion, shared, run.profile, run.omega,
-                             pure=False): block
+                             run.reports, pure=False): block
                for block in blocks}
     for future in as_completed(futures):
         block = futures[future]
@@ -584,11 +600,12 @@ def _first_line(exc: BaseException) -> str:
 
 def _fit_block_shared(items: Sequence[FitData | str], model: str, modes: int | str,
                       criterion: str, fixed: dict[str, Any], profile: bool = False,
-                      omega: np.ndarray | None = None) -> tuple[list[dict[str, Any]], float]:
+                      omega: np.ndarray | None = None, reports: bool = False
+                      ) -> tuple[list[dict[str, Any]], float]:
     """:func:`fit_block` in a worker, with its wall time [s]."""
     t0 = time.perf_counter()
-    return fit_block(items, model, modes, criterion, fixed, profile=profile, omega=omega), \
-        time.perf_counter() - t0
+    return fit_block(items, model, modes, criterion, fixed, profile=profile, omega=omega,
+                     reports=reports), time.perf_counter() - t0
 
 
 def pixel_quality(result: dict[str, Any]) -> int:
@@ -681,6 +698,10 @@ def _assemble(results: list[dict[str, Any]], dims: tuple[str, ...], layout: dict
         "long_name": "identifiability of the fitted parameter",
         "flag_values": np.array(list(IDENTIFIABILITY), dtype=np.int8),
         "flag_meanings": " ".join(IDENTIFIABILITY.values())})
+    if any("report" in r for r in results):
+        data["fit_report"] = (dims, np.array([r.get("report", "no fit") for r in results],
+                                             dtype=object).reshape(shape),
+                              {"long_name": "lmfit's fit report of the pixel"})
     data["message"] = (dims, np.array(messages, dtype=object).reshape(shape),
                        {"long_name": "data notes and the optimiser's message, or why the fit "
                                      "failed"})

@@ -20,6 +20,8 @@ residuals (``attrs["stderr_correction"]``) is in the dataset's ``<name>_stderr``
 
 A dataset read back from a file, or made by an operation that returns a new dataset (``isel``,
 ``assign``, …), has only its variables: ``ds.lmfit`` then raises a ParameterError that says so.
+A map keeps each pixel's report as text on request (``fit_map(..., reports=True)``: the variable
+``fit_report``), which files keep.
 :func:`attach` is how the fitting functions give a result dataset its fit.
 """
 
@@ -36,7 +38,7 @@ from viscoforce.exceptions import ParameterError
 if TYPE_CHECKING:  # pragma: no cover
     from viscoforce.fitting.fit import Outcome
 
-__all__ = ["LmfitAccessor", "attach"]
+__all__ = ["LmfitAccessor", "attach", "fit_report"]
 
 
 @xr.register_dataset_accessor("lmfit")
@@ -67,26 +69,14 @@ class LmfitAccessor:
     def minimizer(self) -> lmfit.Minimizer:
         """The :class:`lmfit.Minimizer` of the fit (internal and SPEC parameters)."""
         if self._minimizer is None:
-            from viscoforce.fitting.fit import _residual
-
-            outcome = self._require()
-            model = outcome.model
-            params = model.parameters_from(outcome.values, outcome.data.x, expressions=True,
-                                           y=outcome.data.y)
-            for name, value in outcome.result.params.valuesdict().items():
-                params[name].set(value=value)  # start at the best fit itself
-            self._minimizer = lmfit.Minimizer(_residual(model, outcome.data), params,
-                                              scale_covar=not outcome.data.sigma_known)
+            self._minimizer = lmfit_minimizer(self._require())
         return self._minimizer
 
     @property
     def result(self) -> lmfit.minimizer.MinimizerResult:
         """Lmfit's :class:`~lmfit.minimizer.MinimizerResult` at the best fit."""
         if self._result is None:
-            minimizer = self.minimizer
-            with warnings.catch_warnings():
-                warnings.simplefilter("ignore", RuntimeWarning)
-                self._result = minimizer.minimize(method="leastsq")
+            self._result = lmfit_result(self.minimizer)
         return self._result
 
     def fit_report(self, **kwargs: Any) -> str:
@@ -105,6 +95,31 @@ class LmfitAccessor:
     def uvars(self) -> dict[str, Any]:
         """Every parameter as an ``uncertainties`` variable, correlated (lmfit's ``uvars``)."""
         return dict(self.result.uvars)
+
+
+def lmfit_minimizer(outcome: Outcome) -> lmfit.Minimizer:
+    """An :class:`lmfit.Minimizer` of a fit, at its best values, with the SPEC names too."""
+    from viscoforce.fitting.fit import _residual
+
+    model = outcome.model
+    params = model.parameters_from(outcome.values, outcome.data.x, expressions=True,
+                                   y=outcome.data.y)
+    for name, value in outcome.result.params.valuesdict().items():
+        params[name].set(value=value)  # start at the best fit itself
+    return lmfit.Minimizer(_residual(model, outcome.data), params,
+                           scale_covar=not outcome.data.sigma_known)
+
+
+def lmfit_result(minimizer: lmfit.Minimizer) -> lmfit.minimizer.MinimizerResult:
+    """Lmfit's own result of ``minimizer`` (one more ``leastsq`` from the best fit)."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)
+        return minimizer.minimize(method="leastsq")
+
+
+def fit_report(outcome: Outcome) -> str:
+    """:func:`lmfit.fit_report` of a fit (``ds.lmfit.fit_report()``; a map's pixels on request)."""
+    return lmfit.fit_report(lmfit_result(lmfit_minimizer(outcome)))
 
 
 def attach(ds: xr.Dataset, outcome: Outcome) -> xr.Dataset:
