@@ -72,3 +72,16 @@ def test_reports_on_request_keep_each_pixels_lmfit_report(spectra, tmp_path):
         assert str(back["fit_report"][1, 0].values) == text  # files keep it
     with pytest.raises(ParameterError, match="reports must be True or False"):
         fit_map(spectra, "prony", scheduler="synchronous", progress=False, reports="yes")
+
+
+def test_the_cli_keeps_the_reports_in_its_output(spectra, tmp_path):
+    import xarray as xr
+
+    from viscoforce.cli import main
+
+    spectra.to_netcdf(tmp_path / "map.nc")
+    out = tmp_path / "fits.nc"
+    assert main(["fit", str(tmp_path / "map.nc"), "--model", "prony", "--scheduler",
+                 "synchronous", "--reports", "--out", str(out)]) == 0
+    with xr.open_dataset(out) as back:
+        assert "[[Variables]]" in str(back["fit_report"][0, 0].values)

@@ -169,6 +169,9 @@ def add_fit(parser: argparse.ArgumentParser) -> None:
                          Output("--plot", FIGURE, "FILE.png",
                                 "data and fit (one spectrum/curve), or a map of one fitted "
                                 "variable over the pixels (a map; --plot-variable)")])
+    parser.add_argument("--reports", action="store_true",
+                        help="a map: keep each pixel's lmfit report in --out (the text variable "
+                             "fit_report; one more least-squares run per pixel)")
     parser.add_argument("--plot-variable", default=None, metavar="NAME",
                         help="the variable of a map's --plot (default: the first fitted "
                              "parameter; any per-pixel variable, e.g. E0_young, redchi)")
@@ -725,6 +728,9 @@ def run_fit(args: argparse.Namespace) -> int:
     _check_model(args, kind)
     ds = _select_curve(ds, kind, args.curve)
     is_map = bool(_extra_dims(ds, kind))
+    if not is_map and getattr(args, "reports", False):
+        raise UsageError("--reports keeps a map's per-pixel lmfit reports; a single fit has "
+                         "its report in the API (ds.lmfit.fit_report())")
     if not is_map and getattr(args, "plot_variable", None) is not None:
         raise UsageError("--plot-variable chooses what a map's --plot shows; this is one "
                          "spectrum or curve")
@@ -747,7 +753,8 @@ def run_fit(args: argparse.Namespace) -> int:
         result, texts = _fit_recording(
             fit_map, ds, args.model, modes=1 if args.modes is None else args.modes,
             criterion=args.criterion, scheduler=args.scheduler, workers=args.workers,
-            progress=progress, segment=args.segment, poisson=args.poisson, **options, **fixed)
+            progress=progress, segment=args.segment, poisson=args.poisson,
+            reports=args.reports, **options, **fixed)
         info = _map_json(result)
     else:
         result, texts = _fit_recording(fit_one, args, ds, kind)
