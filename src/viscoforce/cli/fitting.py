@@ -984,7 +984,7 @@ def _plot(ds, kind: str, result, args: argparse.Namespace) -> None:
         except ParameterError as exc:
             raise UsageError(f"--plot-variable: {exc}") from None
     elif kind == "spectrum":
-        handle = bode_plot(ds, fit=result)
+        handle = bode_plot(ds, fit=result, residuals=True)
     else:
         if kind == "curves":
             from viscoforce.fitting.curves import curve_data
@@ -1037,7 +1037,7 @@ def run_bode(args: argparse.Namespace) -> int:
     elif args.out:
         write_netcdf(ds if fit is None else fit, args.out)
     if args.plot:
-        _save_figure(bode_plot(ds, fit=fit, modulus=args.modulus,
+        _save_figure(bode_plot(ds, fit=fit, modulus=args.modulus, residuals=fit is not None,
                                frequency_unit="Hz" if measured_data else "rad/s"), args.plot)
     if args.json:
         print_json({"plot": args.plot, "out": args.out,
