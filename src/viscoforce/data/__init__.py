@@ -1,7 +1,7 @@
 """The example files shipped inside viscoforce, found with :mod:`importlib.resources`.
 
 They travel in the wheel, so ``viscoforce demo``, the notebooks and the README's examples run
-from any folder, not only from the repository. ``examples/README.md`` says how each file was
+in every folder, not only in the repository. ``examples/README.md`` says how each file was
 made and its true parameters; ``examples/real/`` holds a real JPK modulation map (MIT, with its
 ``LICENSE`` and ``SOURCE.md``). In the repository, ``data_examples/`` is a link to the same
 folder.
