@@ -151,12 +151,6 @@ class LinearizedState:
         problem = require_problem(problem)
         modulus = _relaxed_modulus(problem, relaxed_modulus)
         position, sol = equilibrium_at_load(problem, load, modulus)
-        return cls._from_equilibrium(problem, position, modulus, sol)
-
-    @classmethod
-    def _from_equilibrium(cls, problem: ContactProblem, position: float, modulus: float,
-                          sol: NewtonResult) -> LinearizedState:
-        """Decompose the linearisation about the static solution ``sol`` (module docstring)."""
         return cls._from_decomposition(problem, position, modulus, _decompose(problem, sol))
 
     @classmethod
