@@ -207,23 +207,25 @@ def _real(folder: Path, out: Path, report: dict[str, Any]) -> None:
                            title=f"real JPK map, curve 0: data and {fit.attrs['candidate']} "
                                  "contact fit"),
                  str(out / "bode_real.png"))
-    viewer = _viewer(whole, spec, out, {"radius": REAL_TIP_RADIUS, **material})
+    viewer = _viewer(whole, spec, out)
     report["real"] = {"seconds": elapsed, "viewer": viewer, "candidate": str(fit.attrs["candidate"]),
                       "redchi": float(fit["redchi"]), "chi2_pvalue": float(fit["chi2_pvalue"]),
                       "explanation": str(fit.attrs["explanation"]), "map": summary, **{
         n: [float(fit[n]), float(fit[f"{n}_stderr"])] for n in fit["param_i"].values}}
 
 
-def _viewer(whole, spec, out: Path, fixed: dict[str, Any]) -> str | None:
-    """The real map's viewer page (map_viewer.html; None, with a note, without Bokeh)."""
+def _viewer(whole, spec, out: Path) -> str | None:
+    """The real map's viewer page (map_viewer.html; None, with a note, without Bokeh).
+
+    The map result carries each pixel's best-fit spectrum (``fit_map``), which the page draws.
+    """
     try:
-        from viscoforce.plotting.viewer import best_fit_curves, map_view, report_html
+        from viscoforce.plotting.viewer import map_view, report_html
     except ImportError as exc:  # bokeh missing: the rest of the demo stands
         print(f"   note: map_viewer.html not written ({exc}; pip install bokeh)")
         return None
-    curves = best_fit_curves(whole, spec, **fixed)
     path = out / "map_viewer.html"
-    write_text(path, report_html(map_view(whole, spec, curves, title=(
+    write_text(path, report_html(map_view(whole, spec, title=(
         f"real JPK map ({spec.sizes['curve']} curves): {whole.attrs['model']} model"))))
     print(f"   viewer of the map: {path} (open it in a browser; click a pixel)")
     return str(path)
