@@ -122,6 +122,20 @@ def at_bound(params: lmfit.Parameters, *, rtol: float = 1e-6) -> list[str]:
     return hits
 
 
+def reported_values(layout: Sequence[Item], internal: Mapping[str, float]) -> dict[str, float]:
+    """SPEC values from internal values (:func:`to_reported` without the derivatives)."""
+    values: dict[str, float] = {}
+    for item in layout:
+        if isinstance(item, Chain):
+            total = 0.0
+            for name in item.names:
+                total += internal[f"log_{name}"]
+                values[name] = 10.0 ** total
+        else:
+            values[item.name] = internal[item.name]
+    return values
+
+
 def to_reported(layout: Sequence[Item], internal: Mapping[str, float]
                 ) -> tuple[dict[str, float], dict[str, dict[str, float]]]:
     """SPEC values from internal values, and their derivatives d(SPEC)/d(internal).

@@ -60,7 +60,7 @@ from viscoforce.exceptions import (
     ModelValidityError,
     ParameterError,
 )
-from viscoforce.fitting import _params
+from viscoforce.fitting import _engine, _params
 from viscoforce.fitting.identify import (
     IDENTIFIABILITY,
     QUADRATIC_CORRELATION,
@@ -305,7 +305,7 @@ class Outcome:
     """
 
     model: FitModel
-    result: lmfit.minimizer.MinimizerResult
+    result: lmfit.minimizer.MinimizerResult | _engine.LeastSquares
     values: dict[str, float]
     covariance: np.ndarray | None
     data: FitData
@@ -403,25 +403,45 @@ class Outcome:
 
 
 def _residual(model: FitModel, data: FitData):
+    """The weighted residual (real) as a function of lmfit Parameters (internal names)."""
+    of_internal = _internal_residual(model, data)
+
+    def residual(params: lmfit.Parameters) -> np.ndarray:
+        return of_internal(params.valuesdict())
+
+    return residual
+
+
+def _vector_residual(model: FitModel, data: FitData, names: Sequence[str]):
+    """The weighted residual as a function of the varied internal values in ``names`` order."""
+    of_internal = _internal_residual(model, data)
+
+    def residual(x: np.ndarray) -> np.ndarray:
+        return of_internal(dict(zip(names, x.tolist(), strict=True)))
+
+    return residual
+
+
+def _internal_residual(model: FitModel, data: FitData):
     func, layout, x, y = model.raw, model.layout, data.x, data.y
     weights = None if data.weights is None else (
         data.weights.view(float) if np.iscomplexobj(data.weights) else data.weights)
 
-    def residual(params: lmfit.Parameters) -> np.ndarray:
-        values, _ = _params.to_reported(layout, params.valuesdict())
-        diff = np.asarray(y - func(x, values))
+    def residual(internal: Mapping[str, float]) -> np.ndarray:
+        diff = np.asarray(y - func(x, _params.reported_values(layout, internal)))
         if np.iscomplexobj(diff):
             diff = diff.view(float)
         if weights is not None:
             diff = diff * weights
-        if not np.all(np.isfinite(diff)):
+        if not np.isfinite(diff).all():
             raise ArithmeticError("the model gave NaN or inf at these parameters")
         return diff
 
     return residual
 
 
-def _outcome(model: FitModel, res: lmfit.minimizer.MinimizerResult, data: FitData) -> Outcome:
+def _outcome(model: FitModel, res: lmfit.minimizer.MinimizerResult | _engine.LeastSquares,
+             data: FitData) -> Outcome:
     values, grads = _params.to_reported(model.layout, res.params.valuesdict())
     cov = None
     if res.errorbars and res.covar is not None and np.all(np.isfinite(res.covar)):
@@ -469,15 +489,14 @@ def fit_once(model: FitModel, data: FitData, *, starts: int = 2) -> Outcome:
             f"model {model.spec.name!r} with {model.spec.modes} mode(s) has {n_free} free "
             f"parameters but the data give only {data.n_values} values "
             f"({data.y.size} points): fit fewer modes or measure more points")
-    residual = _residual(model, data)
+    residual = _vector_residual(model, data, [n for n, p in first.items() if p.vary])
     best: Outcome | None = None
     errors: list[str] = []
-    for params in [first, *_alternative_starts(model, first, starts - 1)]:
+    for params in [first, *_alternative_starts(model, first, starts - 1)]:  # copies first
         try:
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore", RuntimeWarning)
-                res = lmfit.minimize(residual, params, method="leastsq",
-                                     scale_covar=not data.sigma_known)
+                res = _engine.leastsq(residual, params, scale_covar=not data.sigma_known)
         except (ValueError, ArithmeticError, ParameterError, ConvergenceError) as exc:
             errors.append(str(exc).splitlines()[0])
             continue

@@ -10,6 +10,7 @@ from typing import Any, NamedTuple
 
 import numpy as np
 import xarray as xr
+from xarray.indexes import PandasIndex
 
 from viscoforce.exceptions import SchemaError
 
@@ -325,3 +326,76 @@ def flag_attrs(flags: Mapping[int, str], dtype: type = np.int8) -> dict[str, Any
     """CF ``flag_values`` and ``flag_meanings`` of a code → meaning table."""
     return {"flag_values": np.array(list(flags), dtype=dtype),
             "flag_meanings": " ".join(flags.values())}
+
+
+def assemble(data_vars: Mapping[str, Any], coords: Mapping[str, Any] | None = None,
+             attrs: Mapping[str, Any] | None = None) -> xr.Dataset:
+    """``xr.Dataset(data_vars, coords=coords, attrs=attrs)``, built without xarray's merge.
+
+    The library builds its datasets from fresh :class:`xarray.Variable` objects (from
+    :func:`variable`) that need no alignment, yet the public constructor spends most of a small
+    fit's time merging them (≈ 0.8 ms for 40 scalars, issue 22). When every entry is a Variable,
+    a DataArray without coordinates or a ``(dims, values[, attrs])`` tuple, this assembles the
+    dataset directly: the dimension sizes are checked here, each 1-D coordinate named after its
+    dim gets the default pandas index, and xarray's ``Dataset._construct_direct`` (private, and
+    used by xarray's own methods since 0.x) makes the object. Anything else, or an xarray
+    without that constructor, takes the public one. ``tests/test_schema_assemble.py`` checks
+    that both give identical datasets. The variables are taken over, not copied: pass fresh ones.
+
+    Raises
+    ------
+    SchemaError
+        A dimension with two sizes (the message names it and both variables).
+    """
+    coords = dict(coords or {})
+    fast = _direct_variables(data_vars, coords)
+    construct = getattr(xr.Dataset, "_construct_direct", None)
+    if fast is None or construct is None:
+        try:
+            return xr.Dataset(dict(data_vars), coords=coords, attrs=dict(attrs or {}))
+        except ValueError as exc:  # conflicting sizes: the same message as the fast path
+            raise SchemaError(f"dataset variables disagree: {exc}") from None
+    variables, coord_names = fast
+    dims: dict[str, int] = {}
+    owner: dict[str, str] = {}
+    for name, var in variables.items():
+        for dim, size in zip(var.dims, var.shape, strict=True):
+            if dims.setdefault(dim, size) != size:
+                raise SchemaError(f"dataset variables disagree: dimension {dim!r} has size "
+                                  f"{dims[dim]} in {owner[dim]!r} but {size} in {name!r}")
+            owner.setdefault(dim, name)
+    indexes = {}
+    for name in coord_names:
+        var = variables[name]
+        if var.dims == (name,):
+            index = PandasIndex.from_variables({name: var}, options={})
+            variables.update(index.create_variables({name: var}))
+            indexes[name] = index
+    try:
+        return construct(variables, coord_names, dims, dict(attrs or {}), indexes)
+    except TypeError:  # the private signature changed: the public constructor
+        return xr.Dataset(dict(data_vars), coords=coords, attrs=dict(attrs or {}))
+
+
+def _direct_variables(data_vars: Mapping[str, Any], coords: Mapping[str, Any]
+                      ) -> tuple[dict[str, xr.Variable], set[str]] | None:
+    """All entries as Variables and the coordinate names, or None where the public path must."""
+    variables: dict[str, xr.Variable] = {}
+    for group in (coords, data_vars):
+        for name, value in group.items():
+            if isinstance(value, xr.DataArray):
+                if value.coords:
+                    return None
+                value = value.variable
+            elif isinstance(value, tuple):
+                try:
+                    value = xr.Variable(*value)
+                except (TypeError, ValueError):
+                    return None
+            if not isinstance(value, xr.Variable) or not isinstance(name, str) or (
+                    name in variables):
+                return None
+            if value.ndim == 1 and value.dims[0] == name and group is data_vars:
+                return None  # a data variable named after its dim becomes an index coordinate
+            variables[name] = value
+    return variables, set(coords)

@@ -23,6 +23,7 @@ from viscoforce.schema._core import (
     as_flag,
     as_mapping,
     as_text,
+    assemble,
     check_attrs,
     check_flags,
     check_one,
@@ -194,7 +195,7 @@ def make_fit_result(params: Mapping[str, tuple[float, float | None]], *,
         data[name] = v
     meta = clean_attrs(attrs)
     meta["model"] = model
-    return validate_fit_result(xr.Dataset(data, coords=coords, attrs=meta))
+    return validate_fit_result(assemble(data, coords, meta))
 
 
 def validate_fit_result(ds: xr.Dataset, *, require: Iterable[str] | None = None) -> xr.Dataset:

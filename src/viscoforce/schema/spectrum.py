@@ -21,6 +21,7 @@ from viscoforce.schema._core import (
     as_mapping,
     as_names,
     as_text,
+    assemble,
     check_attrs,
     check_flags,
     check_present,
@@ -201,8 +202,8 @@ def make_spectrum(omega: ArrayLike, complex_stiffness: ArrayLike, mean_force: Ar
     if source is not None:
         meta["source"] = source
     try:
-        ds = xr.Dataset(out, coords=all_coords, attrs=meta)
-    except (TypeError, ValueError) as exc:
+        ds = assemble(out, all_coords, meta)
+    except (TypeError, ValueError, SchemaError) as exc:
         raise SchemaError(
             f"coords must map names to DataArrays or (dims, values[, attrs]) tuples over the "
             f"dims {dims}: {exc}") from None

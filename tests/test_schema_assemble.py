@@ -1,0 +1,84 @@
+"""Issue 22: schema._core.assemble builds what ``xr.Dataset(...)`` builds, without the merge.
+
+The oracle is xarray's public constructor on the same inputs: identical variables, coordinates,
+attributes and indexes (``xr.testing.assert_identical`` plus the index types), and the same
+refusal of a dimension with two sizes.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import xarray as xr
+
+from viscoforce.exceptions import SchemaError
+from viscoforce.schema import make_spectrum
+from viscoforce.schema._core import assemble
+
+
+def _inputs():
+    omega = np.geomspace(1.0, 1e3, 5)
+    names = ["E0", "E_inf", "tau"]
+    data = {
+        "E0": xr.Variable((), 1e9, {"units": "Pa"}),
+        "correlation": xr.Variable(("param_i", "param_j"), np.eye(3), {"units": "1"}),
+        "fit_stiffness": xr.Variable(("omega",), omega * 2, {"units": "N/m"}),
+        "success": xr.DataArray(np.int8(1), attrs={"flag_values": np.array([0, 1], np.int8)}),
+        "identifiability": xr.Variable(("param_i",), np.zeros(3, np.int8)),
+    }
+    coords = {"param_i": ("param_i", names), "param_j": ("param_j", names),
+              "omega": xr.Variable(("omega",), omega, {"units": "rad/s"}),
+              "x": xr.Variable(("omega",), np.arange(5.0), {"units": "m"})}
+    return data, coords, {"model": "svda", "nfev": 12}
+
+
+def _fresh(inputs):
+    data, coords, attrs = inputs
+    copy = {k: (v.copy(deep=True) if hasattr(v, "copy") else v) for k, v in data.items()}
+    return copy, dict(coords), dict(attrs)
+
+
+def test_assemble_is_identical_to_the_public_constructor():
+    data, coords, attrs = _fresh(_inputs())
+    expected = xr.Dataset(data, coords=coords, attrs=attrs)
+    got = assemble(*_fresh(_inputs()))
+    xr.testing.assert_identical(got, expected)
+    assert set(got.xindexes) == set(expected.xindexes) == {"param_i", "param_j", "omega"}
+    for name in got.xindexes:
+        assert type(got.xindexes[name]) is type(expected.xindexes[name])
+        assert got.xindexes[name].equals(expected.xindexes[name])
+    assert list(got.data_vars) == list(expected.data_vars)
+    assert set(got.coords) == set(expected.coords)
+    assert got.sizes == expected.sizes
+    # the result behaves as a dataset: selection by label, arithmetic, a round trip through dict
+    assert float(got.sel(omega=got.omega[2])["fit_stiffness"]) == pytest.approx(
+        float(expected["fit_stiffness"][2]))
+    xr.testing.assert_identical(xr.Dataset.from_dict(got.to_dict()),
+                                xr.Dataset.from_dict(expected.to_dict()))
+
+
+def test_assemble_refuses_a_dimension_with_two_sizes_naming_it():
+    data = {"a": xr.Variable(("omega",), np.ones(3)), "b": xr.Variable(("omega",), np.ones(4))}
+    with pytest.raises(SchemaError, match="'omega' has size 3 in 'a' but 4 in 'b'"):
+        assemble(data)
+    with pytest.raises(ValueError):
+        xr.Dataset(data)  # the public constructor refuses it too
+
+
+def test_assemble_falls_back_for_inputs_that_need_alignment():
+    """A DataArray with its own coordinates goes through the public constructor (aligned)."""
+    da = xr.DataArray([1.0, 2.0], dims="t", coords={"t": [0.0, 1.0]})
+    got = assemble({"f": da, "g": xr.Variable(("t",), [3.0, 4.0])})
+    xr.testing.assert_identical(got, xr.Dataset({"f": da, "g": ("t", [3.0, 4.0])}))
+
+
+def test_spectrum_built_by_assemble_is_the_public_constructors():
+    omega = np.geomspace(1.0, 1e3, 4)
+    k = (1 + 0.3j) * np.arange(1.0, 9.0).reshape(2, 4)
+    ds = make_spectrum(omega, k, 1e-9, 1e-9, dims=("curve", "omega"),
+                       coords={"x": ("curve", [0.0, 1e-6])}, stderr={"stiffness": 0.01},
+                       quality=np.zeros((2, 4), dtype=int))
+    rebuilt = xr.Dataset({n: ds[n].variable for n in ds.data_vars},
+                         coords={n: ds[n].variable for n in ds.coords}, attrs=ds.attrs)
+    xr.testing.assert_identical(ds, rebuilt)
+    assert set(ds.xindexes) == {"omega"}
