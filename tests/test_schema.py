@@ -572,7 +572,7 @@ def test_schema_is_pure():
     import ast
     from pathlib import Path
 
-    allowed = {"__future__", "collections", "typing", "re", "numpy", "xarray"}
+    allowed = {"__future__", "collections", "functools", "typing", "re", "numpy", "xarray"}
     for path in Path(schema.__file__).parent.glob("*.py"):
         for node in ast.walk(ast.parse(path.read_text())):
             if isinstance(node, ast.Import):

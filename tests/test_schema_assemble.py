@@ -82,3 +82,41 @@ def test_spectrum_built_by_assemble_is_the_public_constructors():
                          coords={n: ds[n].variable for n in ds.coords}, attrs=ds.attrs)
     xr.testing.assert_identical(ds, rebuilt)
     assert set(ds.xindexes) == {"omega"}
+
+
+FIT_CASES = [
+    ("svda", 1, {"position": 2e-9, "radius": 10e-6, "P": 1e6, "debye_length": 1e-9}),
+    ("contact", 1, {"radius": 5e-6, "indentation": 5e-7}),
+    ("contact", 1, {"radius": 5e-6, "indentation": 5e-7, "material": "power-law"}),
+    ("prony", 2, {}),
+    ("prony", "auto", {}),
+]
+
+
+@pytest.mark.parametrize("name, modes, fixed", FIT_CASES,
+                         ids=["svda", "contact", "contact-power-law", "prony-2", "prony-auto"])
+def test_every_fit_result_validates(name, modes, fixed):
+    """The fitting code assembles its results unchecked (make_fit_result(check=False))."""
+    import warnings
+
+    from viscoforce.fitting.fit import fit_data, spectrum_data
+    from viscoforce.fitting.models import make_model
+    from viscoforce.schema.fit import validate_fit_result
+
+    omega = np.geomspace(10.0, 1e5, 16)
+    truth = {"svda": {"E0": 1e9, "E_inf": 2e8, "tau": 1e-3},
+             "contact": {"E0": 1e4, "E_inf": 2e3, "tau": 1e-3},
+             "prony": {"k_inf": 1.0, "dk_1": 2.0, "dk_2": 1.0, "tau_1": 1e-4, "tau_2": 1e-2}}[name]
+    if fixed.get("material") == "power-law":
+        truth = {"E0": 1e4, "E_inf": 2e3, "tau": 1e-3}
+        k = make_model("contact", 1, radius=5e-6, indentation=5e-7).raw(omega, truth)
+    else:
+        k = make_model(name, 2 if modes == "auto" else modes, **fixed).raw(omega, truth)
+    rng = np.random.default_rng(3)
+    noisy = k * (1 + 0.01 * rng.standard_normal(k.shape))
+    ds_in = make_spectrum(omega, noisy, 1e-7, 1e-10, stderr={"stiffness": 0.01 * np.abs(k),
+                                                              "phase": 0.5})
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        ds = fit_data(spectrum_data(ds_in), name, modes=modes, **fixed)
+    assert validate_fit_result(ds) is ds

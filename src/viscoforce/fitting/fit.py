@@ -666,7 +666,7 @@ def result_dataset(outcome: Outcome, data: FitData, *,
                            correlation=info["correlation"], success=info["success"],
                            redchi=info["redchi"], aic=info["aic"], bic=info["bic"],
                            modes=model.spec.modes, model=model.spec.name, attrs=attrs,
-                           extra=extra, **curves), outcome)
+                           extra=extra, check=False, **curves), outcome)
 
 
 def _statistics_variables(info: Mapping[str, Any], names: list[str],

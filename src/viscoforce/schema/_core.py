@@ -5,6 +5,7 @@ Pure: imports only numpy, xarray and :mod:`viscoforce.exceptions`.
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Iterable, Mapping
 from typing import Any, NamedTuple
 
@@ -368,13 +369,25 @@ def assemble(data_vars: Mapping[str, Any], coords: Mapping[str, Any] | None = No
     for name in coord_names:
         var = variables[name]
         if var.dims == (name,):
-            index = PandasIndex.from_variables({name: var}, options={})
+            index = (_text_index(name, tuple(var.values.tolist()), var.dtype.str)
+                     if var.dtype.kind == "U" else
+                     PandasIndex.from_variables({name: var}, options={}))
             variables.update(index.create_variables({name: var}))
             indexes[name] = index
     try:
         return construct(variables, coord_names, dims, dict(attrs or {}), indexes)
     except TypeError:  # the private signature changed: the public constructor
         return xr.Dataset(dict(data_vars), coords=coords, attrs=dict(attrs or {}))
+
+
+@functools.lru_cache(maxsize=256)
+def _text_index(dim: str, labels: tuple[str, ...], dtype: str) -> PandasIndex:
+    """The pandas index of a text coordinate (the parameter names), built once per labels.
+
+    Indexes are immutable and xarray shares them between datasets (``copy``, ``isel``).
+    """
+    var = xr.Variable((dim,), np.array(labels, dtype=dtype))
+    return PandasIndex.from_variables({dim: var}, options={})
 
 
 def _direct_variables(data_vars: Mapping[str, Any], coords: Mapping[str, Any]
