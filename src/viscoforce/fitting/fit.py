@@ -185,7 +185,9 @@ def spectrum_arrays(ds: xr.Dataset, dims: tuple[str, ...]) -> dict[str, np.ndarr
         if name not in ds.variables:
             return np.full((n_pixels, n_omega), fill)
         da = ds.variables[name]  # scalar, per pixel, per frequency or per point: broadcast
-        values = np.asarray(da.transpose(*(d for d in order if d in da.dims)).values, dtype=float)
+        wanted = tuple(d for d in order if d in da.dims)
+        values = np.asarray((da if da.dims == wanted else da.transpose(*wanted)).values,
+                            dtype=float)
         index = tuple(slice(None) if d in da.dims else None for d in order)
         return np.broadcast_to(values[index], shape).reshape(n_pixels, n_omega)
 
@@ -362,9 +364,9 @@ class Outcome:
         """
         if not self.data.sigma_known:
             return math.nan
-        from scipy.stats import chi2
+        from scipy.special import chdtrc  # chi2.sf without scipy.stats' argument machinery
 
-        return float(chi2.sf(self.calibrated_chisqr, self.dof))
+        return float(chdtrc(self.dof, self.calibrated_chisqr))
 
     @property
     def calibrated_chisqr(self) -> float:
@@ -372,14 +374,14 @@ class Outcome:
         nu = self.data.sigma_dof
         if nu is None:
             return float(self.result.chisqr)
-        from scipy.stats import norm, t
+        from scipy.special import ndtri, stdtr  # t.sf and norm.isf, without scipy.stats
 
         r = np.asarray(self.result.residual, dtype=float)
         nu = np.repeat(nu, r.size // nu.size)
         finite = np.isfinite(nu)
         z = r.copy()
-        tail = t.sf(np.abs(r[finite]), nu[finite])
-        z[finite] = np.sign(r[finite]) * norm.isf(np.maximum(tail, 1e-300))
+        tail = stdtr(nu[finite], -np.abs(r[finite]))
+        z[finite] = np.sign(r[finite]) * -ndtri(np.maximum(tail, 1e-300))
         return float(z @ z)
 
     def evaluate(self, x: np.ndarray) -> np.ndarray:
@@ -475,6 +477,8 @@ def residual_lag1(residual: np.ndarray, t: np.ndarray) -> float:
 def fit_once(model: FitModel, data: FitData, *, starts: int = 2) -> Outcome:
     """Least-squares fit of ``model`` from its data-driven guess (and ``starts`` − 1 more).
 
+    The other starts are tried only while the best fit so far is not settled (:func:`_settled`).
+
     Raises
     ------
     ParameterError
@@ -493,6 +497,8 @@ def fit_once(model: FitModel, data: FitData, *, starts: int = 2) -> Outcome:
     best: Outcome | None = None
     errors: list[str] = []
     for params in [first, *_alternative_starts(model, first, starts - 1)]:  # copies first
+        if best is not None and _settled(best):
+            break
         try:
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore", RuntimeWarning)
@@ -509,6 +515,25 @@ def fit_once(model: FitModel, data: FitData, *, starts: int = 2) -> Outcome:
         raise ConvergenceError(f"model {model.spec.name!r} could not be fitted from any start: "
                                + "; ".join(errors[:3]))
     return best
+
+
+#: χ² p-value from which a first start's fit is taken without trying the others.
+SETTLED_PVALUE = 0.05
+
+
+def _settled(outcome: Outcome) -> bool:
+    """Whether a fit needs no other start: it describes the data at an interior minimum.
+
+    The other starts (:func:`_alternative_starts`) guard a several-mode fit against a minimum
+    where two relaxation times merge or one runs to its window's edge. A fit that converged
+    with a covariance, has no parameter on a bound and passes the χ² test (p ≥
+    :data:`SETTLED_PVALUE`; with known stderr only) shows neither, and another start could
+    lower its χ² by no more than the noise: it is kept (issue 22: each start is a whole fit).
+    """
+    res = outcome.result
+    if not (outcome.data.sigma_known and res.success and res.errorbars):
+        return False
+    return not _params.at_bound(res.params) and outcome.pvalue >= SETTLED_PVALUE
 
 
 def _alternative_starts(model: FitModel, first: lmfit.Parameters,
@@ -922,6 +947,11 @@ def fit_data(data: FitData, name: str, *, modes: int | str = 1, criterion: str =
     return ds
 
 
+def _scalar(ds: xr.Dataset, name: Any) -> float:
+    """A scalar variable of ``ds`` as a float (read from the Variable: no DataArray is built)."""
+    return float(ds.variables[str(name)].values)
+
+
 def bound_text(ds: xr.Dataset, name: str) -> str | None:
     """How a parameter that is not determined should be reported (None when it is determined).
 
@@ -934,9 +964,9 @@ def bound_text(ds: xr.Dataset, name: str) -> str | None:
     code = int(codes.get(name, 0))
     unit = str(ds[name].attrs.get("units", ""))
     if code == 1 and f"{name}_lower" in ds.variables:
-        return f"{name} > {float(ds[f'{name}_lower']):.3g} {unit}".rstrip()
+        return f"{name} > {_scalar(ds, f'{name}_lower'):.3g} {unit}".rstrip()
     if code == 2 and f"{name}_upper" in ds.variables:
-        return f"{name} < {float(ds[f'{name}_upper']):.3g} {unit}".rstrip()
+        return f"{name} < {_scalar(ds, f'{name}_upper'):.3g} {unit}".rstrip()
     if code == 0:
         return None
     return f"{name} not determined"
@@ -950,18 +980,18 @@ def warn_unidentified(ds: xr.Dataset, *, stacklevel: int = 3) -> list[str]:
     one flat on both sides as not determined. Without it, the local test: stderr above the
     value, or none (the covariance is singular).
     """
-    names = [str(n) for n in ds["param_i"].values]
+    names = [str(n) for n in ds.variables["param_i"].values]
     if "identifiability" in ds.variables:
-        codes = np.asarray(ds["identifiability"].values).reshape(-1)
+        codes = np.asarray(ds.variables["identifiability"].values).reshape(-1)
         bad = [n for n, c in zip(names, codes, strict=True) if int(c) != 0]
     else:
         bad = [n for n in names
-               if not np.isfinite(float(ds[f"{n}_stderr"])) or
-               abs(float(ds[f"{n}_stderr"])) > abs(float(ds[n]))]
+               if not np.isfinite(_scalar(ds, f"{n}_stderr")) or
+               abs(_scalar(ds, f"{n}_stderr")) > abs(_scalar(ds, n))]
     if bad:
         shown = "; ".join(
-            f"{bound_text(ds, n) or n} (fitted {float(ds[n]):.4g} ± "
-            f"{float(ds[f'{n}_stderr']):.3g})" for n in bad)
+            f"{bound_text(ds, n) or n} (fitted {_scalar(ds, n):.4g} ± "
+            f"{_scalar(ds, f'{n}_stderr'):.3g})" for n in bad)
         warnings.warn(
             f"the data do not determine {', '.join(bad)}: {shown}; report the bound, fix the "
             "parameter, fit fewer parameters, or measure where the spectrum depends on it",
@@ -971,12 +1001,12 @@ def warn_unidentified(ds: xr.Dataset, *, stacklevel: int = 3) -> list[str]:
 
 def warn_goodness(ds: xr.Dataset, *, stacklevel: int = 3) -> bool:
     """Warn (GoodnessOfFitWarning) when the χ² p-value is below :data:`PVALUE_WARN`."""
-    p = float(ds["chi2_pvalue"]) if "chi2_pvalue" in ds.variables else math.nan
+    p = _scalar(ds, "chi2_pvalue") if "chi2_pvalue" in ds.variables else math.nan
     if math.isfinite(p) and p < PVALUE_WARN:
         warnings.warn(
             f"the model does not describe these data: chi-square {ds.attrs.get('chisqr', math.nan):.4g}"
             f"{_calibrated_text(ds)} for {ds.attrs.get('dof', '?')} degrees of freedom (redchi "
-            f"{float(ds['redchi']):.3g}), p = {p:.2g} < {PVALUE_WARN:g}; its stderr assume it "
+            f"{_scalar(ds, 'redchi'):.3g}), p = {p:.2g} < {PVALUE_WARN:g}; its stderr assume it "
             "does. Try another model or material (--model auto), or check the data's stderr",
             GoodnessOfFitWarning, stacklevel=stacklevel)
         return True
@@ -1142,9 +1172,9 @@ def svda_bias(ds: xr.Dataset, spectrum: xr.Dataset, position: float, radius: flo
     biases the moduli by ≈ δ / s, s = |∂ln k*/∂ln E| (E0, E_inf scaled together), which is small
     before contact: the SVDA error is O(κ|u0|) and so is s.
     """
-    values = {n: float(ds[n]) for n in ("E0", "E_inf", "tau")}
+    values = {n: _scalar(ds, n) for n in ("E0", "E_inf", "tau")}
     error = float(svda_error_estimate(position, values["E_inf"], radius, P, debye_length))
-    omega = np.asarray(spectrum["omega"].values, dtype=float)
+    omega = np.asarray(spectrum.variables["omega"].values, dtype=float)
     kernel = (position, values["E0"], values["E_inf"], values["tau"], radius, P)
     k = svda_stiffness_kernel(omega, *kernel, 1.0 / debye_length)
     scaled = (position, *(v * (1 + SENSITIVITY_STEP) for v in kernel[1:3]), *kernel[3:])
@@ -1164,12 +1194,12 @@ def contact_bias(ds: xr.Dataset, fixed: Mapping[str, Any], omega: np.ndarray,
     structural materials have none (E → 0 as ω → 0): their bias is not estimated (NaN, with the
     reason), rather than extrapolated.
     """
-    modes = int(ds["modes"])
+    modes = int(ds.variables["modes"].values)
     kind = str(ds.attrs.get("material", fixed.get("material") or "sls"))
     if kind not in ("sls", "prony"):
         return math.nan, (f"not estimated: the Hertz-contact estimate needs a relaxed modulus, "
                           f"which material {kind} does not have")
-    values = {str(n): float(ds[n]) for n in ds["param_i"].values}
+    values = {str(n): _scalar(ds, n) for n in ds.variables["param_i"].values}
     return hertz_error(material_from(values, modes), float(fixed["indentation"]), decay_length,
                        float(np.max(omega)))
 
@@ -1195,7 +1225,7 @@ def _warn_model_bias(ds: xr.Dataset, model: str, bias: float, reason: str) -> No
 
 def _sls_of(ds: xr.Dataset):
     """The standard linear solid of a one-mode fit result."""
-    return material_from({n: float(ds[n]) for n in ("E0", "E_inf", "tau")}, 1)
+    return material_from({n: _scalar(ds, n) for n in ("E0", "E_inf", "tau")}, 1)
 
 
 #: Relative step of the moduli sensitivity of an svda fit (its bias estimate).
