@@ -18,7 +18,12 @@ map, 1 % seeded noise in stiffness and phase and those stderr columns; 30 freque
    same command on a 1x2 map (its fixed cost: interpreter, imports, argument parsing, reading
    and writing netCDF; the two fits take ~5 ms); for reference, a child that only imports
    ``viscoforce.cli``, ``viscoforce.cli.fitting``, ``viscoforce.fitting.maps`` and
-   ``viscoforce.fitting.fit`` is timed too.
+   ``viscoforce.fitting.fit`` is timed too. A CLI that fits on a cluster also imports the
+   cluster library (dask.distributed), which the 1x2 map (fitted in-process) never does and
+   which the API's process has imported since its first cluster: where the CLI's child chose
+   the cluster, its start-up is that plus the import, measured as the median time of a child
+   importing the fit modules and ``distributed`` minus that of the child importing the fit
+   modules only.
 
 3. ``capacity``: what two processes get from the machine at that moment: a pure-Python loop
    (:data:`SPIN`) alone, then twice at once in two child processes; capacity = 2 x alone /
@@ -34,8 +39,9 @@ Checks, printed PASS/FAIL:
   cluster (otherwise reported, not judged);
 - the cost model's time within 10 % (or 0.05 s) of the better of ``in_process`` and ``cluster``,
   for every size;
-- CLI - API <= the CLI's start-up + 0.5 s (what grows with the map: reading it, writing
-  fits.nc, the summary), every size.
+- CLI - API <= the CLI's start-up (+ the cluster library's import where the CLI fitted on a
+  cluster) + 0.5 s (what grows with the map: reading it, writing fits.nc, the summary), every
+  size.
 
 BLAS is pinned to one thread (OPENBLAS/OMP/MKL_NUM_THREADS=1 before NumPy loads; inherited by
 the cluster's workers and the CLI children). Outputs (in ``--out``, default benchmarks/out/):
@@ -176,15 +182,18 @@ def cli_startup(rounds: int, tmp: Path) -> dict:
 
     data = tmp / "svda-1x2.nc"
     write_netcdf(svda_map(2).isel(y=[0]), data)
-    walls, imports = [], []
+    walls, imports, cluster_imports = [], [], []
     for _ in range(rounds):
         walls.append(run_cli(data, tmp / "fits-1x2.nc")[0])
-        t0 = time.perf_counter()
-        subprocess.run([sys.executable, "-c", STARTUP_CODE], check=True)
-        imports.append(time.perf_counter() - t0)
+        for code, times in ((STARTUP_CODE, imports),
+                            (STARTUP_CODE + ", distributed", cluster_imports)):
+            t0 = time.perf_counter()
+            subprocess.run([sys.executable, "-c", code], check=True)
+            times.append(time.perf_counter() - t0)
+    base = statistics.median(imports)
     return {"time_median_s": statistics.median(walls), "time_min_s": min(walls),
-            "runs": len(walls), "imports_median_s": statistics.median(imports),
-            "imports_code": STARTUP_CODE}
+            "runs": len(walls), "imports_median_s": base, "imports_code": STARTUP_CODE,
+            "cluster_import_s": max(0.0, statistics.median(cluster_imports) - base)}
 
 
 def _spin(n: int = SPIN) -> int:
@@ -281,9 +290,11 @@ def judge(results: dict, startup: dict, quick: bool) -> dict:
                                   "passed": auto <= allowed}
         if "cli" in res:
             over = res["cli"]["time_median_s"] - auto
-            allowed = startup["time_median_s"] + TARGET["cli_margin_s"]
+            on_cluster = any(e.startswith("local cluster") for e in res["cli"]["executions"])
+            imports = startup.get("cluster_import_s", 0.0) if on_cluster else 0.0
+            allowed = startup["time_median_s"] + imports + TARGET["cli_margin_s"]
             checks[f"cli_{size}"] = {"overhead_s": over, "allowed_s": allowed,
-                                     "passed": over <= allowed}
+                                     "cluster_import_s": imports, "passed": over <= allowed}
     judged = [c["passed"] for c in checks.values() if c["passed"] is not None]
     return {"checks": checks, "summary": {"passed": all(judged), "verdict": pf(all(judged)),
                                           "judged": len(judged), "quick": quick}}
@@ -320,7 +331,8 @@ def print_results(results: dict, startup: dict | None) -> None:
     if startup is not None:
         print(f"CLI start-up (the fit command on a 1x2 map): {startup['time_median_s']:.2f} s "
               f"median of {startup['runs']} (a child only importing the fit modules: "
-              f"{startup['imports_median_s']:.2f} s)")
+              f"{startup['imports_median_s']:.2f} s; importing dask.distributed as well: "
+              f"+{startup['cluster_import_s']:.2f} s)")
     for size, res in results.items():
         parts = [f"{w} {res[w]['time_median_s']:.2f} s" for w in WAYS if w in res]
         auto = res["auto"]
@@ -352,8 +364,10 @@ def print_checks(judged: dict) -> None:
                   f"against the better {c['best_s']:.2f} s, target <= {c['allowed_s']:.2f} s "
                   f"(10 % or 0.05 s): {verdict}")
         else:
+            imports = (f" + {c['cluster_import_s']:.2f} s importing the cluster library"
+                       if c["cluster_import_s"] else "")
             print(f"CLI - API on {name[4:]}: {c['overhead_s']:.2f} s, target <= "
-                  f"{c['allowed_s']:.2f} s (start-up + {TARGET['cli_margin_s']:g} s): "
+                  f"{c['allowed_s']:.2f} s (start-up{imports} + {TARGET['cli_margin_s']:g} s): "
                   f"{verdict}")
     print(f"overall: {judged['summary']['verdict']}")
 
