@@ -159,7 +159,7 @@ class LinearizedState:
         """The state of a decomposed linearisation: its modes and their load weights."""
         left = np.copysign(dec.q, dec.d)
         weights = 2.0 * np.pi * (left @ dec.vec) * scipy.linalg.lu_solve(
-            dec.lu, dec.q.astype(dec.vec.dtype), check_finite=False)
+            dec.lu, dec.q.astype(dec.vec.dtype), check_finite=False)  # real when V is
         gap = np.array(dec.sol.gap, dtype=float)
         gap.flags.writeable = False
         lam = np.array(dec.lam, dtype=complex)
@@ -288,9 +288,10 @@ class _Decomposition:
     d: FloatArray
     q: FloatArray
     lam: NDArray[np.complex128]
-    vec: NDArray[np.complex128]
+    #: Eigenvectors: real when every eigenvalue is (scipy's convention), else complex.
+    vec: NDArray[np.complex128] | FloatArray
     #: LU factors of ``vec`` (scipy.linalg.lu_factor): V⁻¹ applied without forming it.
-    lu: tuple[NDArray[np.complex128], NDArray[np.intc]]
+    lu: tuple[NDArray[np.complex128] | FloatArray, NDArray[np.intc]]
 
 
 def _decompose(problem: ContactProblem, sol: NewtonResult) -> _Decomposition:
@@ -302,9 +303,36 @@ def _decompose(problem: ContactProblem, sol: NewtonResult) -> _Decomposition:
     kernel = problem.influence[np.ix_(active, active)] / area[active][None, :]  # A W⁻¹
     lam, vec = scipy.linalg.eig(q[:, None] * kernel * np.copysign(q, d)[None, :],
                                 overwrite_a=True, check_finite=False)
-    vec = np.asarray(vec, dtype=complex)
+    # scipy returns real eigenvectors when every eigenvalue is real (a repulsive law: M' is
+    # similar to a symmetric-definite matrix up to the kernel's small asymmetry); they stay real,
+    # so that V's factors and every product with them run in real arithmetic (_times)
     return _Decomposition(sol=sol, active=active, d=d, q=q, lam=np.asarray(lam, dtype=complex),
                           vec=vec, lu=scipy.linalg.lu_factor(vec, check_finite=False))
+
+
+def _times(matrix: np.ndarray, z: np.ndarray) -> np.ndarray:
+    """``matrix @ z`` for a real matrix and complex ``z``: one real product on (re, im) pairs.
+
+    NumPy would promote the real matrix to complex and multiply by its zero imaginary parts
+    (4× the work); viewing z's columns as interleaved real pairs gives the same sums.
+    """
+    if np.iscomplexobj(matrix) or not np.iscomplexobj(z):
+        return matrix @ z
+    z = np.ascontiguousarray(z, dtype=complex)
+    pairs = z.view(float).reshape(*z.shape[:-1], 2 * z.shape[-1]) if z.ndim == 2 else (
+        z.view(float).reshape(-1, 2))
+    out = np.ascontiguousarray(matrix @ pairs)
+    return out.view(complex).reshape(matrix.shape[0], *z.shape[1:])
+
+
+def _lu_solve(lu: tuple[np.ndarray, np.ndarray], b: np.ndarray) -> np.ndarray:
+    """``scipy.linalg.lu_solve`` of complex ``b`` with real factors: real and imaginary parts."""
+    if np.iscomplexobj(lu[0]) or not np.iscomplexobj(b):
+        return scipy.linalg.lu_solve(lu, b, check_finite=False)
+    b = np.ascontiguousarray(b, dtype=complex)
+    pairs = b.view(float).reshape(b.shape[0], -1)
+    out = np.ascontiguousarray(scipy.linalg.lu_solve(lu, pairs, check_finite=False))
+    return out.view(complex).reshape(b.shape)
 
 
 # ── the bounded cache of static states ───────────────────────────────────────────────────────────
@@ -589,9 +617,9 @@ class _BiasModes:
     active: NDArray[np.intp]
     inactive: NDArray[np.intp]
     lam: NDArray[np.complex128]
-    left: NDArray[np.complex128]
+    left: NDArray[np.complex128] | FloatArray
     q: FloatArray
-    lu: tuple[NDArray[np.complex128], NDArray[np.intc]]
+    lu: tuple[NDArray[np.complex128] | FloatArray, NDArray[np.intc]]
     coupling: FloatArray
     load_weights: FloatArray
 
@@ -613,10 +641,10 @@ class _BiasModes:
         """(I + c_f M)⁻¹ rhs[:, f] for every column f (c: one compliance value 2C* per column)."""
         a, i = self.active, self.inactive
         x = np.empty_like(rhs, dtype=complex)
-        modal = scipy.linalg.lu_solve(self.lu, self.q[:, None] * rhs[a], check_finite=False)
-        x[a] = self.left @ (modal / (1.0 + self.lam[:, None] * c[None, :]))
+        modal = _lu_solve(self.lu, self.q[:, None] * rhs[a])
+        x[a] = _times(self.left, modal / (1.0 + self.lam[:, None] * c[None, :]))
         if i.size:
-            x[i] = rhs[i] - c[None, :] * (self.coupling @ x[a])
+            x[i] = rhs[i] - c[None, :] * _times(self.coupling, x[a])
         return x
 
 
@@ -672,9 +700,9 @@ def amplitude_bias(problem: ContactProblem, position: float, omega: ArrayLike) -
     a, d1, d2, d3 = modes.influence, modes.d1[:, None], modes.d2[:, None], modes.d3[:, None]
     h1 = modes.solve(c_w, np.ones((n, f), dtype=complex))
     h2_0 = modes.solve(c_0, c_0[None, :] * (a @ (d2 * np.abs(h1) ** 2 / 4.0)))
-    h2_2 = modes.solve(c_2w, c_2w[None, :] * (a @ (d2 * h1 ** 2 / 4.0)))
+    h2_2 = modes.solve(c_2w, c_2w[None, :] * _times(a, d2 * h1 ** 2 / 4.0))
     q3 = d2 * (h1 * h2_0 + np.conj(h1) * h2_2 / 2.0) + d3 * np.abs(h1) ** 2 * h1 / 8.0
-    h3 = modes.solve(c_w, c_w[None, :] * (a @ q3))
+    h3 = modes.solve(c_w, c_w[None, :] * _times(a, q3))
     out = (modes.load_weights @ (d1 * h3 + q3)) / (modes.load_weights @ (d1 * h1))
     if result_key is not None:
         with _BIAS_LOCK:
