@@ -48,8 +48,7 @@ def _both(model, data):
     start = model.internal_guess(data.y, data.x)
     theirs = lmfit.minimize(_residual(model, data), start.copy(), method="leastsq",
                             scale_covar=not data.sigma_known)
-    names = [n for n, p in start.items() if p.vary]
-    ours = _engine.leastsq(_vector_residual(model, data, names), start,
+    ours = _engine.leastsq(_vector_residual(model, data, start), start,
                            scale_covar=not data.sigma_known)
     return theirs, ours
 
@@ -117,3 +116,17 @@ def test_engine_refuses_expressions():
     params.add("b", expr="2*a")
     with pytest.raises(ValueError, match="expressions"):
         _engine.leastsq(lambda x: x, params)
+
+
+def test_engine_keeps_parameters_that_do_not_vary():
+    """A parameter with vary=False keeps its value; the others fit as lmfit fits them."""
+    model = make_model("contact", 1, radius=5e-6, indentation=5e-7)
+    data = _spectrum_data(model, SLS, 5)
+    start = model.internal_guess(data.y, data.x)
+    start["log_tau"].set(value=-3.0, vary=False)
+    theirs = lmfit.minimize(_residual(model, data), start.copy(), method="leastsq",
+                            scale_covar=not data.sigma_known)
+    ours = _engine.leastsq(_vector_residual(model, data, start), start,
+                           scale_covar=not data.sigma_known)
+    assert start["log_tau"].value == -3.0 and "log_tau" not in ours.var_names
+    _assert_same(theirs, ours)

@@ -414,12 +414,17 @@ def _residual(model: FitModel, data: FitData):
     return residual
 
 
-def _vector_residual(model: FitModel, data: FitData, names: Sequence[str]):
-    """The weighted residual as a function of the varied internal values in ``names`` order."""
+def _vector_residual(model: FitModel, data: FitData, params: lmfit.Parameters):
+    """The weighted residual of the varied internal values (in ``params``' order) as an array.
+
+    Parameters that do not vary keep their values in ``params``.
+    """
     of_internal = _internal_residual(model, data)
+    names = [n for n, p in params.items() if p.vary]
+    fixed = {n: p.value for n, p in params.items() if not p.vary}
 
     def residual(x: np.ndarray) -> np.ndarray:
-        return of_internal(dict(zip(names, x.tolist(), strict=True)))
+        return of_internal({**fixed, **dict(zip(names, x.tolist(), strict=True))})
 
     return residual
 
@@ -493,7 +498,7 @@ def fit_once(model: FitModel, data: FitData, *, starts: int = 2) -> Outcome:
             f"model {model.spec.name!r} with {model.spec.modes} mode(s) has {n_free} free "
             f"parameters but the data give only {data.n_values} values "
             f"({data.y.size} points): fit fewer modes or measure more points")
-    residual = _vector_residual(model, data, [n for n, p in first.items() if p.vary])
+    residual = _vector_residual(model, data, first)
     best: Outcome | None = None
     errors: list[str] = []
     for params in [first, *_alternative_starts(model, first, starts - 1)]:  # copies first
