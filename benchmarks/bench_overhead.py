@@ -11,7 +11,7 @@ the fits are weighted), for each model below:
 - ``floor``: a plain ``lmfit.minimize(residual, start, method="leastsq")`` of the same closed form
   (the model's own function ``FitModel.raw``) from the same start (the model's guess, computed
   once outside the timing), its residual written out by hand: weighted complex differences as
-  real numbers, the chain parameters decoded as 10**(sum of logs);
+  real numbers, the chain parameters decoded as 10**(sum of logs) by ``_params.reported_values``;
 - ``local`` and ``profile``: the library call with ``identifiability="local"`` (no limits) and
   ``"profile"`` (the profile likelihood of every parameter), for information;
 - ``pixel``: what one pixel of a map costs (``fitting.maps.fit_block`` on the prepared data: the
@@ -154,20 +154,6 @@ def cases(rng: np.random.Generator) -> list[dict]:
 
 # ── the floor ────────────────────────────────────────────────────────────────────────────────────
 
-def decode(layout, p: dict) -> dict:
-    """SPEC values from the internal ``log_`` parameters (10**(sum of logs) along a chain)."""
-    out = {}
-    for item in layout:
-        if isinstance(item, _params.Chain):
-            total = 0.0
-            for name in item.names:
-                total += p[f"log_{name}"]
-                out[name] = 10.0 ** total
-        else:
-            out[item.name] = p[item.name]
-    return out
-
-
 def floor_fit(case: dict):
     """A plain ``lmfit.minimize`` of the model's function from the model's start (a closure)."""
     data = case["data"]()
@@ -178,7 +164,7 @@ def floor_fit(case: dict):
                                            if np.iscomplexobj(data.weights) else data.weights)
 
     def residual(params):
-        d = np.asarray(y - func(x, decode(layout, params.valuesdict())))
+        d = np.asarray(y - func(x, _params.reported_values(layout, params.valuesdict())))
         d = d.view(float) if np.iscomplexobj(d) else d
         return d if w is None else d * w
 
