@@ -394,7 +394,7 @@ def _direct_variables(data_vars: Mapping[str, Any], coords: Mapping[str, Any]
                       ) -> tuple[dict[str, xr.Variable], set[str]] | None:
     """All entries as Variables and the coordinate names, or None where the public path must."""
     variables: dict[str, xr.Variable] = {}
-    for group in (coords, data_vars):
+    for group in (data_vars, coords):  # the public constructor's order of variables and dims
         for name, value in group.items():
             if isinstance(value, xr.DataArray):
                 if value.coords:
