@@ -122,3 +122,15 @@ def test_every_fit_result_validates(name, modes, fixed):
         warnings.simplefilter("ignore")
         ds = fit_data(spectrum_data(ds_in), name, modes=modes, **fixed)
     assert validate_fit_result(ds) is ds
+
+
+def test_linear_response_spectrum_validates():
+    """linear_response builds its spectrum unchecked (make_spectrum(check=False))."""
+    import viscoforce as vf
+    from viscoforce.schema import validate_spectrum
+
+    problem = vf.ContactProblem.create(sphere=vf.PAPER.sphere(),
+                                       surface_force=vf.paper_pressure_law(),
+                                       material=vf.PAPER.material(), deepest_position=-5e-9)
+    ds = vf.linear_response(problem, -5e-9, 1e-11, np.geomspace(1.0, 1e5, 8))
+    assert validate_spectrum(ds) is ds
