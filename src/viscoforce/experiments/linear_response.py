@@ -331,8 +331,14 @@ def _lu_solve(lu: tuple[np.ndarray, np.ndarray], b: np.ndarray) -> np.ndarray:
         return scipy.linalg.lu_solve(lu, b, check_finite=False)
     b = np.ascontiguousarray(b, dtype=complex)
     pairs = b.view(float).reshape(b.shape[0], -1)
-    out = np.ascontiguousarray(scipy.linalg.lu_solve(lu, pairs, check_finite=False))
-    return out.view(complex).reshape(b.shape)
+    out, info = _DGETRS(lu[0], lu[1], pairs)  # LAPACK directly: lu_solve's argument layer
+    if info != 0:  # pragma: no cover - factors of a nonsingular V
+        raise np.linalg.LinAlgError(f"LAPACK dgetrs reported illegal argument {-info}")
+    return np.ascontiguousarray(out).view(complex).reshape(b.shape)
+
+
+#: LAPACK's real LU solve (what scipy.linalg.lu_solve calls for float64 factors).
+_DGETRS = scipy.linalg.lapack.get_lapack_funcs("getrs", (np.empty((1, 1)),))
 
 
 # ── the bounded cache of static states ───────────────────────────────────────────────────────────
