@@ -110,12 +110,71 @@ def test_bound_transforms_are_lmfits(low, high):
         assert bounds.gradient(u)[0] == pytest.approx(p.scale_gradient(u_lmfit), abs=1e-12)
 
 
-def test_engine_refuses_expressions():
+def test_engine_refuses_expressions_naming_the_parameter():
     params = lmfit.Parameters()
     params.add("a", value=1.0)
     params.add("b", expr="2*a")
-    with pytest.raises(ValueError, match="expressions"):
+    with pytest.raises(TypeError, match=r"params\['b'\] has the expression '2\*a'"):
         _engine.leastsq(lambda x: x, params)
+
+
+def _line_params(a=1.0, b=0.0, **bounds):
+    params = lmfit.Parameters()
+    params.add("a", value=a, **bounds)
+    params.add("b", value=b)
+    return params
+
+
+def test_a_perfect_fit_has_lmfits_finite_criteria():
+    """χ² = 0: lmfit clamps χ² to 1e-250 n before the logarithm; so does the engine."""
+    x = np.linspace(0.0, 1.0, 12)
+    y = 3.0 * x + 1.0
+
+    def by_params(p):
+        return y - (p["a"].value * x + p["b"].value)
+
+    theirs = lmfit.minimize(by_params, _line_params(), method="leastsq")
+    ours = _engine.leastsq(lambda v: y - (v[0] * x + v[1]), _line_params())
+    assert np.isfinite(ours.aic) and np.isfinite(ours.bic)
+    for key in ("chisqr", "aic", "bic", "redchi"):
+        assert getattr(ours, key) == pytest.approx(getattr(theirs, key), rel=1e-9, abs=1e-300)
+
+
+def test_starts_on_a_bound_are_lmfits():
+    """A start exactly on either bound: lmfit's internal value, inverse and gradient."""
+    for low, high, value in ((-2.0, 3.0, -2.0), (-2.0, 3.0, 3.0), (-2.0, np.inf, -2.0),
+                             (-np.inf, 3.0, 3.0)):
+        p = lmfit.Parameter("p", value=value, min=low, max=high)
+        bounds = _engine._Bounds(np.array([low]), np.array([high]))
+        u = bounds.internal(np.array([value]))
+        assert u[0] == pytest.approx(p.setup_bounds(), abs=1e-12)
+        assert bounds.external(u)[0] == pytest.approx(value, abs=1e-12)
+
+
+def test_minpack_stops_at_lmfits_evaluation_limit(monkeypatch):
+    """lmfit aborts a fit after 2000 (n + 1) evaluations; MINPACK is given that limit (ier = 5,
+    a failure) and lmfit's other settings."""
+    seen = {}
+    real = _engine.minpack_leastsq
+
+    def spy(func, x0, **kwargs):
+        seen.update(kwargs)
+        return real(func, x0, **kwargs)
+
+    monkeypatch.setattr(_engine, "minpack_leastsq", spy)
+    x = np.linspace(0.0, 1.0, 12)
+    _engine.leastsq(lambda v: 3.0 * x + 1.0 - (v[0] * x + v[1]), _line_params())
+    assert seen["maxfev"] == 2000 * (2 + 1)
+    assert {k: seen[k] for k in ("ftol", "xtol", "gtol", "epsfcn", "factor")} == {
+        "ftol": 1.5e-8, "xtol": 1.5e-8, "gtol": 0.0, "epsfcn": 1e-10, "factor": 100}
+
+
+def test_a_residual_that_raises_propagates():
+    def broken(v):
+        raise ArithmeticError("the model gave NaN")
+
+    with pytest.raises(ArithmeticError, match="NaN"):
+        _engine.leastsq(broken, _line_params())
 
 
 def test_engine_keeps_parameters_that_do_not_vary():
@@ -130,3 +189,73 @@ def test_engine_keeps_parameters_that_do_not_vary():
                            scale_covar=not data.sigma_known)
     assert start["log_tau"].value == -3.0 and "log_tau" not in ours.var_names
     _assert_same(theirs, ours)
+
+
+# ── the other starts of a several-mode fit (fit._settled) ──────────────────────────────────────
+
+PRONY = {"k_inf": 1.0, "dk_1": 2.0, "dk_2": 1.0, "tau_1": 1e-4, "tau_2": 1e-2}
+
+
+def _count_fits(monkeypatch):
+    from viscoforce.fitting import fit as fit_module
+
+    calls = []
+    real = fit_module._engine.leastsq
+
+    def counting(residual, params, **kwargs):
+        calls.append(1)
+        return real(residual, params, **kwargs)
+
+    monkeypatch.setattr(fit_module._engine, "leastsq", counting)
+    return calls
+
+
+@pytest.mark.parametrize("weighted, settle, fits", [
+    (True, True, 1),    # settled: interior, covariance, p >= 0.05 -> the first start only
+    (True, False, 2),   # a selection by criterion tries every start
+    (False, True, 2),   # unknown stderr: no chi-square test, so never settled
+])
+def test_other_starts_run_only_for_a_fit_not_settled(monkeypatch, weighted, settle, fits):
+    from viscoforce.fitting.fit import _settled, fit_once
+
+    model = make_model("prony", 2)
+    data = _spectrum_data(model, PRONY, 11, weighted=weighted)
+    calls = _count_fits(monkeypatch)
+    outcome = fit_once(model, data, settle=settle)
+    assert len(calls) == fits
+    assert _settled(outcome) == (weighted and outcome.pvalue >= 0.05)
+
+
+def test_a_fit_on_a_bound_is_not_settled():
+    from viscoforce.fitting.fit import _settled, fit_once
+
+    model = make_model("prony", 2)
+    data = _spectrum_data(model, PRONY, 11)
+    outcome = fit_once(model, data)
+    assert _settled(outcome)
+    name = "log_tau_2"
+    outcome.result.params[name].value = outcome.result.params[name].max  # now on its bound
+    assert not _settled(outcome)
+
+
+def test_selection_by_criterion_keeps_every_start(monkeypatch):
+    """modes='auto' compares criteria: every candidate tries all its starts."""
+    from viscoforce.fitting.fit import select
+
+    model = make_model("prony", 2)
+    data = _spectrum_data(model, PRONY, 11)
+    calls = _count_fits(monkeypatch)
+    _, rows = select(data, "prony", modes="auto")
+    several = sum(1 for r in rows if r["modes"] > 1)
+    assert len(calls) == (len(rows) - several) + 2 * several
+
+
+def test_the_result_carries_its_fit_through_xarrays_accessor_cache():
+    """report._accessor fills xarray's accessor cache: ds.lmfit is that object."""
+    from viscoforce.fitting.fit import fit_data
+    from viscoforce.fitting.report import _accessor
+
+    model = make_model("contact", 1, radius=5e-6, indentation=5e-7)
+    ds = fit_data(_spectrum_data(model, SLS, 3), "contact", radius=5e-6, indentation=5e-7)
+    assert ds.lmfit is _accessor(ds) and ds.lmfit.available
+    assert "log_E_inf" in ds.lmfit.fit_report()

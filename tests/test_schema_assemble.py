@@ -65,6 +65,19 @@ def test_assemble_refuses_a_dimension_with_two_sizes_naming_it():
         xr.Dataset(data)  # the public constructor refuses it too
 
 
+def test_a_coordinate_named_after_one_of_its_dims_takes_the_public_path():
+    """A 2-D coordinate named after one of its dims: whatever xarray makes of it."""
+    data = {"a": xr.Variable(("x", "y"), np.ones((2, 2)))}
+    coords = {"x": (("x", "y"), np.arange(4.0).reshape(2, 2))}
+    try:
+        expected = xr.Dataset(data, coords=coords)
+    except ValueError:
+        with pytest.raises(SchemaError):
+            assemble(data, coords)
+    else:
+        xr.testing.assert_identical(assemble(data, coords), expected)
+
+
 def test_assemble_falls_back_for_inputs_that_need_alignment():
     """A DataArray with its own coordinates goes through the public constructor (aligned)."""
     da = xr.DataArray([1.0, 2.0], dims="t", coords={"t": [0.0, 1.0]})
@@ -134,3 +147,71 @@ def test_linear_response_spectrum_validates():
                                        material=vf.PAPER.material(), deepest_position=-5e-9)
     ds = vf.linear_response(problem, -5e-9, 1e-11, np.geomspace(1.0, 1e5, 8))
     assert validate_spectrum(ds) is ds
+
+
+def test_the_callers_objects_are_left_alone():
+    """Coordinates and extra variables given by the caller are copied, as xr.Dataset does."""
+    from viscoforce.schema import make_fit_result
+
+    x = xr.DataArray([0.0, 1e-6], dims="curve")
+    omega = np.geomspace(1.0, 1e3, 4)
+    ds = make_spectrum(omega, np.ones((2, 4)) * (1 + 0.3j), 1e-9, 1e-9, dims=("curve", "omega"),
+                       coords={"x": x})
+    assert ds["x"].attrs["units"] == "m" and x.attrs == {}
+    extra = xr.Variable((), 1.0, {"units": "1"})
+    fit = make_fit_result({"E0": (1e9, 1e7)}, success=True, redchi=1.0, aic=0.0, bic=0.0,
+                          modes=1, model="svda", extra={"extra_value": extra})
+    fit["extra_value"].attrs["long_name"] = "changed in the result"
+    assert extra.attrs == {"units": "1"}
+
+
+def test_two_datasets_sharing_a_parameter_index_are_independent():
+    from viscoforce.schema import make_fit_result
+
+    one, two = (make_fit_result({"E0": (v, 1.0), "tau": (1e-3, 1e-5)}, success=True, redchi=1.0,
+                                aic=0.0, bic=0.0, modes=1, model="svda") for v in (1e9, 2e9))
+    assert one.xindexes["param_i"] is two.xindexes["param_i"]  # shared, immutable
+    one["E0"].attrs["units"] = "GPa"
+    assert two["E0"].attrs["units"] == "Pa"
+    assert float(two.sel(param_i="tau")["E0"]) == 2e9
+
+
+@pytest.mark.parametrize("data, coords", [
+    ({"a": xr.Variable(("x",), [1.0])}, {"a": ("x", [2.0])}),            # a name twice
+])
+def test_what_xarray_refuses_is_a_schema_error(data, coords):
+    with pytest.raises(ValueError):
+        xr.Dataset(data, coords=coords)
+    with pytest.raises(SchemaError, match="dataset variables disagree"):
+        assemble(data, coords)
+
+
+def test_results_equal_the_public_constructors_on_the_same_inputs(monkeypatch):
+    """make_spectrum and make_fit_result with xarray's constructor in place of assemble."""
+    import viscoforce.schema.fit as fit_schema
+    import viscoforce.schema.spectrum as spectrum_schema
+    from viscoforce.schema import make_fit_result
+
+    def build():
+        omega = np.geomspace(1.0, 1e3, 4)
+        spectrum = make_spectrum(omega, (1 + 0.3j) * np.arange(1.0, 9.0).reshape(2, 4), 1e-9,
+                                 1e-9, dims=("curve", "omega"),
+                                 coords={"x": ("curve", [0.0, 1e-6])},
+                                 stderr={"stiffness": 0.01}, quality=np.zeros((2, 4), int))
+        fit = make_fit_result({"E0": (1e9, 1e7), "tau": (1e-3, None)}, success=True,
+                              redchi=1.2, aic=3.0, bic=4.0, modes=1, model="svda", omega=omega,
+                              fit_stiffness=np.ones(4), fit_phase=np.full(4, 10.0),
+                              extra={"chi2_pvalue": xr.Variable((), 0.5, {"units": "1"})})
+        return spectrum, fit
+
+    fast = build()
+
+    def public(data, coords=None, attrs=None, *, fresh=()):
+        return xr.Dataset(dict(data), coords=coords, attrs=attrs)
+
+    monkeypatch.setattr(spectrum_schema, "assemble", public)
+    monkeypatch.setattr(fit_schema, "assemble", public)
+    for got, expected in zip(fast, build(), strict=True):
+        xr.testing.assert_identical(got, expected)
+        assert list(got.variables) == list(expected.variables)
+        assert list(got.sizes.items()) == list(expected.sizes.items())

@@ -311,16 +311,15 @@ def _decompose(problem: ContactProblem, sol: NewtonResult) -> _Decomposition:
 
 
 def _times(matrix: np.ndarray, z: np.ndarray) -> np.ndarray:
-    """``matrix @ z`` for a real matrix and complex ``z``: one real product on (re, im) pairs.
+    """``matrix @ z`` for a real matrix and complex 1-D or 2-D ``z``: one real product on pairs.
 
     NumPy would promote the real matrix to complex and multiply by its zero imaginary parts
     (4× the work); viewing z's columns as interleaved real pairs gives the same sums.
     """
-    if np.iscomplexobj(matrix) or not np.iscomplexobj(z):
+    if np.iscomplexobj(matrix) or not np.iscomplexobj(z) or z.ndim > 2:
         return matrix @ z
     z = np.ascontiguousarray(z, dtype=complex)
-    pairs = z.view(float).reshape(*z.shape[:-1], 2 * z.shape[-1]) if z.ndim == 2 else (
-        z.view(float).reshape(-1, 2))
+    pairs = z.view(float).reshape(z.shape[0], -1) if z.ndim == 2 else z.view(float).reshape(-1, 2)
     out = np.ascontiguousarray(matrix @ pairs)
     return out.view(complex).reshape(matrix.shape[0], *z.shape[1:])
 

@@ -1,8 +1,8 @@
 """Lmfit's ``leastsq``, without lmfit's per-fit machinery: the same MINPACK call, the same numbers.
 
-A closed-form fit of 20 points takes ≈ 0.3 ms of model evaluations; ``lmfit.minimize`` adds
-≈ 0.6 ms around them (a deep copy of the Parameters with a new asteval interpreter, a Python
-layer on every evaluation, uncertainties objects), which is most of a fit's cost (issue 22).
+``lmfit.minimize`` wraps every fit in a deep copy of the Parameters (a new asteval interpreter),
+a Python layer on every evaluation and uncertainties objects: on a closed form of 20 points
+that is a sizeable part of the fit (issue 22; benchmarks/README.md, bench_overhead).
 :func:`leastsq` does what :meth:`lmfit.Minimizer.leastsq` does for the parameters this package
 varies — values with optional bounds, no expressions — and nothing else:
 
@@ -10,7 +10,8 @@ varies — values with optional bounds, no expressions — and nothing else:
   bounds, x = min − 1 + √(u² + 1) with a lower bound only, x = max + 1 − √(u² + 1) with an
   upper bound only, x = u without bounds;
 - :func:`scipy.optimize.leastsq` with lmfit's settings (ftol = xtol = 1.5e-8, gtol = 0,
-  epsfcn = 1e-10, factor = 100, at most 2000 (n + 1) evaluations);
+  epsfcn = 1e-10, factor = 100); at most 2000 (n + 1) evaluations, after which the fit is a
+  failure, as lmfit aborts it;
 - the covariance moved to the parameters' own scale by the transforms' gradients and scaled
   by the reduced χ² when ``scale_covar``; χ², AIC and BIC as lmfit defines them.
 
@@ -24,8 +25,9 @@ covariance, statistics) on every closed-form model. Where a model needs lmfit it
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
+from types import MappingProxyType
 
 import lmfit
 import numpy as np
@@ -35,16 +37,21 @@ from scipy.optimize import leastsq as minpack_leastsq
 SETTINGS = {"ftol": 1.5e-8, "xtol": 1.5e-8, "gtol": 0.0, "epsfcn": 1e-10, "factor": 100}
 #: lmfit's ``tiny``: an internal start closer to 0 is 0 (``Parameter.setup_bounds``).
 TINY = 1e-15
-#: lmfit's messages by MINPACK's ``ier``.
-MESSAGES = {0: "Invalid Input Parameters. I.e. more variables than data points given, "
-               "tolerance < 0.0, or no data provided.",
-            4: "One or more variable did not affect the fit.",
-            5: "Too many function evaluations."}
+#: lmfit's messages by MINPACK's ``ier`` (read-only).
+MESSAGES: Mapping[int, str] = MappingProxyType({
+    0: "Invalid Input Parameters. I.e. more variables than data points given, tolerance < 0.0, "
+       "or no data provided.",
+    4: "One or more variable did not affect the fit.",
+    5: "Too many function evaluations."})
 
 
-@dataclass
+@dataclass(frozen=True)
 class LeastSquares:
-    """The attributes of lmfit's ``MinimizerResult`` that this package reads."""
+    """The attributes of lmfit's ``MinimizerResult`` that this package reads.
+
+    The statistics are lmfit's (``MinimizerResult._calculate_statistics``): ``redchi`` from the
+    sum of squares, then χ² clamped to ≥ 1e-250·n before AIC and BIC take its logarithm.
+    """
 
     params: lmfit.Parameters
     var_names: list[str]
@@ -55,23 +62,24 @@ class LeastSquares:
     success: bool
     message: str
     nvarys: int
+    method: str = "leastsq"
     ndata: int = field(init=False)
     nfree: int = field(init=False)
     chisqr: float = field(init=False)
     redchi: float = field(init=False)
     aic: float = field(init=False)
     bic: float = field(init=False)
-    method: str = "leastsq"
 
     def __post_init__(self) -> None:
-        self.ndata = int(self.residual.size)
-        self.nfree = self.ndata - self.nvarys
-        self.chisqr = float(self.residual @ self.residual)
-        self.redchi = self.chisqr / max(1, self.nfree)
-        loglik = self.ndata * (math.log(self.chisqr / self.ndata) if self.chisqr > 0
-                               else -math.inf)
-        self.aic = loglik + 2 * self.nvarys
-        self.bic = loglik + math.log(self.ndata) * self.nvarys
+        ndata = int(self.residual.size)
+        squares = float(self.residual @ self.residual)
+        chisqr = max(squares, 1e-250 * ndata)
+        loglik = ndata * math.log(chisqr / ndata)
+        for key, value in (("ndata", ndata), ("nfree", ndata - self.nvarys),
+                           ("redchi", squares / max(1, ndata - self.nvarys)),
+                           ("chisqr", chisqr), ("aic", loglik + 2 * self.nvarys),
+                           ("bic", loglik + math.log(ndata) * self.nvarys)):
+            object.__setattr__(self, key, value)
 
     @property
     def errorbars(self) -> bool:
@@ -120,47 +128,60 @@ def leastsq(residual: Callable[[np.ndarray], np.ndarray], params: lmfit.Paramete
             scale_covar: bool = True) -> LeastSquares:
     """Minimise Σ residual² over the varied ``params`` as ``lmfit.minimize(method="leastsq")``.
 
-    ``residual(x)`` takes the varied parameters' values (in the order of ``params``) as an
-    array and returns real residuals. ``params`` (no expressions) are updated in place to the
-    best fit; they are the result's ``params``.
+    Parameters
+    ----------
+    residual : callable
+        ``residual(x)``: the varied parameters' values (in the order of ``params``) as an
+        array → real residuals (an exception raised here propagates).
+    params : lmfit.Parameters
+        Start values and bounds, without expressions; updated in place to the best fit (values,
+        stderr, correlations): they are the result's ``params``.
+    scale_covar : bool
+        Scale the covariance by the reduced χ² (unknown stderr), as lmfit does.
+
+    Returns
+    -------
+    LeastSquares
+        The fit; ``success`` is False when MINPACK stopped without converging (e.g. after
+        2000 (n + 1) evaluations, where lmfit aborts).
 
     Raises
     ------
-    ValueError
+    TypeError
         A parameter with an expression (lmfit's own minimiser handles those).
     """
+    constrained = [name for name, p in params.items() if p.expr]
+    if constrained:
+        raise TypeError(f"params[{constrained[0]!r}] has the expression "
+                        f"{params[constrained[0]].expr!r}: use lmfit.minimize for constrained "
+                        "parameters")
     names = [name for name, p in params.items() if p.vary]
-    if any(p.expr for p in params.values()):
-        raise ValueError("parameters with expressions need lmfit.minimize")
     low = np.array([params[n].min for n in names], dtype=float)
     high = np.array([params[n].max for n in names], dtype=float)
     bounds = _Bounds(low, high)
-    start = np.array([params[n].value for n in names], dtype=float)
-    start = np.clip(start, low, high)
+    start = np.clip(np.array([params[n].value for n in names], dtype=float), low, high)
 
     def internal_residual(u: np.ndarray) -> np.ndarray:
         return residual(bounds.external(u))
 
-    max_nfev = 2000 * (len(names) + 1)
     best, cov, info, _, ier = minpack_leastsq(
-        internal_residual, bounds.internal(start), full_output=True, maxfev=2 * max_nfev,
-        **SETTINGS)
+        internal_residual, bounds.internal(start), full_output=True,
+        maxfev=2000 * (len(names) + 1), **SETTINGS)
     best = np.atleast_1d(best)
-    x = bounds.external(best)
     fvec = np.asarray(info["fvec"], dtype=float)
-    result = LeastSquares(params, names, fvec, None, int(info["nfev"]), int(ier),
-                          ier in (1, 2, 3, 4),
-                          "Fit succeeded." if ier in (1, 2, 3) else MESSAGES.get(
-                              ier, "Tolerance seems to be too small."), len(names))
-    for name, value in zip(names, x, strict=True):
+    message = "Fit succeeded." if ier in (1, 2, 3) else MESSAGES.get(
+        ier, "Tolerance seems to be too small.")
+    for name, value in zip(names, bounds.external(best), strict=True):
         params[name].value = float(value)
         params[name].stderr, params[name].correl = None, None
-    if cov is not None:
+    if cov is None:
+        message += " Could not estimate error-bars."
+    else:
         g = bounds.gradient(best)
         cov = cov * np.outer(g, g)
         if scale_covar:
-            cov = cov * result.redchi
-        result.covar = cov
+            squares = float(fvec @ fvec)
+            cov = cov * (squares / max(1, fvec.size - len(names)))
         with np.errstate(invalid="ignore"):
             sd = np.sqrt(np.diag(cov))
         for i, name in enumerate(names):
@@ -168,6 +189,5 @@ def leastsq(residual: Callable[[np.ndarray], np.ndarray], params: lmfit.Paramete
             params[name].correl = {other: float(cov[i, j] / (sd[i] * sd[j]))
                                    for j, other in enumerate(names)
                                    if j != i and sd[i] > 0 and sd[j] > 0}
-    else:
-        result.message += " Could not estimate error-bars."
-    return result
+    return LeastSquares(params, names, fvec, cov, int(info["nfev"]), int(ier),
+                        ier in (1, 2, 3, 4), message, len(names))

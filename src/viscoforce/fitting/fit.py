@@ -28,10 +28,11 @@ whose likelihood is one-sided is reported as a bound, not as a value with an err
 
 from __future__ import annotations
 
+import itertools
 import math
 import re
 import warnings
-from collections.abc import Mapping, Sequence
+from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -479,10 +480,13 @@ def residual_lag1(residual: np.ndarray, t: np.ndarray) -> float:
     return float(r[:-1] @ r[1:]) / denom if denom > 0 else 0.0
 
 
-def fit_once(model: FitModel, data: FitData, *, starts: int = 2) -> Outcome:
+def fit_once(model: FitModel, data: FitData, *, starts: int = 2, settle: bool = True
+             ) -> Outcome:
     """Least-squares fit of ``model`` from its data-driven guess (and ``starts`` − 1 more).
 
-    The other starts are tried only while the best fit so far is not settled (:func:`_settled`).
+    With ``settle``, the other starts are tried only while the best fit so far is not settled
+    (:func:`_settled`); a selection by criterion (``modes="auto"``, the measured-data chooser)
+    passes False and tries them all, since its choice rests on differences in χ².
 
     Raises
     ------
@@ -501,8 +505,8 @@ def fit_once(model: FitModel, data: FitData, *, starts: int = 2) -> Outcome:
     residual = _vector_residual(model, data, first)
     best: Outcome | None = None
     errors: list[str] = []
-    for params in [first, *_alternative_starts(model, first, starts - 1)]:  # copies first
-        if best is not None and _settled(best):
+    for params in itertools.chain([first], _alternative_starts(model, first, starts - 1)):
+        if settle and best is not None and _settled(best):
             break
         try:
             with warnings.catch_warnings():
@@ -542,18 +546,28 @@ def _settled(outcome: Outcome) -> bool:
 
 
 def _alternative_starts(model: FitModel, first: lmfit.Parameters,
-                        count: int) -> list[lmfit.Parameters]:
-    """More starts for several modes: the relaxation times spread wider, or closer."""
+                        count: int) -> Iterator[lmfit.Parameters]:
+    """More starts for several modes: the relaxation times spread wider, or closer.
+
+    The start values are read now (the fit then moves ``first``); each start is built only when
+    it is asked for.
+    """
     if count <= 0 or model.spec.modes == 1:
-        return []
-    out = []
-    for factor in (2.5, 0.4)[:count]:
-        params = first.copy()
-        for name, p in params.items():
-            if name.startswith("log_tau_") and name != "log_tau_1" and p.vary:
-                p.set(value=min(max(p.value * factor, p.min), p.max))
-        out.append(params)
-    return out
+        return iter(())
+    values = {name: p.value for name, p in first.items()}
+
+    def starts() -> Iterator[lmfit.Parameters]:
+        for factor in (2.5, 0.4)[:count]:
+            params = first.copy()
+            for name, p in params.items():
+                value = values[name]
+                if name.startswith("log_tau_") and name != "log_tau_1" and p.vary:
+                    value = min(max(value * factor, p.min), p.max)
+                p.set(value=value)
+                p.stderr, p.correl = None, None
+            yield params
+
+    return starts()
 
 
 # ── results ─────────────────────────────────────────────────────────────────────────────────────
@@ -878,7 +892,7 @@ def select(data: FitData, name: str, *, modes: int | str = 1, criterion: str = "
         if len(model.names) >= data.n_values:  # one internal parameter per SPEC name
             break
         try:
-            outcomes.append(fit_once(model, data))
+            outcomes.append(fit_once(model, data, settle=False))
         except ConvergenceError:
             if not outcomes:
                 raise

@@ -152,7 +152,7 @@ def fit_measured_auto(spectrum: xr.Dataset, *, modes: int | str = "auto", criter
                              f"{data.n_values} values"})
                 break
             try:
-                outcome = fit_once(model, data)
+                outcome = fit_once(model, data, settle=False)  # compared by criterion
             except (ConvergenceError, ModelValidityError, ParameterError) as exc:
                 rows.append({"label": label, "note": f"failed: {str(exc).splitlines()[0]}"})
                 continue

@@ -140,9 +140,9 @@ def _accessor(ds: xr.Dataset) -> LmfitAccessor:
     """``ds.lmfit``, put in xarray's accessor cache directly.
 
     The first ``ds.lmfit`` of a new dataset looks ``_cache`` up through the dataset's
-    ``__getattr__``, whose miss builds a did-you-mean message over every variable name: a
-    quarter of a millisecond per fit (issue 22). The cache is the slot xarray's accessor
-    descriptor reads, so ``ds.lmfit`` afterwards returns this same object.
+    ``__getattr__``, whose miss builds a did-you-mean message over every variable name (issue
+    22: a sizeable part of a small fit). The cache is the slot xarray's accessor descriptor
+    reads, so ``ds.lmfit`` afterwards returns this same object (``tests/test_fit_engine.py``).
     """
     try:
         cache = object.__getattribute__(ds, "_cache")

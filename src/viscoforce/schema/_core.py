@@ -6,7 +6,7 @@ Pure: imports only numpy, xarray and :mod:`viscoforce.exceptions`.
 from __future__ import annotations
 
 import functools
-from collections.abc import Iterable, Mapping
+from collections.abc import Collection, Iterable, Mapping
 from typing import Any, NamedTuple
 
 import numpy as np
@@ -330,32 +330,40 @@ def flag_attrs(flags: Mapping[int, str], dtype: type = np.int8) -> dict[str, Any
 
 
 def assemble(data_vars: Mapping[str, Any], coords: Mapping[str, Any] | None = None,
-             attrs: Mapping[str, Any] | None = None) -> xr.Dataset:
+             attrs: Mapping[str, Any] | None = None, *,
+             fresh: Collection[str] = ()) -> xr.Dataset:
     """``xr.Dataset(data_vars, coords=coords, attrs=attrs)``, built without xarray's merge.
 
     The library builds its datasets from fresh :class:`xarray.Variable` objects (from
     :func:`variable`) that need no alignment, yet the public constructor spends most of a small
-    fit's time merging them (≈ 0.8 ms for 40 scalars, issue 22). When every entry is a Variable,
-    a DataArray without coordinates or a ``(dims, values[, attrs])`` tuple, this assembles the
-    dataset directly: the dimension sizes are checked here, each 1-D coordinate named after its
-    dim gets the default pandas index, and xarray's ``Dataset._construct_direct`` (private, and
-    used by xarray's own methods since 0.x) makes the object. Anything else, or an xarray
-    without that constructor, takes the public one. ``tests/test_schema_assemble.py`` checks
-    that both give identical datasets. The variables are taken over, not copied: pass fresh ones.
+    fit's time merging them (issue 22). When every entry is a Variable, a DataArray without
+    coordinates or a ``(dims, values[, attrs])`` tuple, this assembles the dataset directly: the
+    dimension sizes are checked here, each 1-D coordinate named after its dim gets the default
+    pandas index, and xarray's ``Dataset._construct_direct`` (private, and used by xarray's own
+    methods since 0.x) makes the object. Anything else, or an xarray without that constructor,
+    takes the public one. ``tests/test_schema_assemble.py`` checks that both give identical
+    datasets.
+
+    Parameters
+    ----------
+    data_vars, coords, attrs
+        As for :class:`xarray.Dataset`.
+    fresh : collection of str
+        Names of Variables the caller made for this dataset: they are taken over. Every other
+        Variable or DataArray is copied (shallow, as the public constructor does), so that
+        changing the dataset's attributes leaves the caller's objects alone.
 
     Raises
     ------
     SchemaError
-        A dimension with two sizes (the message names it and both variables).
+        A dimension with two sizes, or arguments the public constructor refuses (the message
+        says why).
     """
     coords = dict(coords or {})
-    fast = _direct_variables(data_vars, coords)
+    fast = _direct_variables(data_vars, coords, set(fresh))
     construct = getattr(xr.Dataset, "_construct_direct", None)
     if fast is None or construct is None:
-        try:
-            return xr.Dataset(dict(data_vars), coords=coords, attrs=dict(attrs or {}))
-        except ValueError as exc:  # conflicting sizes: the same message as the fast path
-            raise SchemaError(f"dataset variables disagree: {exc}") from None
+        return _public_dataset(data_vars, coords, attrs)
     variables, coord_names = fast
     dims: dict[str, int] = {}
     owner: dict[str, str] = {}
@@ -370,19 +378,33 @@ def assemble(data_vars: Mapping[str, Any], coords: Mapping[str, Any] | None = No
         var = variables[name]
         if var.dims == (name,):
             index = (_text_index(name, tuple(var.values.tolist()), var.dtype.str)
-                     if var.dtype.kind == "U" else
+                     if var.dtype.kind == "U" and var.size <= TEXT_INDEX_CACHE_LABELS else
                      PandasIndex.from_variables({name: var}, options={}))
             variables.update(index.create_variables({name: var}))
             indexes[name] = index
     try:
         return construct(variables, coord_names, dims, dict(attrs or {}), indexes)
     except TypeError:  # the private signature changed: the public constructor
+        return _public_dataset(data_vars, coords, attrs)
+
+
+def _public_dataset(data_vars: Mapping[str, Any], coords: Mapping[str, Any],
+                    attrs: Mapping[str, Any] | None) -> xr.Dataset:
+    """``xr.Dataset(...)``, its refusals as SchemaError."""
+    try:
         return xr.Dataset(dict(data_vars), coords=coords, attrs=dict(attrs or {}))
+    except (TypeError, ValueError) as exc:
+        raise SchemaError(f"dataset variables disagree: {exc}") from None
 
 
-@functools.lru_cache(maxsize=256)
+#: Longest text coordinate whose pandas index :func:`assemble` keeps for reuse (the parameter
+#: names of a fit; a map's text labels are built each time).
+TEXT_INDEX_CACHE_LABELS = 32
+
+
+@functools.lru_cache(maxsize=64)
 def _text_index(dim: str, labels: tuple[str, ...], dtype: str) -> PandasIndex:
-    """The pandas index of a text coordinate (the parameter names), built once per labels.
+    """The pandas index of a short text coordinate (the parameter names), built once per labels.
 
     Indexes are immutable and xarray shares them between datasets (``copy``, ``isel``).
     """
@@ -390,16 +412,22 @@ def _text_index(dim: str, labels: tuple[str, ...], dtype: str) -> PandasIndex:
     return PandasIndex.from_variables({dim: var}, options={})
 
 
-def _direct_variables(data_vars: Mapping[str, Any], coords: Mapping[str, Any]
-                      ) -> tuple[dict[str, xr.Variable], set[str]] | None:
-    """All entries as Variables and the coordinate names, or None where the public path must."""
+def _direct_variables(data_vars: Mapping[str, Any], coords: Mapping[str, Any],
+                      fresh: set[str]) -> tuple[dict[str, xr.Variable], set[str]] | None:
+    """All entries as Variables and the coordinate names, or None where the public path must.
+
+    Variables not named in ``fresh`` and every DataArray's Variable are shallow copies.
+    """
     variables: dict[str, xr.Variable] = {}
     for group in (data_vars, coords):  # the public constructor's order of variables and dims
         for name, value in group.items():
             if isinstance(value, xr.DataArray):
                 if value.coords:
                     return None
-                value = value.variable
+                value = value.variable.copy(deep=False)
+            elif isinstance(value, xr.Variable):
+                if name not in fresh:
+                    value = value.copy(deep=False)
             elif isinstance(value, tuple):
                 try:
                     value = xr.Variable(*value)
@@ -408,7 +436,7 @@ def _direct_variables(data_vars: Mapping[str, Any], coords: Mapping[str, Any]
             if not isinstance(value, xr.Variable) or not isinstance(name, str) or (
                     name in variables):
                 return None
-            if value.ndim == 1 and value.dims[0] == name and group is data_vars:
-                return None  # a data variable named after its dim becomes an index coordinate
+            if name in value.dims and (value.dims != (name,) or group is data_vars):
+                return None  # xarray's rules: an index coordinate, or a refusal
             variables[name] = value
     return variables, set(coords)

@@ -137,8 +137,8 @@ def make_fit_result(params: Mapping[str, tuple[float, float | None]], *,
         its dims; checked with the rest.
     check : bool
         Validate the dataset (:func:`validate_fit_result`). The fitting code passes False for
-        the results it assembles from checked pieces (a quarter of a small fit's fixed cost);
-        ``tests/test_schema_assemble.py`` validates every model's result instead.
+        the results it assembles from checked pieces; ``tests/test_schema_assemble.py``
+        validates every model's result instead.
 
     Returns
     -------
@@ -156,7 +156,7 @@ def make_fit_result(params: Mapping[str, tuple[float, float | None]], *,
     clash = sorted(set(names) & (set(FIT_VARIABLES) | {"param_i", "param_j"}))
     if clash:
         raise SchemaError(f"fit parameter names {clash} clash with fit-result variables")
-    data: dict[str, xr.DataArray] = {}
+    data: dict[str, xr.Variable | xr.DataArray] = {}
     for name in names:
         try:
             value, err = params[name]
@@ -174,7 +174,7 @@ def make_fit_result(params: Mapping[str, tuple[float, float | None]], *,
     pair = ("param_i", "param_j")
     data["correlation"] = variable(shaped("correlation", corr, (n, n), pair), pair,
                                    t["correlation"])
-    data["success"] = xr.DataArray(np.int8(success), attrs={
+    data["success"] = xr.Variable((), np.int8(success), {
         "long_name": t["success"].long_name, **flag_attrs(SUCCESS_FLAGS)})
     for name, value in (("redchi", redchi), ("aic", aic), ("bic", bic)):
         data[name] = variable(shaped(name, value, (), ()), (), t[name])
@@ -194,14 +194,15 @@ def make_fit_result(params: Mapping[str, tuple[float, float | None]], *,
         for name, v in curves.items():
             if v is not None:
                 data[name] = variable(shaped(name, v, x.shape, (axis,)), (axis,), t[name])
+    fresh = set(data) | set(coords)  # made here; the caller's extra variables are copied
     for name, v in as_mapping("extra", extra).items():
         if name in data or name in coords:
             raise SchemaError(f"extra variable {name!r} clashes with a fit-result variable")
         data[name] = v
     meta = clean_attrs(attrs)
     meta["model"] = model
-    ds = assemble(data, coords, meta)
-    return validate_fit_result(ds) if check else ds
+    ds = assemble(data, coords, meta, fresh=fresh)
+    return validate_fit_result(ds) if as_flag("check", check) else ds
 
 
 def validate_fit_result(ds: xr.Dataset, *, require: Iterable[str] | None = None) -> xr.Dataset:

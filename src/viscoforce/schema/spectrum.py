@@ -123,8 +123,8 @@ def make_spectrum(omega: ArrayLike, complex_stiffness: ArrayLike, mean_force: Ar
         measured one: NaN may then mark unknown values, see ``mean_force``).
     check : bool
         Validate the dataset (:func:`validate_spectrum`). The solvers pass False for the spectra
-        they build from their own checked arrays (``linear_response``: 0.05 ms of a 3.5 ms
-        call); ``tests/test_schema_assemble.py`` validates what they return.
+        they build from their own checked arrays (``linear_response``);
+        ``tests/test_schema_assemble.py`` validates what they return.
 
     Returns
     -------
@@ -206,7 +206,7 @@ def make_spectrum(omega: ArrayLike, complex_stiffness: ArrayLike, mean_force: Ar
     if source is not None:
         meta["source"] = source
     try:
-        ds = assemble(out, all_coords, meta)
+        ds = assemble(out, all_coords, meta, fresh={*out, "omega"})
     except (TypeError, ValueError, SchemaError) as exc:
         raise SchemaError(
             f"coords must map names to DataArrays or (dims, values[, attrs]) tuples over the "
@@ -215,11 +215,11 @@ def make_spectrum(omega: ArrayLike, complex_stiffness: ArrayLike, mean_force: Ar
         if name in t and t[name].units:
             ds[name].attrs.setdefault("units", t[name].units)
             ds[name].attrs.setdefault("long_name", t[name].long_name)
-    return validate_spectrum(ds) if check else ds
+    return validate_spectrum(ds) if as_flag("check", check) else ds
 
 
 def _quality(quality: ArrayLike, shape: tuple[int, ...], dims: tuple[str, ...],
-             comment: str) -> xr.DataArray:
+             comment: str) -> xr.Variable:
     raw = np.asarray(quality)
     if raw.dtype.kind not in "iu":
         raise SchemaError(f"quality must be integer codes of {QUALITY_FLAGS}, got {raw.dtype}")
@@ -230,8 +230,8 @@ def _quality(quality: ArrayLike, shape: tuple[int, ...], dims: tuple[str, ...],
     bad = np.setdiff1d(codes, list(QUALITY_FLAGS))
     if bad.size:
         raise SchemaError(f"quality codes {bad.tolist()} are not among {QUALITY_FLAGS}")
-    return xr.DataArray(codes, dims=dims, attrs={"long_name": "quality flag",
-                                                 **flag_attrs(QUALITY_FLAGS), "comment": comment})
+    return xr.Variable(dims, codes, {"long_name": "quality flag", **flag_attrs(QUALITY_FLAGS),
+                                     "comment": comment})
 
 
 def phase_quality(phase: ArrayLike) -> np.ndarray:

@@ -119,7 +119,7 @@ def solve_gap(problem: ContactProblem, base: FloatArray, coupling: float, initia
         np.multiply(a_mat, (-coupling) * law.pressure_derivative(h), out=jac)
         jac.flat[:: n + 1] += 1.0
         # LAPACK's getrf/getrs directly: scipy.linalg.lu_factor/lu_solve return the same
-        # factors and solution, through an argument layer that costs ~10 µs per iteration
+        # factors and solution through an argument layer that costs more than a small solve
         lu, piv, info = _GETRF(jac, overwrite_a=True)
         if info == 0:
             delta, info = _GETRS(lu, piv, -res)
