@@ -310,6 +310,17 @@ def _decompose(problem: ContactProblem, sol: NewtonResult) -> _Decomposition:
                           vec=vec, lu=scipy.linalg.lu_factor(vec, check_finite=False))
 
 
+def _pairs(z: np.ndarray) -> np.ndarray:
+    """A complex 1-D or 2-D array as real rows of interleaved (re, im) pairs (a view)."""
+    z = np.ascontiguousarray(z, dtype=complex)
+    return z.view(float).reshape(z.shape[0], -1)
+
+
+def _from_pairs(pairs: np.ndarray, rows: int, tail: tuple[int, ...]) -> np.ndarray:
+    """The complex array of ``rows`` × ``tail`` whose (re, im) pairs are ``pairs``' rows."""
+    return np.ascontiguousarray(pairs).view(complex).reshape(rows, *tail)
+
+
 def _times(matrix: np.ndarray, z: np.ndarray) -> np.ndarray:
     """``matrix @ z`` for a real matrix and complex 1-D or 2-D ``z``: one real product on pairs.
 
@@ -318,22 +329,17 @@ def _times(matrix: np.ndarray, z: np.ndarray) -> np.ndarray:
     """
     if np.iscomplexobj(matrix) or not np.iscomplexobj(z) or z.ndim > 2:
         return matrix @ z
-    z = np.ascontiguousarray(z, dtype=complex)
-    pairs = z.view(float).reshape(z.shape[0], -1) if z.ndim == 2 else z.view(float).reshape(-1, 2)
-    out = np.ascontiguousarray(matrix @ pairs)
-    return out.view(complex).reshape(matrix.shape[0], *z.shape[1:])
+    return _from_pairs(matrix @ _pairs(z), matrix.shape[0], z.shape[1:])
 
 
 def _lu_solve(lu: tuple[np.ndarray, np.ndarray], b: np.ndarray) -> np.ndarray:
     """``scipy.linalg.lu_solve`` of complex ``b`` with real factors: real and imaginary parts."""
-    if np.iscomplexobj(lu[0]) or not np.iscomplexobj(b):
+    if np.iscomplexobj(lu[0]) or not np.iscomplexobj(b) or b.ndim > 2:
         return scipy.linalg.lu_solve(lu, b, check_finite=False)
-    b = np.ascontiguousarray(b, dtype=complex)
-    pairs = b.view(float).reshape(b.shape[0], -1)
-    out, info = _DGETRS(lu[0], lu[1], pairs)  # LAPACK directly: lu_solve's argument layer
+    out, info = _DGETRS(lu[0], lu[1], _pairs(b))  # LAPACK directly: lu_solve's argument layer
     if info != 0:  # pragma: no cover - factors of a nonsingular V
         raise np.linalg.LinAlgError(f"LAPACK dgetrs reported illegal argument {-info}")
-    return np.ascontiguousarray(out).view(complex).reshape(b.shape)
+    return _from_pairs(out, b.shape[0], b.shape[1:])
 
 
 #: LAPACK's real LU solve (what scipy.linalg.lu_solve calls for float64 factors).
@@ -645,14 +651,13 @@ class _BiasModes:
     def solve(self, c: np.ndarray, rhs: np.ndarray) -> np.ndarray:
         """(I + c_f M)⁻¹ rhs[:, f] for every column f (c: one compliance value 2C* per column)."""
         a, i = self.active, self.inactive
-        if not i.size:  # every node carries a force derivative: no indexing
-            modal = _lu_solve(self.lu, self.q[:, None] * rhs)
-            return _times(self.left, modal / (1.0 + self.lam[:, None] * c[None, :]))
+        modal = _lu_solve(self.lu, self.q[:, None] * (rhs[a] if i.size else rhs))
+        x_a = _times(self.left, modal / (1.0 + self.lam[:, None] * c[None, :]))
+        if not i.size:  # every node carries a force derivative: x is its active part
+            return x_a
         x = np.empty_like(rhs, dtype=complex)
-        modal = _lu_solve(self.lu, self.q[:, None] * rhs[a])
-        x[a] = _times(self.left, modal / (1.0 + self.lam[:, None] * c[None, :]))
-        if i.size:
-            x[i] = rhs[i] - c[None, :] * _times(self.coupling, x[a])
+        x[a] = x_a
+        x[i] = rhs[i] - c[None, :] * _times(self.coupling, x_a)
         return x
 
 

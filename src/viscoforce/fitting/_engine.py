@@ -26,7 +26,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from types import MappingProxyType
 
 import lmfit
@@ -174,20 +174,19 @@ def leastsq(residual: Callable[[np.ndarray], np.ndarray], params: lmfit.Paramete
     for name, value in zip(names, bounds.external(best), strict=True):
         params[name].value = float(value)
         params[name].stderr, params[name].correl = None, None
+    result = LeastSquares(params, names, fvec, None, int(info["nfev"]), int(ier),
+                          ier in (1, 2, 3, 4), message + (
+                              " Could not estimate error-bars." if cov is None else ""),
+                          len(names))
     if cov is None:
-        message += " Could not estimate error-bars."
-    else:
-        g = bounds.gradient(best)
-        cov = cov * np.outer(g, g)
-        if scale_covar:
-            squares = float(fvec @ fvec)
-            cov = cov * (squares / max(1, fvec.size - len(names)))
-        with np.errstate(invalid="ignore"):
-            sd = np.sqrt(np.diag(cov))
-        for i, name in enumerate(names):
-            params[name].stderr = float(sd[i])
-            params[name].correl = {other: float(cov[i, j] / (sd[i] * sd[j]))
-                                   for j, other in enumerate(names)
-                                   if j != i and sd[i] > 0 and sd[j] > 0}
-    return LeastSquares(params, names, fvec, cov, int(info["nfev"]), int(ier),
-                        ier in (1, 2, 3, 4), message, len(names))
+        return result
+    g = bounds.gradient(best)
+    cov = cov * np.outer(g, g) * (result.redchi if scale_covar else 1.0)
+    with np.errstate(invalid="ignore"):
+        sd = np.sqrt(np.diag(cov))
+    for i, name in enumerate(names):
+        params[name].stderr = float(sd[i])
+        params[name].correl = {other: float(cov[i, j] / (sd[i] * sd[j]))
+                               for j, other in enumerate(names)
+                               if j != i and sd[i] > 0 and sd[j] > 0}
+    return replace(result, covar=cov)

@@ -143,18 +143,15 @@ def to_reported(layout: Sequence[Item], internal: Mapping[str, float]
     A chain member is 10**(Σ of the logs up to it), so d q_k / d log_j = ln 10 · q_k for every
     j up to k; a signed or bounded quantity is itself.
     """
-    values: dict[str, float] = {}
+    values = {name: float(v) for name, v in reported_values(layout, internal).items()}
     grads: dict[str, dict[str, float]] = {}
     ln10 = math.log(10.0)
     for item in layout:
         if isinstance(item, Chain):
-            total, logs = 0.0, []
+            logs: list[str] = []
             for name in item.names:
-                total += float(internal[f"log_{name}"])
                 logs.append(f"log_{name}")
-                values[name] = 10.0 ** total
                 grads[name] = {lg: ln10 * values[name] for lg in logs}
         else:
-            values[item.name] = float(internal[item.name])
             grads[item.name] = {item.name: 1.0}
     return values, grads
