@@ -158,7 +158,7 @@ def floor_fit(case: dict):
     """A plain ``lmfit.minimize`` of the model's function from the model's start (a closure)."""
     data = case["data"]()
     model = make_model(case["model"], case["modes"], **case["fixed"])
-    start = model.internal_guess(data.y, data.x)
+    start = model.internal_guess(data.y, data.x).to_lmfit()
     x, y, layout, func = data.x, data.y, model.layout, model.raw
     w = None if data.weights is None else (data.weights.view(float)
                                            if np.iscomplexobj(data.weights) else data.weights)

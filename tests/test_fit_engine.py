@@ -46,7 +46,7 @@ def _spectrum_data(model, truth, seed, weighted=True):
 
 def _both(model, data):
     start = model.internal_guess(data.y, data.x)
-    theirs = lmfit.minimize(_residual(model, data), start.copy(), method="leastsq",
+    theirs = lmfit.minimize(_residual(model, data), start.to_lmfit(), method="leastsq",
                             scale_covar=not data.sigma_known)
     ours = _engine.leastsq(_vector_residual(model, data, start), start,
                            scale_covar=not data.sigma_known)
@@ -183,7 +183,7 @@ def test_engine_keeps_parameters_that_do_not_vary():
     data = _spectrum_data(model, SLS, 5)
     start = model.internal_guess(data.y, data.x)
     start["log_tau"].set(value=-3.0, vary=False)
-    theirs = lmfit.minimize(_residual(model, data), start.copy(), method="leastsq",
+    theirs = lmfit.minimize(_residual(model, data), start.to_lmfit(), method="leastsq",
                             scale_covar=not data.sigma_known)
     ours = _engine.leastsq(_vector_residual(model, data, start), start,
                            scale_covar=not data.sigma_known)
@@ -259,3 +259,82 @@ def test_the_result_carries_its_fit_through_xarrays_accessor_cache():
     ds = fit_data(_spectrum_data(model, SLS, 3), "contact", radius=5e-6, indentation=5e-7)
     assert ds.lmfit is _accessor(ds) and ds.lmfit.available
     assert "log_E_inf" in ds.lmfit.fit_report()
+
+
+# ── the engine's light parameters and decoder (issue 22: no lmfit container per fit) ──────────
+
+@pytest.mark.parametrize("model_name, modes, fixed, truth", CASES)
+def test_internal_parameters_are_lmfits_own(model_name, modes, fixed, truth):
+    """internal_guess's light container holds what lmfit's Parameters of the layout hold."""
+    from viscoforce.fitting import _params
+
+    model = make_model(model_name, modes, **fixed)
+    data = _spectrum_data(model, truth, 11)
+    ours = model.internal_guess(data.y, data.x)
+    guess = model._guesser(data.y, data.x)
+    reference = lmfit.Parameters()
+    for name, p in model.parameters_from(guess, data.x, y=data.y).items():
+        if not p.expr:  # the internal ones: what lmfit would vary
+            reference.add(name, value=p.value, min=p.min, max=p.max, vary=p.vary)
+    assert isinstance(ours, _params.InternalParameters)
+    assert list(ours) == list(reference)
+    for name, p in reference.items():
+        assert (ours[name].value, ours[name].min, ours[name].max, ours[name].vary) == (
+            p.value, p.min, p.max, p.vary)
+    as_lmfit = ours.to_lmfit()
+    assert as_lmfit.valuesdict() == ours.valuesdict() == reference.valuesdict()
+
+
+def test_internal_parameters_clip_copy_and_refuse_empty_windows():
+    from viscoforce.fitting._params import Internal, InternalParameters
+
+    params = InternalParameters()
+    params.add("a", value=5.0, min=0.0, max=2.0)  # lmfit clips a start beyond a bound
+    assert params["a"].value == 2.0 == lmfit.Parameter("a", value=5.0, min=0.0, max=2.0).value
+    twin = params.copy()
+    twin["a"].set(value=-1.0)
+    assert twin["a"].value == 0.0 and params["a"].value == 2.0  # independent, clipped
+    twin["a"].set(vary=False)
+    assert not twin["a"].vary and params["a"].vary
+    with pytest.raises(ValueError, match="min < max"):
+        Internal("b", 1.0, 2.0, 2.0)
+
+
+@pytest.mark.parametrize("model_name, modes, fixed, truth", CASES)
+def test_the_decoder_gives_reported_values_exactly(model_name, modes, fixed, truth):
+    """The fit loop's decoder is reported_values to the bit, varied and fixed alike."""
+    from viscoforce.fitting import _params
+
+    model = make_model(model_name, modes, **fixed)
+    data = _spectrum_data(model, truth, 12)
+    params = model.internal_guess(data.y, data.x)
+    names = list(params)
+    held = names[-1]
+    varied = names[:-1]
+    rng = np.random.default_rng(3)
+    decode = _params.decoder(model.layout, varied, {held: params[held].value})
+    for _ in range(20):
+        x = [params[n].value + rng.normal(scale=0.3) for n in varied]
+        internal = {**dict(zip(varied, x, strict=True)), held: params[held].value}
+        assert decode(x) == _params.reported_values(model.layout, internal)
+    with pytest.raises(KeyError, match="neither varied nor fixed"):
+        _params.decoder(model.layout, varied, {})
+
+
+@pytest.mark.parametrize("low, high", [
+    ([-2.0, 0.0, 1.0], [3.0, 12.0, 1.5]),                    # every parameter bounded twice
+    ([-2.0, -np.inf, 0.5, -np.inf], [3.0, 1.0, np.inf, np.inf]),  # mixed, one free
+    ([-np.inf, -np.inf], [np.inf, np.inf]),                 # none bounded
+])
+def test_bound_transforms_match_lmfits_per_parameter(low, high):
+    """The vectorised transforms (and the all-bounded shortcut) are lmfit's, parameter by
+    parameter: external value and gradient."""
+    bounds = _engine._Bounds(np.array(low), np.array(high))
+    u = np.random.default_rng(0).normal(scale=2.0, size=len(low))
+    x, g = bounds.external(u), bounds.gradient(u)
+    for i, (lo, hi) in enumerate(zip(low, high, strict=True)):
+        p = lmfit.Parameter("p", value=0.5 * (max(lo, -5.0) + min(hi, 5.0)), min=lo, max=hi)
+        p.setup_bounds()
+        value, grad = p.from_internal(u[i]), p.scale_gradient(u[i])
+        assert x[i] == pytest.approx(value, rel=1e-15, abs=1e-15)
+        assert g[i] == pytest.approx(grad, rel=1e-12, abs=1e-15)

@@ -215,3 +215,32 @@ def test_results_equal_the_public_constructors_on_the_same_inputs(monkeypatch):
         xr.testing.assert_identical(got, expected)
         assert list(got.variables) == list(expected.variables)
         assert list(got.sizes.items()) == list(expected.sizes.items())
+
+
+@pytest.mark.parametrize("dims, values", [
+    ((), 1.5), ((), 3), ((), True), ((), "text"), ((), np.int8(2)), ((), np.float64(2.5)),
+    ((), float("nan")), (("d",), [1, 2]), (("d",), np.arange(3.0)), ("d", ["a", "bb"]),
+    ((), None), (("d",), [1, "a"]),
+])
+def test_plain_variables_equal_xarrays(dims, values):
+    """plain_variable (xarray's fastpath for plain numbers and text) builds xr.Variable's
+    object: same dims, dtype, values and attrs; other inputs take the public constructor."""
+    from viscoforce.schema import plain_variable
+
+    ours = plain_variable(dims, values, {"units": "Pa"})
+    theirs = xr.Variable(dims, values, {"units": "Pa"})
+    xr.testing.assert_identical(ours, theirs)
+    assert ours.dtype == theirs.dtype
+
+
+def test_fresh_extra_variables_are_taken_over_and_others_copied():
+    from viscoforce.schema import make_fit_result
+
+    def build(fresh_extra):
+        extra = {"chi2_pvalue": xr.Variable((), 0.5, {"units": "1"})}
+        ds = make_fit_result({"E0": (1e9, 1e7)}, success=True, redchi=1.0, aic=1.0, bic=1.0,
+                             modes=1, model="svda", extra=extra, fresh_extra=fresh_extra)
+        ds["chi2_pvalue"].attrs["note"] = "changed"
+        return "note" in extra["chi2_pvalue"].attrs
+
+    assert build(True) and not build(False)

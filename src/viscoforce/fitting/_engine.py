@@ -96,6 +96,10 @@ class _Bounds:
         self.lower = np.isfinite(low) & ~self.both
         self.upper = np.isfinite(high) & ~self.both
         self.half = np.where(self.both, (high - low) / 2.0, 1.0)
+        #: every parameter bounded on both sides (the usual case): one expression, no masks
+        self.all_both = bool(self.both.all())
+        self.any_both = bool(self.both.any())
+        self.any_one_sided = bool(self.lower.any() or self.upper.any())
 
     def internal(self, x: np.ndarray) -> np.ndarray:
         u = x.copy()
@@ -107,11 +111,15 @@ class _Bounds:
         return u
 
     def external(self, u: np.ndarray) -> np.ndarray:
+        if self.all_both:  # the masked expression below, elementwise the same operations
+            return self.low + (np.sin(u) + 1.0) * self.half
         x = u.copy()
         b, lo, hi = self.both, self.lower, self.upper
-        x[b] = self.low[b] + (np.sin(u[b]) + 1.0) * self.half[b]
-        x[lo] = self.low[lo] - 1.0 + np.sqrt(u[lo] ** 2 + 1.0)
-        x[hi] = self.high[hi] + 1.0 - np.sqrt(u[hi] ** 2 + 1.0)
+        if self.any_both:
+            x[b] = self.low[b] + (np.sin(u[b]) + 1.0) * self.half[b]
+        if self.any_one_sided:
+            x[lo] = self.low[lo] - 1.0 + np.sqrt(u[lo] ** 2 + 1.0)
+            x[hi] = self.high[hi] + 1.0 - np.sqrt(u[hi] ** 2 + 1.0)
         return x
 
     def gradient(self, u: np.ndarray) -> np.ndarray:

@@ -509,7 +509,7 @@ def _fit_step_stage(data: FitData, fixed: dict[str, Any], *, final: bool = False
     model = make_model("step", **fixed)
     if warm is not None:
         model.response.warm_from(warm)
-    params = model.internal_guess(data.y, data.x)
+    params = model.internal_guess(data.y, data.x).to_lmfit()  # lmfit minimises (Dfun)
     residual = _residual(model, data)
     weights = 1.0 if data.weights is None else np.asarray(data.weights, dtype=float)[:, None]
 

@@ -32,7 +32,7 @@ import itertools
 import math
 import re
 import warnings
-from collections.abc import Iterator, Mapping, Sequence
+from collections.abc import Callable, Iterator, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -85,7 +85,7 @@ from viscoforce.fitting.models import (
 )
 from viscoforce.fitting.report import attach, carry
 from viscoforce.problem import ContactProblem
-from viscoforce.schema import make_fit_result, validate_spectrum
+from viscoforce.schema import make_fit_result, plain_variable, validate_spectrum
 from viscoforce.svda import svda_error_estimate, svda_stiffness_kernel
 
 #: Information criteria of ``modes="auto"`` (``--criterion``).
@@ -407,12 +407,9 @@ class Outcome:
 
 def _residual(model: FitModel, data: FitData):
     """The weighted residual (real) as a function of lmfit Parameters (internal names)."""
-    of_internal = _internal_residual(model, data)
-
-    def residual(params: lmfit.Parameters) -> np.ndarray:
-        return of_internal(params.valuesdict())
-
-    return residual
+    layout = model.layout
+    return _values_residual(model, data, lambda params: _params.reported_values(
+        layout, params.valuesdict()))
 
 
 def _vector_residual(model: FitModel, data: FitData, params: lmfit.Parameters):
@@ -420,23 +417,20 @@ def _vector_residual(model: FitModel, data: FitData, params: lmfit.Parameters):
 
     Parameters that do not vary keep their values in ``params``.
     """
-    of_internal = _internal_residual(model, data)
-    names = [n for n, p in params.items() if p.vary]
-    fixed = {n: p.value for n, p in params.items() if not p.vary}
-
-    def residual(x: np.ndarray) -> np.ndarray:
-        return of_internal({**fixed, **dict(zip(names, x.tolist(), strict=True))})
-
-    return residual
+    decode = _params.decoder(model.layout, [n for n, p in params.items() if p.vary],
+                             {n: p.value for n, p in params.items() if not p.vary})
+    return _values_residual(model, data, lambda x: decode(x.tolist()))
 
 
-def _internal_residual(model: FitModel, data: FitData):
-    func, layout, x, y = model.raw, model.layout, data.x, data.y
+def _values_residual(model: FitModel, data: FitData,
+                     values: Callable[[Any], Mapping[str, float]]):
+    """The weighted residual (real) at the SPEC values that ``values(argument)`` gives."""
+    func, x, y = model.raw, data.x, data.y
     weights = None if data.weights is None else (
         data.weights.view(float) if np.iscomplexobj(data.weights) else data.weights)
 
-    def residual(internal: Mapping[str, float]) -> np.ndarray:
-        diff = np.asarray(y - func(x, _params.reported_values(layout, internal)))
+    def residual(argument: Any) -> np.ndarray:
+        diff = np.asarray(y - func(x, values(argument)))
         if np.iscomplexobj(diff):
             diff = diff.view(float)
         if weights is not None:
@@ -695,7 +689,7 @@ def result_dataset(outcome: Outcome, data: FitData, *,
     extra = _statistics_variables(info, model.names, bool(profile))
     if selection:
         def per_candidate(key: str, long_name: str) -> xr.Variable:
-            return xr.Variable("candidate", [s[key] for s in selection],
+            return plain_variable("candidate", [s[key] for s in selection],
                                {"units": "1", "long_name": long_name})
 
         extra.update(selection_modes=per_candidate("modes", "modes of the candidate"),
@@ -710,33 +704,33 @@ def result_dataset(outcome: Outcome, data: FitData, *,
                            correlation=info["correlation"], success=info["success"],
                            redchi=info["redchi"], aic=info["aic"], bic=info["bic"],
                            modes=model.spec.modes, model=model.spec.name, attrs=attrs,
-                           extra=extra, check=False, **curves), outcome)
+                           extra=extra, fresh_extra=True, check=False, **curves), outcome)
 
 
 def _statistics_variables(info: Mapping[str, Any], names: list[str],
                           limits: bool) -> dict[str, xr.Variable]:
     from viscoforce.schema.fit import parameter_units
 
-    out = {"chi2_pvalue": xr.Variable((), info["chi2_pvalue"], {
+    out = {"chi2_pvalue": plain_variable((), info["chi2_pvalue"], {
         "units": "1", "long_name": "chi-square goodness-of-fit p-value (NaN: stderr unknown)",
         "comment": "residuals whose stderr were estimated with nu degrees of freedom (the "
                    "lock-in's 2 x lockin_stderr_bins) enter as normal scores of their t_nu "
                    "tail probability"}),
-        "identifiability": xr.Variable(
+        "identifiability": plain_variable(
             ("param_i",), np.array([info["identifiability"][n] for n in names], dtype=np.int8),
             {"long_name": "identifiability of the fitted parameter",
              "flag_values": np.array(list(IDENTIFIABILITY), dtype=np.int8),
              "flag_meanings": " ".join(IDENTIFIABILITY.values())})}
     if limits:
-        out["profiled"] = xr.Variable(
+        out["profiled"] = plain_variable(
             ("param_i",), np.array([n in info["profiled"] for n in names], dtype=np.int8),
             {"units": "1", "long_name": "limits from the profile likelihood (1) or from the "
                                         "curvature, +-2 stderr in log10 for positive parameters (0)"})
         for n in names:
             unit = parameter_units(n)
-            out[f"{n}_lower"] = xr.Variable((), info["lower"][n], {
+            out[f"{n}_lower"] = plain_variable((), info["lower"][n], {
                 "units": unit, "long_name": f"2-sigma lower limit of {n}"})
-            out[f"{n}_upper"] = xr.Variable((), info["upper"][n], {
+            out[f"{n}_upper"] = plain_variable((), info["upper"][n], {
                 "units": unit, "long_name": f"2-sigma upper limit of {n}"})
     return out
 
@@ -839,7 +833,7 @@ def derived_variables(params: Mapping[str, tuple[Any, Any]], nu: float
                 dims = source.dims if isinstance(source, xr.Variable) else ()
                 values = np.asarray(source.values if isinstance(source, xr.Variable) else (
                     math.nan if source is None else source), dtype=float)
-                out[f"{name}_{suffix}{tail}"] = xr.Variable(
+                out[f"{name}_{suffix}{tail}"] = plain_variable(
                     dims, convert(values) if values.ndim else float(convert(values)), {
                         "units": unit, "poisson": float(nu),
                         "long_name": f"{'standard error of ' if tail else ''}{what} "

@@ -370,7 +370,7 @@ def _window(layout: Sequence[_params.Item], best: lmfit.Parameters, name: str,
 def _shifted(layout: Sequence[_params.Item], base: lmfit.Parameters, name: str, log: bool,
              target: float) -> lmfit.Parameters:
     """A copy of ``base`` with ``name``'s own internal parameter moved to meet ``target``."""
-    start = base.copy()
+    start = _params.as_lmfit(base)  # lmfit.minimize's own Parameters
     values, _ = _params.to_reported(layout, base.valuesdict())
     key = f"log_{name}" if log else name
     if key not in start or not start[key].vary:

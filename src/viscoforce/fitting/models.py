@@ -107,10 +107,11 @@ class FitModel(lmfit.Model):
 
     def parameters_from(self, values: Mapping[str, float], x: np.ndarray, *,
                         expressions: bool = True, y: np.ndarray | None = None
-                        ) -> lmfit.Parameters:
+                        ) -> lmfit.Parameters | P.InternalParameters:
         """Parameters starting at ``values`` (SPEC names), with the bounds for data over ``x``.
 
-        ``expressions=False``: the internal parameters only (see
+        ``expressions=False``: the internal parameters only, as
+        :class:`viscoforce.fitting._params.InternalParameters` (see
         :func:`viscoforce.fitting._params.build_parameters`). ``y``: the data, for models whose
         bounded parameters take their window from it (hertz: baseline, slope).
         """
@@ -136,8 +137,11 @@ class FitModel(lmfit.Model):
         x = np.asarray(x, dtype=float)
         return self.parameters_from(self._guesser(np.asarray(data), x), x, y=np.asarray(data))
 
-    def internal_guess(self, data: np.ndarray, x: np.ndarray) -> lmfit.Parameters:
-        """The internal (``log_…``) parameters of :meth:`guess`, without the expressions."""
+    def internal_guess(self, data: np.ndarray, x: np.ndarray) -> P.InternalParameters:
+        """The internal (``log_…``) parameters of :meth:`guess`, without the expressions.
+
+        What the fitting engine varies (``.to_lmfit()`` for lmfit's own minimiser).
+        """
         x = np.asarray(x, dtype=float)
         return self.parameters_from(self._guesser(np.asarray(data), x), x, expressions=False,
                                     y=np.asarray(data))

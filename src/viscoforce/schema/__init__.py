@@ -41,7 +41,7 @@ Pure: imports only numpy, xarray and :mod:`viscoforce.exceptions`.
 from __future__ import annotations
 
 from viscoforce.exceptions import SchemaError
-from viscoforce.schema._core import EXTRA, VariableSpec, clean_attrs
+from viscoforce.schema._core import EXTRA, VariableSpec, clean_attrs, plain_variable
 from viscoforce.schema.curves import (
     CURVES_VARIABLES,
     SEGMENT_NAMES,
@@ -81,7 +81,7 @@ from viscoforce.schema.trajectory import (
 )
 
 __all__ = [
-    "SchemaError", "VariableSpec", "EXTRA", "clean_attrs",
+    "SchemaError", "VariableSpec", "EXTRA", "clean_attrs", "plain_variable",
     "EQUILIBRIUM_VARIABLES", "SIGN_CONVENTION", "make_equilibrium", "validate_equilibrium",
     "TRAJECTORY_VARIABLES", "PROFILE_VARIABLES", "make_trajectory", "validate_trajectory",
     "SPECTRUM_VARIABLES", "PHASE_CONVENTION", "QUALITY_FLAGS", "QUALITY_COMMENT", "make_spectrum",

@@ -32,6 +32,7 @@ from viscoforce.schema._core import (
     clean_attrs,
     coordinate,
     flag_attrs,
+    plain_variable,
     require_dataset,
     shaped,
     variable,
@@ -103,7 +104,7 @@ def make_fit_result(params: Mapping[str, tuple[float, float | None]], *,
                     units: Mapping[str, str] | None = None,
                     attrs: Mapping[str, Any] | None = None,
                     extra: Mapping[str, xr.Variable | xr.DataArray] | None = None,
-                    check: bool = True) -> xr.Dataset:
+                    fresh_extra: bool = False, check: bool = True) -> xr.Dataset:
     """Build the result of one fit.
 
     Parameters
@@ -135,6 +136,10 @@ def make_fit_result(params: Mapping[str, tuple[float, float | None]], *,
     extra : mapping, optional
         More variables (statistics, limits, derived moduli) put into the same dataset, over
         its dims; checked with the rest.
+    fresh_extra : bool
+        The ``extra`` Variables were made for this result: they are taken over, not copied
+        (the fitting code's own; a caller's variables are copied by default, so that the
+        result's attributes stay apart from them).
     check : bool
         Validate the dataset (:func:`validate_fit_result`). The fitting code passes False for
         the results it assembles from checked pieces; ``tests/test_schema_assemble.py``
@@ -174,7 +179,7 @@ def make_fit_result(params: Mapping[str, tuple[float, float | None]], *,
     pair = ("param_i", "param_j")
     data["correlation"] = variable(shaped("correlation", corr, (n, n), pair), pair,
                                    t["correlation"])
-    data["success"] = xr.Variable((), np.int8(success), {
+    data["success"] = plain_variable((), np.int8(success), {
         "long_name": t["success"].long_name, **flag_attrs(SUCCESS_FLAGS)})
     for name, value in (("redchi", redchi), ("aic", aic), ("bic", bic)):
         data[name] = variable(shaped(name, value, (), ()), (), t[name])
@@ -195,6 +200,8 @@ def make_fit_result(params: Mapping[str, tuple[float, float | None]], *,
             if v is not None:
                 data[name] = variable(shaped(name, v, x.shape, (axis,)), (axis,), t[name])
     fresh = set(data) | set(coords)  # made here; the caller's extra variables are copied
+    if as_flag("fresh_extra", fresh_extra):
+        fresh |= set(as_mapping("extra", extra))
     for name, v in as_mapping("extra", extra).items():
         if name in data or name in coords:
             raise SchemaError(f"extra variable {name!r} clashes with a fit-result variable")
