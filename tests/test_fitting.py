@@ -7,6 +7,7 @@ starts from the model's own guess (no hand-set starting values).
 
 from __future__ import annotations
 
+import math
 import warnings
 
 import numpy as np
@@ -352,3 +353,20 @@ def test_svda_kernel_equals_the_checked_closed_form():
         fast = svda_stiffness_kernel(OMEGA, position, PAPER.E0, PAPER.E_inf, PAPER.tau, PAPER.R,
                                      PAPER.P, 1 / PAPER.debye_length)
         np.testing.assert_allclose(fast, checked, rtol=1e-14)
+
+
+@pytest.mark.parametrize("log_z", [-40.0, 0.3, 25.0, 690.0, 705.0, 720.0])
+def test_svda_kernel_lambert_w_on_both_sides_of_exps_range(log_z):
+    """The kernel's scalar W (libm exp) and its asymptotic branch give _omega_log_w's u0: the
+    static force F̄κ = 2πRP e^{-κ(h0 - u0)} over 1 − κu0 = k*(0), on either side of
+    closed_form.MAX_EXPONENT = 700 (and of exp's overflow at 709.8)."""
+    from viscoforce.svda import _omega_log_w, svda_stiffness_kernel
+
+    kappa, radius, p_amp, e_inf = 1e9, 1e-6, 1e6, 1e9
+    base = 0.5 * math.log(8.0 * math.pi * radius * kappa) + math.log(p_amp / e_inf)
+    position = (base - log_z) / kappa  # so that log z = log_z
+    k0 = svda_stiffness_kernel(np.array([0.0]), position, 2 * e_inf, e_inf, 1e-3, radius, p_amp,
+                               kappa)[0]
+    w = float(_omega_log_w(np.array([log_z]))[0])
+    expected = 2 * math.pi * radius * p_amp * math.exp(-kappa * position - w) / (1 + w)
+    assert k0.real == pytest.approx(expected, rel=1e-13) and k0.imag == 0.0

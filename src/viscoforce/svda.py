@@ -476,7 +476,11 @@ def svda_stiffness_kernel(omega: FloatArray, position: float, E0: float, E_inf: 
     """
     log_z = (0.5 * (math.log(8.0 * math.pi) + math.log(radius) + math.log(kappa))
              + math.log(P) - math.log(E_inf) - kappa * position)
-    u0 = -float(_omega_log_w(np.array([log_z]))[0]) / kappa
+    # _omega_log_w on one value: its scalar branch without the array's masks (to 1 ulp: libm's
+    # exp in place of NumPy's), its asymptotic branch beyond exp's range
+    w = (float(lambertw(math.exp(log_z), k=0).real) if log_z < MAX_EXPONENT
+         else float(_omega_log_w(np.array([log_z]))[0]))
+    u0 = -w / kappa
     c = -kappa * u0 * E_inf / E0
     mean_force = 2.0 * math.pi * radius * P / kappa * math.exp(-kappa * (position - u0))
     x = omega * tau
