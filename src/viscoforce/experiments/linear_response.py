@@ -158,8 +158,7 @@ class LinearizedState:
                             dec: _Decomposition) -> LinearizedState:
         """The state of a decomposed linearisation: its modes and their load weights."""
         left = np.copysign(dec.q, dec.d)
-        weights = 2.0 * np.pi * (left @ dec.vec) * scipy.linalg.lu_solve(
-            dec.lu, dec.q.astype(dec.vec.dtype), check_finite=False)  # real when V is
+        weights = 2.0 * np.pi * (left @ dec.vec) * dec.unit_modes  # real when V is
         gap = np.array(dec.sol.gap, dtype=float)
         gap.flags.writeable = False
         lam = np.array(dec.lam, dtype=complex)
@@ -284,6 +283,8 @@ class _Decomposition:
     """
 
     sol: NewtonResult
+    #: p′ [Pa/m] at every node (the finite-amplitude check needs it too).
+    d1: FloatArray
     active: NDArray[np.intp]
     d: FloatArray
     q: FloatArray
@@ -292,22 +293,34 @@ class _Decomposition:
     vec: NDArray[np.complex128] | FloatArray
     #: LU factors of ``vec`` (scipy.linalg.lu_factor): V⁻¹ applied without forming it.
     lu: tuple[NDArray[np.complex128] | FloatArray, NDArray[np.intc]]
+    #: V⁻¹ q, the modal coordinates of the unit drive (both users need it).
+    unit_modes: NDArray[np.complex128] | FloatArray
 
 
 def _decompose(problem: ContactProblem, sol: NewtonResult) -> _Decomposition:
-    stiff = -problem.surface_force.pressure_derivative(sol.gap)  # −p′ (> 0 where repulsive)
+    d1 = problem.surface_force.pressure_derivative(sol.gap)
+    stiff = -d1  # s = −p′ (> 0 where repulsive)
     area = problem.grid.area_weights
     active = np.flatnonzero(stiff != 0.0)
-    d = area[active] * stiff[active]  # D = W s on the nodes that carry a force derivative
+    if active.size == stiff.size:  # every node (the paper's law): no copies by index
+        d, kernel = area * stiff, problem.influence
+    else:
+        area = area[active]
+        d, kernel = area * stiff[active], problem.influence[np.ix_(active, active)]
+    # D = W s on the nodes that carry a force derivative, and M' = q (A W⁻¹) q sign(D), built
+    # in place in LAPACK's (Fortran) order so that eig overwrites it without a copy
     q = np.sqrt(np.abs(d))
-    kernel = problem.influence[np.ix_(active, active)] / area[active][None, :]  # A W⁻¹
-    lam, vec = scipy.linalg.eig(q[:, None] * kernel * np.copysign(q, d)[None, :],
-                                overwrite_a=True, check_finite=False)
+    balanced = np.divide(kernel, area[None, :], order="F")
+    balanced *= q[:, None]
+    balanced *= np.copysign(q, d)[None, :]
+    lam, vec = scipy.linalg.eig(balanced, overwrite_a=True, check_finite=False)
     # scipy returns real eigenvectors when every eigenvalue is real (a repulsive law: M' is
     # similar to a symmetric-definite matrix up to the kernel's small asymmetry); they stay real,
     # so that V's factors and every product with them run in real arithmetic (_times)
-    return _Decomposition(sol=sol, active=active, d=d, q=q, lam=np.asarray(lam, dtype=complex),
-                          vec=vec, lu=scipy.linalg.lu_factor(vec, check_finite=False))
+    lu = scipy.linalg.lu_factor(vec, check_finite=False)
+    return _Decomposition(sol=sol, d1=d1, active=active, d=d, q=q,
+                          lam=np.asarray(lam, dtype=complex), vec=vec, lu=lu,
+                          unit_modes=_lu_solve(lu, q))
 
 
 def _pairs(z: np.ndarray) -> np.ndarray:
@@ -333,13 +346,14 @@ def _times(matrix: np.ndarray, z: np.ndarray) -> np.ndarray:
 
 
 def _lu_solve(lu: tuple[np.ndarray, np.ndarray], b: np.ndarray) -> np.ndarray:
-    """``scipy.linalg.lu_solve`` of complex ``b`` with real factors: real and imaginary parts."""
-    if np.iscomplexobj(lu[0]) or not np.iscomplexobj(b) or b.ndim > 2:
+    """``scipy.linalg.lu_solve`` with real factors: LAPACK directly (complex ``b`` as pairs)."""
+    if np.iscomplexobj(lu[0]) or b.ndim > 2:
         return scipy.linalg.lu_solve(lu, b, check_finite=False)
-    out, info = _DGETRS(lu[0], lu[1], _pairs(b))  # LAPACK directly: lu_solve's argument layer
+    pairs = np.iscomplexobj(b)  # real and imaginary parts: one real solve
+    out, info = _DGETRS(lu[0], lu[1], _pairs(b) if pairs else b)  # no lu_solve argument layer
     if info != 0:  # pragma: no cover - factors of a nonsingular V
         raise np.linalg.LinAlgError(f"LAPACK dgetrs reported illegal argument {-info}")
-    return _from_pairs(out, b.shape[0], b.shape[1:])
+    return _from_pairs(out, b.shape[0], b.shape[1:]) if pairs else out
 
 
 #: LAPACK's real LU solve (what scipy.linalg.lu_solve calls for float64 factors).
@@ -495,12 +509,19 @@ def linear_stiffness(problem: ContactProblem, position: float, omega: ArrayLike)
     problem = require_problem(problem)
     position = require_number("position", position, require_finite,
                               "finite [m] (h0, the undeformed apex separation)")
-    omega = require_frequencies(omega, allow_zero=True)
+    return _linear_stiffness(problem, position, require_frequencies(omega, allow_zero=True))
+
+
+def _linear_stiffness(problem: ContactProblem, position: float, omega: FloatArray) -> tuple[
+        np.ndarray, float]:
+    """:func:`linear_stiffness` of a checked problem, position [m] and frequencies [rad/s]."""
     check_effort(f"frequencies of linear_stiffness ({omega.size} requested)", omega.size,
                  MAX_SAMPLES, hint="request fewer frequencies")
     material = problem.material
     state = linearized_state(problem, position, material.relaxed_modulus)
-    return state.stiffness_for(material, omega), state.mean_force
+    # stiffness_for without its checks: the problem's own material, the state built for its E_inf
+    c = 2.0 * np.asarray(material.complex_compliance(omega), dtype=complex)
+    return state.stiffness(c), state.mean_force
 
 
 def linear_response(problem: ContactProblem, position: float, eta: float,
@@ -539,7 +560,9 @@ def linear_response(problem: ContactProblem, position: float, eta: float,
     problem = require_problem(problem)
     eta = require_number("eta", eta, require_positive, "> 0 [m] (finite)")
     omega = require_frequencies(omega, allow_zero=False)
-    k, mean = linear_stiffness(problem, position, omega)
+    position = require_number("position", position, require_finite,
+                              "finite [m] (h0, the undeformed apex separation)")
+    k, mean = _linear_stiffness(problem, position, omega)
     _warn_large_eta(problem, float(position), eta, omega)
     attrs = dict(problem.parameters())
     attrs.update({"method": "linear", "position": float(position), "eta": eta})
@@ -599,13 +622,13 @@ def finite_amplitude_error(problem: ContactProblem, position: float, eta: float,
     return bias * eta * eta, True
 
 
-def _pressure_derivatives(problem: ContactProblem, gap: np.ndarray
+def _pressure_derivatives(problem: ContactProblem, gap: np.ndarray, d0: np.ndarray | None = None
                           ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """p′, p″, p‴ at the nodal gaps (p″, p‴ by central differences of p′)."""
+    """p′, p″, p‴ at the nodal gaps (p″, p‴ by central differences of p′; ``d0``: p′ if known)."""
     law = problem.surface_force
     terms = law.terms if isinstance(law, SumOfLaws) else (law,)
     step = FD_STEP * min(t.decay_length for t in terms)
-    d0 = law.pressure_derivative(gap)
+    d0 = law.pressure_derivative(gap) if d0 is None else d0
     up, down = law.pressure_derivative(gap + step), law.pressure_derivative(gap - step)
     return d0, (up - down) / (2.0 * step), (up - 2.0 * d0 + down) / (step * step)
 
@@ -614,51 +637,82 @@ def _pressure_derivatives(problem: ContactProblem, gap: np.ndarray
 class _BiasModes:
     """The static E_inf state of :func:`amplitude_bias` and the modes of M = A·diag(s), s = −p′.
 
-    With D = W s and the balanced M' = |D|^½ (A W⁻¹) |D|^½ sign(D) = V Λ V⁻¹ on the nodes where
-    s ≠ 0 (as :class:`LinearizedState`), (I + cM)⁻¹ b has active part P (1 + cΛ)⁻¹ Q b_a with
-    P = |D|^-½ V, Q = V⁻¹ |D|^½, and inactive part b_i − c A_ia s_a x_a: every solve of the
-    harmonic balance, at every frequency, is a matrix product and an LU solve with V's factors
-    (module docstring).
+    The nodes are ordered active first (s ≠ 0, as :class:`LinearizedState`), then inactive.
+    With D = W s and the balanced M' = |D|^½ (A W⁻¹) |D|^½ sign(D) = V Λ V⁻¹ on the active
+    nodes, every solve of the harmonic balance but the first, x = (I + cM)⁻¹ c A y for a nodal
+    y, has modal coordinates z = c G y / (1 + cΛ) with G = V⁻¹ |D|^½ A_a: (V's LU solve done
+    once, here), active part x_a = P z with P = |D|^-½ V, and inactive part
+    x_i = c A_i: y − c A_ia s_a P z. The first order's right-hand side 1 has z = g / (1 + cΛ),
+    g = V⁻¹ |D|^½ 1 (:attr:`_Decomposition.unit_modes`). The load integral of p′x is ρ z with
+    ρ = (L p′)_a P (p′ = 0 off the active nodes), so the third order is never formed at the
+    nodes. Per frequency, each order is a column of one or two real matrix products.
     """
 
+    #: p′, p″, p‴ [Pa/m, Pa/m², Pa/m³] at the ordered nodes.
     d1: FloatArray
     d2: FloatArray
     d3: FloatArray
-    influence: FloatArray
-    active: NDArray[np.intp]
-    inactive: NDArray[np.intp]
-    lam: NDArray[np.complex128]
-    left: NDArray[np.complex128] | FloatArray
-    q: FloatArray
-    lu: tuple[NDArray[np.complex128] | FloatArray, NDArray[np.intc]]
-    coupling: FloatArray
+    #: Load weights 2π W [m²] at the ordered nodes.
     load_weights: FloatArray
+    #: Λ [Pa]: real when V is.
+    lam: NDArray[np.complex128] | FloatArray
+    #: g = V⁻¹ |D|^½ 1.
+    unit_modes: NDArray[np.complex128] | FloatArray
+    #: Rows G, then A_i: (columns in node order): c times it gives z and the inactive c A y.
+    project: NDArray[np.complex128] | FloatArray
+    #: Rows P, then A_ia s_a P: x_a and the coupling of the inactive nodes, from z.
+    expand: NDArray[np.complex128] | FloatArray
+    #: ρ = (L p′)_a P: the load integral of p′x from z.
+    load_modes: NDArray[np.complex128] | FloatArray
 
     @classmethod
     def build(cls, problem: ContactProblem, position: float, e_inf: float) -> _BiasModes:
         dec = _decomposition(problem, position, e_inf)  # shared with linearized_state
-        d1, d2, d3 = _pressure_derivatives(problem, dec.sol.gap)
-        area = problem.grid.area_weights
-        stiff = -d1
+        d1, d2, d3 = _pressure_derivatives(problem, dec.sol.gap, dec.d1)
         active, q, vec = dec.active, dec.q, dec.vec
-        inactive = np.flatnonzero(stiff == 0.0)
-        left = vec / q[:, None]
-        coupling = problem.influence[np.ix_(inactive, active)] * stiff[active][None, :]
-        return cls(d1=d1, d2=d2, d3=d3, influence=problem.influence, active=active,
-                   inactive=inactive, lam=dec.lam, left=left, q=q, lu=dec.lu,
-                   coupling=coupling, load_weights=2.0 * np.pi * np.asarray(area, dtype=float))
+        inactive = np.flatnonzero(d1 == 0.0)
+        load_weights = 2.0 * np.pi * np.asarray(problem.grid.area_weights, dtype=float)
+        if inactive.size:  # active nodes first
+            order = np.concatenate([active, inactive])
+            a = problem.influence[np.ix_(order, order)]
+            d1, d2, d3, load_weights = d1[order], d2[order], d3[order], load_weights[order]
+        else:
+            a = problem.influence
+        n_a = active.size
+        left = vec / q[:, None]  # P
+        project = _lu_solve(dec.lu, q[:, None] * a[:n_a])  # G
+        expand = left
+        if inactive.size:
+            project = np.concatenate([project, a[n_a:]])
+            expand = np.concatenate([left, (a[n_a:, :n_a] * (-d1[:n_a])[None, :]) @ left])
+        lam = dec.lam if np.iscomplexobj(vec) else dec.lam.real
+        return cls(d1=d1, d2=d2, d3=d3, load_weights=load_weights, lam=lam,
+                   unit_modes=dec.unit_modes, project=project, expand=expand,
+                   load_modes=(load_weights[:n_a] * d1[:n_a]) @ left)
 
-    def solve(self, c: np.ndarray, rhs: np.ndarray) -> np.ndarray:
-        """(I + c_f M)⁻¹ rhs[:, f] for every column f (c: one compliance value 2C* per column)."""
-        a, i = self.active, self.inactive
-        modal = _lu_solve(self.lu, self.q[:, None] * (rhs[a] if i.size else rhs))
-        x_a = _times(self.left, modal / (1.0 + self.lam[:, None] * c[None, :]))
-        if not i.size:  # every node carries a force derivative: x is its active part
-            return x_a
-        x = np.empty_like(rhs, dtype=complex)
-        x[a] = x_a
-        x[i] = rhs[i] - c[None, :] * _times(self.coupling, x_a)
+    def first_order(self, c: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """ĥ1 = (I + cM)⁻¹ 1 at the ordered nodes (one column per value c) and its modes z."""
+        z = self.unit_modes[:, None] / (1.0 + self.lam[:, None] * c)
+        x = _times(self.expand, z)
+        n_a = self.lam.size
+        if x.shape[0] > n_a:  # inactive nodes: 1 − c A_ia s_a x_a
+            x[n_a:] = 1.0 - c * x[n_a:]
+        return x, z
+
+    def solve(self, c: np.ndarray | float, y: np.ndarray) -> np.ndarray:
+        """(I + cM)⁻¹ c A y at the ordered nodes (c: one value per column of y, or one for all)."""
+        n_a = self.lam.size
+        proj = _times(self.project, y)
+        x = _times(self.expand, c * proj[:n_a] / (1.0 + self.lam[:, None] * c))
+        if x.shape[0] > n_a:
+            x[n_a:] = c * (proj[n_a:] - x[n_a:])
         return x
+
+    def load_of_solve(self, c: np.ndarray, y: np.ndarray) -> np.ndarray:
+        """L(p′x) for x = (I + cM)⁻¹ c A y: ρ z, without forming x."""
+        n_a = self.lam.size
+        z = c * _times(self.project[:n_a], y) / (1.0 + self.lam[:, None] * c)
+        return self.load_modes @ z
 
 
 _BIAS_MODES = _StateCache(STATE_CACHE_SIZE)
@@ -705,18 +759,19 @@ def amplitude_bias(problem: ContactProblem, position: float, omega: ArrayLike) -
                 _BIAS_RESULTS.move_to_end(result_key)
                 return _BIAS_RESULTS[result_key].copy()
     modes = _BIAS_MODES.get(key, lambda: _BiasModes.build(problem, position, e_inf))
-    n, f = modes.d1.size, w.size
+    f = w.size
     compliance = np.asarray(material.complex_compliance(np.concatenate([w, 2.0 * w])),
                             dtype=complex)
     c_w, c_2w = 2.0 * compliance[:f], 2.0 * compliance[f:]
-    c_0 = np.full(f, 2.0 / e_inf, dtype=complex)
-    a, d1, d2, d3 = modes.influence, modes.d1[:, None], modes.d2[:, None], modes.d3[:, None]
-    h1 = modes.solve(c_w, np.ones((n, f), dtype=complex))
-    h2_0 = modes.solve(c_0, c_0[None, :] * (a @ (d2 * np.abs(h1) ** 2 / 4.0)))
-    h2_2 = modes.solve(c_2w, c_2w[None, :] * _times(a, d2 * h1 ** 2 / 4.0))
-    q3 = d2 * (h1 * h2_0 + np.conj(h1) * h2_2 / 2.0) + d3 * np.abs(h1) ** 2 * h1 / 8.0
-    h3 = modes.solve(c_w, c_w[None, :] * _times(a, q3))
-    out = (modes.load_weights @ (d1 * h3 + q3)) / (modes.load_weights @ (d1 * h1))
+    # p″/4 and p‴/8 as columns: scaling by a power of 2 is exact, so folding it into them
+    # changes no value and spares an operation on each (node × frequency) array
+    d2, d2_4, d3_8 = modes.d2[:, None], modes.d2[:, None] / 4.0, modes.d3[:, None] / 8.0
+    h1, z1 = modes.first_order(c_w)
+    mag2 = np.abs(h1) ** 2
+    h2_0 = modes.solve(2.0 / e_inf, d2_4 * mag2)  # real: the relaxed compliance
+    h2_2 = modes.solve(c_2w, d2_4 * h1 ** 2)
+    q3 = d2 * (h1 * h2_0 + np.conj(h1) * h2_2 / 2.0) + d3_8 * mag2 * h1
+    out = (modes.load_of_solve(c_w, q3) + modes.load_weights @ q3) / (modes.load_modes @ z1)
     if result_key is not None:
         with _BIAS_LOCK:
             _BIAS_RESULTS[result_key] = out.copy()

@@ -18,6 +18,7 @@ update is below ``xtol`` (max-norm). Otherwise :class:`ConvergenceError` (or
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -112,12 +113,14 @@ def solve_gap(problem: ContactProblem, base: FloatArray, coupling: float, initia
     gap_floor = _GAP_FLOOR * law.decay_length
     p = law.pressure(h)
     res = h - base - coupling * (a_mat @ p)
-    norm = float(np.max(np.abs(res)))
+    norm = float(np.abs(res).max())
     step_norm = np.inf
+    # the Jacobian is built in Fortran order, LAPACK's, so that getrf factors it in place
+    a_fortran = np.asfortranarray(a_mat)
     for it in range(1, max_iter + 1):
-        jac = np.empty((n, n))
-        np.multiply(a_mat, (-coupling) * law.pressure_derivative(h), out=jac)
-        jac.flat[:: n + 1] += 1.0
+        jac = np.multiply(a_fortran, (-coupling) * law.pressure_derivative(h),
+                          out=np.empty((n, n), order="F"))
+        jac.ravel(order="F")[:: n + 1] += 1.0  # the diagonal, through a view of the columns
         # LAPACK's getrf/getrs directly: scipy.linalg.lu_factor/lu_solve return the same
         # factors and solution through an argument layer that costs more than a small solve
         lu, piv, info = _GETRF(jac, overwrite_a=True)
@@ -129,20 +132,20 @@ def solve_gap(problem: ContactProblem, base: FloatArray, coupling: float, initia
             raise ConvergenceError(f"singular Newton Jacobian{where}: {what}", time=time,
                                    iterations=it, residual_norm=norm)
         factor = (lu, piv)
-        step_norm = float(np.max(np.abs(delta)))
-        if not np.isfinite(step_norm):
+        step_norm = float(np.abs(delta).max())
+        if not math.isfinite(step_norm):
             raise ConvergenceError(f"non-finite Newton update{where}", time=time,
                                    iterations=it, residual_norm=norm)
-        shrink = delta < 0
         alpha = 1.0
-        if np.any(shrink):
-            alpha = min(1.0, float(np.min((_FRACTION_TO_BOUNDARY - 1.0) * h[shrink]
-                                          / delta[shrink])))
+        limit = (_FRACTION_TO_BOUNDARY - 1.0) * h  # the most a step may shrink each gap
+        if (delta < limit).any():  # else every ratio limit/delta of a shrinking gap is ≥ 1
+            shrink = delta < 0
+            alpha = min(1.0, float((limit[shrink] / delta[shrink]).min()))
         while True:
-            h_new = h + alpha * delta
+            h_new = h + alpha * delta if alpha != 1.0 else h + delta
             p_new = law.pressure(h_new)
             res_new = h_new - base - coupling * (a_mat @ p_new)
-            norm_new = float(np.max(np.abs(res_new)))
+            norm_new = float(np.abs(res_new).max())
             if norm_new <= (1.0 - 1e-4 * alpha) * norm or alpha * step_norm <= xtol:
                 break
             alpha *= 0.5
@@ -153,7 +156,7 @@ def solve_gap(problem: ContactProblem, base: FloatArray, coupling: float, initia
                     "position (try a smaller step, a stiffer wall, or a shallower position)",
                     time=time, iterations=it, residual_norm=norm)
         h, p, res, norm = h_new, p_new, res_new, norm_new
-        if float(np.min(h)) < gap_floor:
+        if h.min() < gap_floor:
             raise GapClosureError(
                 f"the gap closes{where}: min gap {float(np.min(h)):.3g} m after {it} Newton "
                 "iterations; the surface force cannot hold the surfaces apart at this position "
