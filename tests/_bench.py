@@ -53,8 +53,10 @@ def benchmark_module(name: str) -> ModuleType:
 def run_main(name: str, *args: str) -> tuple[int, str, str]:
     """Exit status, stdout and stderr of ``main(args)`` of ``benchmarks/<name>``, in-process.
 
-    For command-line checks that end before any work (argument errors): it skips the ~1-2 s
-    interpreter start and imports of a subprocess.
+    For command-line checks that end before any work (argument errors) and for the ``--quick``
+    smoke runs of scripts that measure nothing about fresh processes: it skips the ~1-2 s
+    interpreter start and imports of a subprocess. Scripts that time child processes, dask
+    workers or start-up (bench_stream, bench_fit, bench_load, bench_startup) run as children.
     """
     main = benchmark_module(name).main
     out, err = io.StringIO(), io.StringIO()

@@ -8,15 +8,11 @@ from __future__ import annotations
 
 import csv
 import json
-import subprocess
-from pathlib import Path
+import warnings
 
 import pytest
 
-from tests._bench import run_benchmark, run_main
-
-REPO = Path(__file__).resolve().parents[1]
-SCRIPT = REPO / "benchmarks" / "bench_dynamics.py"
+from tests._bench import run_main
 
 # documented in benchmarks/README.md, section bench_dynamics.py
 TOP_KEYS = {"schema", "created", "quick", "machine", "target", "settings", "reference", "sweep",
@@ -31,16 +27,17 @@ LINES = {"exponential (adaptive tol)", "exponential (fixed dt)",
          "exponential-euler (adaptive tol)", "exponential-euler (fixed dt)", "euler (fixed dt)"}
 
 
-def run_script(*args: str) -> subprocess.CompletedProcess:
-    return run_benchmark("bench_dynamics.py", *args)
-
-
 @pytest.fixture(scope="module")
 def quick(tmp_path_factory):
     out = tmp_path_factory.mktemp("bench_dynamics")
-    proc = run_script("--quick", "--out", str(out))
-    assert proc.returncode == 0, proc.stderr
-    return out, proc.stdout, json.loads((out / "dynamics_benchmark.json").read_text())
+    # main() in this process (tests._bench.run_main), not a child: no interpreter start and
+    # imports. Its own warnings are recorded by the script where they matter; the rest are
+    # not errors here, as in a child process.
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        code, stdout, stderr = run_main("bench_dynamics.py", "--quick", "--out", str(out))
+    assert code == 0, stderr
+    return out, stdout, json.loads((out / "dynamics_benchmark.json").read_text())
 
 
 def rows_of(report, method, mode):
