@@ -34,6 +34,7 @@ from __future__ import annotations
 import contextlib
 import math
 import os
+import pickle
 import time
 from collections import deque
 from collections.abc import Callable, Iterator, Sequence
@@ -571,14 +572,15 @@ def _on_cluster(run: _Run, client: Any, left: list[int], per_pixel: float, where
     size = _block_size(len(left), n_workers, per_pixel)
     blocks = [left[start:start + size] for start in range(0, len(left), size)]
     shared = client.scatter(run.fixed, broadcast=True) if run.fixed else run.fixed
-    futures = {client.submit(_fit_block_shared, [run.items[i] for i in block], run.model,
-                             run.modes, run.criterion, shared, run.profile, run.omega,
-                             run.reports, pure=False): block
+    futures = {client.submit(_fit_block_shared, _packed([run.items[i] for i in block]),
+                             run.model, run.modes, run.criterion, shared, run.profile,
+                             run.omega, run.reports, pure=False): block
                for block in blocks}
     for future in as_completed(futures):
         block = futures[future]
         try:
-            results, seconds = future.result()
+            packed, seconds = future.result()
+            results = pickle.loads(packed)
         except ViscoforceError:
             raise
         except Exception as exc:  # the cluster, not a fit (fit_block catches those)
@@ -598,14 +600,25 @@ def _first_line(exc: BaseException) -> str:
     return text.splitlines()[0] if text else "no message"
 
 
-def _fit_block_shared(items: Sequence[FitData | str], model: str, modes: int | str,
-                      criterion: str, fixed: dict[str, Any], profile: bool = False,
+def _packed(value: Any) -> bytes:
+    """``value`` pickled with its arrays in-band: one message part for dask, not one per array.
+
+    A block's pixels and their results hold a few small arrays each (ω, k*, weights; the
+    correlations, the best-fit curve): as separate parts, dask's transport spent more time on
+    them in this process than the workers spent fitting (issue 22 item 3).
+    """
+    return pickle.dumps(value, protocol=pickle.HIGHEST_PROTOCOL)
+
+
+def _fit_block_shared(items: bytes, model: str, modes: int | str, criterion: str,
+                      fixed: dict[str, Any], profile: bool = False,
                       omega: np.ndarray | None = None, reports: bool = False
-                      ) -> tuple[list[dict[str, Any]], float]:
-    """:func:`fit_block` in a worker, with its wall time [s]."""
+                      ) -> tuple[bytes, float]:
+    """:func:`fit_block` in a worker, of ``_packed`` pixels: its packed results, wall time [s]."""
     t0 = time.perf_counter()
-    return fit_block(items, model, modes, criterion, fixed, profile=profile, omega=omega,
-                     reports=reports), time.perf_counter() - t0
+    results = fit_block(pickle.loads(items), model, modes, criterion, fixed, profile=profile,
+                        omega=omega, reports=reports)
+    return _packed(results), time.perf_counter() - t0
 
 
 def pixel_quality(result: dict[str, Any]) -> int:
