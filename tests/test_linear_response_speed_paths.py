@@ -18,10 +18,10 @@ import pytest
 import scipy.linalg
 
 import viscoforce as vf
+from tests._laws import Wrapped
 from tests.test_amplitude_bias_modal import _direct
 from tests.test_linearized_state import _CutOff, direct_stiffness
 from viscoforce.experiments import linear_response as lr
-from viscoforce.physics.surface_forces import SurfaceForceLaw
 from viscoforce.solvers.newton import solve_gap
 from viscoforce.solvers.static import STATIC_XTOL, equilibrium_gap
 
@@ -43,28 +43,16 @@ def _empty_caches():
     clear()
 
 
-class _Recording(SurfaceForceLaw):
+class _Recording(Wrapped):
     """A law that records the gaps at which its pressure is evaluated (Newton's trial steps)."""
 
     def __init__(self, law):
-        self.law, self.trials = law, []
+        super().__init__(law)
+        self.trials = []
 
     def pressure(self, gap):
         self.trials.append(np.array(gap, dtype=float))
         return self.law.pressure(gap)
-
-    def pressure_derivative(self, gap):
-        return self.law.pressure_derivative(gap)
-
-    def energy(self, gap):
-        return self.law.energy(gap)
-
-    @property
-    def decay_length(self):
-        return self.law.decay_length
-
-    def negligible_gap(self, rtol):
-        return self.law.negligible_gap(rtol)
 
 
 def _textbook_newton(problem, base, coupling, initial, xtol, max_iter=60):

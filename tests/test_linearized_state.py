@@ -7,6 +7,7 @@ import numpy as np
 import pytest
 
 import viscoforce as vf
+from tests._laws import Wrapped
 from viscoforce.exceptions import ConvergenceError, EffortError, ParameterError
 from viscoforce.experiments.linear_response import (
     STATE_CACHE_SIZE,
@@ -82,11 +83,12 @@ def test_modal_form_with_an_attractive_term(paper_law):
     np.testing.assert_allclose(k, ref, rtol=1e-10, atol=0)
 
 
-class _CutOff(vf.physics.surface_forces.SurfaceForceLaw):
+class _CutOff(Wrapped):
     """The paper's law set to exactly 0 beyond a gap ``cutoff`` (a finite-range law)."""
 
     def __init__(self, law, cutoff):
-        self.law, self.cutoff = law, cutoff
+        super().__init__(law)
+        self.cutoff = cutoff
 
     def pressure(self, gap):
         h = np.asarray(gap, dtype=float)
@@ -95,16 +97,6 @@ class _CutOff(vf.physics.surface_forces.SurfaceForceLaw):
     def pressure_derivative(self, gap):
         h = np.asarray(gap, dtype=float)
         return np.where(h < self.cutoff, self.law.pressure_derivative(h), 0.0)
-
-    def energy(self, gap):
-        return self.law.energy(gap)
-
-    @property
-    def decay_length(self):
-        return self.law.decay_length
-
-    def negligible_gap(self, rtol):
-        return self.law.negligible_gap(rtol)
 
 
 def test_nodes_without_a_force_derivative_are_left_out(make_problem, paper_law):
