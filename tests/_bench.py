@@ -58,11 +58,19 @@ def run_main(name: str, *args: str) -> tuple[int, str, str]:
     interpreter start and imports of a subprocess. Scripts that time child processes, dask
     workers or start-up (bench_stream, bench_fit, bench_load, bench_startup) run as children.
     """
-    main = benchmark_module(name).main
+    # a script's import pins BLAS threads in os.environ and its main() may put benchmarks/ on
+    # sys.path: both are put back, so later tests in this process see what they saw before
+    saved_env, saved_path = dict(os.environ), list(sys.path)
     out, err = io.StringIO(), io.StringIO()
-    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
-        try:
-            code = main(list(args))
-        except SystemExit as exc:
-            code = exc.code if isinstance(exc.code, int) else 1
+    try:
+        main = benchmark_module(name).main
+        with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+            try:
+                code = main(list(args))
+            except SystemExit as exc:
+                code = exc.code if isinstance(exc.code, int) else 1
+    finally:
+        os.environ.clear()
+        os.environ.update(saved_env)
+        sys.path[:] = saved_path
     return code or 0, out.getvalue(), err.getvalue()

@@ -7,8 +7,6 @@ from __future__ import annotations
 import csv
 import json
 import math
-import os
-import sys
 import warnings
 
 import pytest
@@ -59,19 +57,12 @@ def _reject_constant(name: str) -> float:
 @pytest.fixture(scope="module")
 def quick(tmp_path_factory):
     out = tmp_path_factory.mktemp("real_data")
-    # main() in this process (tests._bench.run_main), not a child: no interpreter start and
-    # imports. The script records its fits' warnings itself; the rest are not errors here, as in
-    # a child process. Its import sets OPENBLAS_NUM_THREADS etc. and main() puts benchmarks/ on
-    # sys.path: both are put back, so later tests in this process see what they saw before.
-    saved_env, saved_path = dict(os.environ), list(sys.path)
-    try:
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")
-            code, stdout, stderr = run_main("real_data.py", "--quick", "--out", str(out))
-    finally:
-        os.environ.clear()
-        os.environ.update(saved_env)
-        sys.path[:] = saved_path
+    # main() in this process (tests._bench.run_main, which puts os.environ and sys.path back),
+    # not a child: no interpreter start and imports. The script records its fits' warnings
+    # itself; the rest are not errors here, as in a child process.
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        code, stdout, stderr = run_main("real_data.py", "--quick", "--out", str(out))
     assert code == 0, stdout + stderr
     report = json.loads((out / "real_data.json").read_text(), parse_constant=_reject_constant)
     return out, stdout, report

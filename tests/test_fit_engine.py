@@ -296,8 +296,9 @@ def test_internal_parameters_clip_copy_and_refuse_empty_windows():
     assert twin["a"].value == 0.0 and params["a"].value == 2.0  # independent, clipped
     twin["a"].set(vary=False)
     assert not twin["a"].vary and params["a"].vary
-    with pytest.raises(ValueError, match="min < max"):
-        Internal("b", 1.0, 2.0, 2.0)
+    for low, high in ((2.0, 2.0), (2.0, 1.0), (1.0, 1.0 + 1e-14), (np.nan, 1.0)):
+        with pytest.raises(ValueError, match="min < max"):  # lmfit refuses or swaps these
+            Internal("b", 1.0, low, high)
 
 
 @pytest.mark.parametrize("model_name, modes, fixed, truth", CASES)
@@ -325,6 +326,7 @@ def test_the_decoder_gives_reported_values_exactly(model_name, modes, fixed, tru
     ([-2.0, 0.0, 1.0], [3.0, 12.0, 1.5]),                    # every parameter bounded twice
     ([-2.0, -np.inf, 0.5, -np.inf], [3.0, 1.0, np.inf, np.inf]),  # mixed, one free
     ([-np.inf, -np.inf], [np.inf, np.inf]),                 # none bounded
+    ([-1.0, -np.inf, -np.inf], [np.inf, 2.0, np.inf]),       # one-sided only (no both-bounded)
 ])
 def test_bound_transforms_match_lmfits_per_parameter(low, high):
     """The vectorised transforms (and the all-bounded shortcut) are lmfit's, parameter by

@@ -363,13 +363,17 @@ def test_svda_kernel_lambert_w_on_both_sides_of_exps_range(log_z):
     """The kernel's scalar W (libm exp) and its asymptotic branch give _omega_log_w's u0: the
     static force F̄κ = 2πRP e^{-κ(h0 - u0)} over 1 − κu0 = k*(0), on either side of
     closed_form.MAX_EXPONENT = 700 (and of exp's overflow at 709.8)."""
-    from viscoforce.svda import _omega_log_w, svda_stiffness_kernel
+    import scipy.optimize
+
+    from viscoforce.svda import svda_stiffness_kernel
 
     kappa, radius, p_amp, e_inf = 1e9, 1e-6, 1e6, 1e9
     base = 0.5 * math.log(8.0 * math.pi * radius * kappa) + math.log(p_amp / e_inf)
     position = (base - log_z) / kappa  # so that log z = log_z
     k0 = svda_stiffness_kernel(np.array([0.0]), position, 2 * e_inf, e_inf, 1e-3, radius, p_amp,
                                kappa)[0]
-    w = float(_omega_log_w(np.array([log_z]))[0])
+    # W(e^L) by bisection on w + ln w = L (monotone in w): independent of both branches
+    w = scipy.optimize.brentq(lambda v: v + math.log(v) - log_z, 1e-300, max(log_z, 1.0) + 1.0,
+                              xtol=1e-300, rtol=4 * np.finfo(float).eps, maxiter=500)
     expected = 2 * math.pi * radius * p_amp * math.exp(-kappa * position - w) / (1 + w)
     assert k0.real == pytest.approx(expected, rel=1e-13) and k0.imag == 0.0

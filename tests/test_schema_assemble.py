@@ -220,11 +220,12 @@ def test_results_equal_the_public_constructors_on_the_same_inputs(monkeypatch):
 @pytest.mark.parametrize("dims, values", [
     ((), 1.5), ((), 3), ((), True), ((), "text"), ((), np.int8(2)), ((), np.float64(2.5)),
     ((), float("nan")), (("d",), [1, 2]), (("d",), np.arange(3.0)), ("d", ["a", "bb"]),
-    ((), None), (("d",), [1, "a"]),
+    ((), None), (("d",), [1, "a"]), (("d",), np.ma.masked_array([1.0, 2.0], [False, True])),
 ])
 def test_plain_variables_equal_xarrays(dims, values):
     """plain_variable (xarray's fastpath for plain numbers and text) builds xr.Variable's
-    object: same dims, dtype, values and attrs; other inputs take the public constructor."""
+    object: same dims, dtype, values and attrs; other inputs (a masked array: its mask) take
+    the public constructor."""
     from viscoforce.schema import plain_variable
 
     ours = plain_variable(dims, values, {"units": "Pa"})

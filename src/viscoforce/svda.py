@@ -78,7 +78,7 @@ __all__ = [
 
 def _omega_log_w(log_x: FloatArray) -> FloatArray:
     """Principal Lambert W of x = e^{log_x} > 0, for any log_x (no overflow of e^{log_x})."""
-    out = np.empty_like(log_x)
+    out = np.full_like(log_x, np.nan)  # NaN stays NaN (neither branch below takes it)
     small = log_x < MAX_EXPONENT
     out[small] = lambertw(np.exp(log_x[small]), k=0).real
     big = ~small & np.isfinite(log_x)

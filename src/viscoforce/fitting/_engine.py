@@ -29,9 +29,10 @@ from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field, replace
 from types import MappingProxyType
 
-import lmfit
 import numpy as np
 from scipy.optimize import leastsq as minpack_leastsq
+
+from viscoforce.fitting._params import ParameterSet
 
 #: lmfit's leastsq settings (``Minimizer.leastsq``).
 SETTINGS = {"ftol": 1.5e-8, "xtol": 1.5e-8, "gtol": 0.0, "epsfcn": 1e-10, "factor": 100}
@@ -53,7 +54,7 @@ class LeastSquares:
     sum of squares, then χ² clamped to ≥ 1e-250·n before AIC and BIC take its logarithm.
     """
 
-    params: lmfit.Parameters
+    params: ParameterSet
     var_names: list[str]
     residual: np.ndarray
     covar: np.ndarray | None
@@ -132,7 +133,7 @@ class _Bounds:
         return g
 
 
-def leastsq(residual: Callable[[np.ndarray], np.ndarray], params: lmfit.Parameters, *,
+def leastsq(residual: Callable[[np.ndarray], np.ndarray], params: ParameterSet, *,
             scale_covar: bool = True) -> LeastSquares:
     """Minimise Σ residual² over the varied ``params`` as ``lmfit.minimize(method="leastsq")``.
 
@@ -141,7 +142,7 @@ def leastsq(residual: Callable[[np.ndarray], np.ndarray], params: lmfit.Paramete
     residual : callable
         ``residual(x)``: the varied parameters' values (in the order of ``params``) as an
         array → real residuals (an exception raised here propagates).
-    params : lmfit.Parameters
+    params : lmfit.Parameters or viscoforce.fitting._params.InternalParameters
         Start values and bounds, without expressions; updated in place to the best fit (values,
         stderr, correlations): they are the result's ``params``.
     scale_covar : bool

@@ -67,7 +67,13 @@ def reported_names(layout: Sequence[Item]) -> list[str]:
 
 @dataclass(slots=True)
 class Internal:
-    """One internal parameter, with the attributes of :class:`lmfit.Parameter` the fits read."""
+    """One internal parameter, with the attributes of :class:`lmfit.Parameter` the fits read.
+
+    Unlike lmfit's: assigning ``value`` directly does not clip it (:meth:`set` does; the fitting
+    engine assigns values its bound transforms keep inside the window), and bounds out of order
+    or NaN are refused rather than swapped. Bounds closer than lmfit's 1e-13 are refused, as
+    lmfit refuses them.
+    """
 
     name: str
     value: float
@@ -79,7 +85,8 @@ class Internal:
     expr: None = None  # never an expression (lmfit's attribute, read by the engine)
 
     def __post_init__(self) -> None:
-        if not self.min < self.max:
+        if not self.min < self.max or math.isclose(self.min, self.max, rel_tol=1e-13,
+                                                    abs_tol=1e-13):
             raise ValueError(f"parameter {self.name!r} needs min < max, got [{self.min!r}, "
                              f"{self.max!r}]")
         self.value = min(max(float(self.value), self.min), self.max)  # as lmfit: clipped
@@ -124,20 +131,37 @@ class InternalParameters(dict):
         return params
 
 
-def as_lmfit(params: lmfit.Parameters | InternalParameters) -> lmfit.Parameters:
+#: Either container of a fit's parameters: what the fitting engine and the profiles read.
+ParameterSet = lmfit.Parameters | InternalParameters
+
+
+def as_lmfit(params: ParameterSet) -> lmfit.Parameters:
     """A copy of ``params`` as lmfit's Parameters (what ``lmfit.minimize`` takes)."""
     return params.to_lmfit() if isinstance(params, InternalParameters) else params.copy()
 
 
 def build_parameters(layout: Sequence[Item], guess: Mapping[str, float], *,
-                     expressions: bool = True) -> lmfit.Parameters | InternalParameters:
+                     expressions: bool = True) -> lmfit.Parameters:
     """Lmfit Parameters for ``layout`` starting at ``guess`` (SPEC name → value in SI).
 
     Chain values out of order in ``guess`` are pushed apart to keep every ratio ≥ 1.
-    ``expressions=False`` leaves out the SPEC names of chains (their expressions): what the
-    minimiser varies, as :class:`InternalParameters` (no expression interpreter per fit).
+    ``expressions=False`` leaves out the SPEC names of chains (their expressions): the internal
+    parameters only (:func:`internal_parameters` holds the same without lmfit's container).
     """
-    params = lmfit.Parameters() if expressions else InternalParameters()
+    return _fill(lmfit.Parameters(), layout, guess, expressions)
+
+
+def internal_parameters(layout: Sequence[Item], guess: Mapping[str, float]
+                        ) -> InternalParameters:
+    """The internal parameters of :func:`build_parameters`, in the light container.
+
+    What a fit varies, without an expression interpreter per fit (issue 22).
+    """
+    return _fill(InternalParameters(), layout, guess, False)
+
+
+def _fill(params: ParameterSet, layout: Sequence[Item], guess: Mapping[str, float],
+          expressions: bool) -> ParameterSet:
     for item in layout:
         if isinstance(item, Signed):
             params.add(item.name, value=float(guess[item.name]))
@@ -149,7 +173,7 @@ def build_parameters(layout: Sequence[Item], guess: Mapping[str, float], *,
     return params
 
 
-def _add_chain(params: lmfit.Parameters, chain: Chain, guess: Mapping[str, float],
+def _add_chain(params: ParameterSet, chain: Chain, guess: Mapping[str, float],
                expressions: bool = True) -> None:
     first, *rest = chain.names
     start = float(guess[first])
@@ -171,7 +195,7 @@ def _add_chain(params: lmfit.Parameters, chain: Chain, guess: Mapping[str, float
         previous, value = name, value * 10 ** log_ratio
 
 
-def at_bound(params: lmfit.Parameters, *, rtol: float = 1e-6) -> list[str]:
+def at_bound(params: ParameterSet, *, rtol: float = 1e-6) -> list[str]:
     """Varied parameters that ended on a bound (their SPEC names, without ``log_``)."""
     hits = []
     for p in params.values():

@@ -412,7 +412,7 @@ def _residual(model: FitModel, data: FitData):
         layout, params.valuesdict()))
 
 
-def _vector_residual(model: FitModel, data: FitData, params: lmfit.Parameters):
+def _vector_residual(model: FitModel, data: FitData, params: _params.ParameterSet):
     """The weighted residual of the varied internal values (in ``params``' order) as an array.
 
     Parameters that do not vary keep their values in ``params``.
@@ -539,8 +539,8 @@ def _settled(outcome: Outcome) -> bool:
     return not _params.at_bound(res.params) and outcome.pvalue >= SETTLED_PVALUE
 
 
-def _alternative_starts(model: FitModel, first: lmfit.Parameters,
-                        count: int) -> Iterator[lmfit.Parameters]:
+def _alternative_starts(model: FitModel, first: _params.InternalParameters,
+                        count: int) -> Iterator[_params.InternalParameters]:
     """More starts for several modes: the relaxation times spread wider, or closer.
 
     The start values are read now (the fit then moves ``first``); each start is built only when
@@ -550,7 +550,7 @@ def _alternative_starts(model: FitModel, first: lmfit.Parameters,
         return iter(())
     values = {name: p.value for name, p in first.items()}
 
-    def starts() -> Iterator[lmfit.Parameters]:
+    def starts() -> Iterator[_params.InternalParameters]:
         for factor in (2.5, 0.4)[:count]:
             params = first.copy()
             for name, p in params.items():

@@ -134,7 +134,7 @@ def quadratic_limits(layout: Sequence[_params.Item], values: Mapping[str, float]
 
 
 def profile_parameters(layout: Sequence[_params.Item], residual: Residual,
-                       best: lmfit.Parameters, stderr: Mapping[str, float | None],
+                       best: _params.ParameterSet, stderr: Mapping[str, float | None],
                        chisqr: float, scale: float, names: Sequence[str] | None = None
                        ) -> dict[str, Profile]:
     """Profile the SPEC parameters of a fit (see the module docstring).
@@ -145,7 +145,7 @@ def profile_parameters(layout: Sequence[_params.Item], residual: Residual,
         The model's parameter layout (:mod:`viscoforce.fitting._params`).
     residual : callable
         The fit's weighted residual of the internal parameters.
-    best : lmfit.Parameters
+    best : lmfit.Parameters or viscoforce.fitting._params.InternalParameters
         The best-fit internal parameters.
     stderr : mapping
         Local stderr of each SPEC parameter (None or NaN when there is none).
@@ -175,7 +175,7 @@ def profile_parameters(layout: Sequence[_params.Item], residual: Residual,
     return out
 
 
-def _profile_one(layout: Sequence[_params.Item], residual: Residual, best: lmfit.Parameters,
+def _profile_one(layout: Sequence[_params.Item], residual: Residual, best: _params.ParameterSet,
                  name: str, log: bool, value: float, local: float, chisqr: float,
                  scale: float) -> Profile:
     g0 = math.log10(value) if log else value
@@ -289,9 +289,9 @@ def _bisect(root_at: Callable[[float], float], lo: float, r_lo: float, hi: float
     return _interpolate(lo, r_lo, hi, r_hi)
 
 
-def _delta_chi2(layout: Sequence[_params.Item], residual: Residual, best: lmfit.Parameters,
+def _delta_chi2(layout: Sequence[_params.Item], residual: Residual, best: _params.ParameterSet,
                 name: str, log: bool, target: float, chisqr: float, scale: float, *,
-                start: lmfit.Parameters | None = None
+                start: _params.ParameterSet | None = None
                 ) -> tuple[float, lmfit.Parameters | None]:
     """Profile Δχ² with ``name`` held at ``target`` (log10 for positive parameters).
 
@@ -334,7 +334,7 @@ def _delta_chi2(layout: Sequence[_params.Item], residual: Residual, best: lmfit.
     return max(float(r @ r) - chisqr, 0.0), res.params
 
 
-def _window_bounds(layout: Sequence[_params.Item], params: lmfit.Parameters) -> set[str]:
+def _window_bounds(layout: Sequence[_params.Item], params: _params.ParameterSet) -> set[str]:
     """Internal parameters on a bound of their window.
 
     An ordering bound (E0 = E_inf) is not one: the fit there is as legitimate as anywhere, and
@@ -352,7 +352,7 @@ def _window_bounds(layout: Sequence[_params.Item], params: lmfit.Parameters) -> 
     return out
 
 
-def _window(layout: Sequence[_params.Item], best: lmfit.Parameters, name: str,
+def _window(layout: Sequence[_params.Item], best: _params.ParameterSet, name: str,
             log: bool) -> tuple[float, float]:
     """The range (log10 for positive parameters) the internal parameters' bounds allow ``name``."""
     for item in layout:
@@ -367,7 +367,7 @@ def _window(layout: Sequence[_params.Item], best: lmfit.Parameters, name: str,
     return (p.min, p.max) if p.vary else (p.value, p.value)
 
 
-def _shifted(layout: Sequence[_params.Item], base: lmfit.Parameters, name: str, log: bool,
+def _shifted(layout: Sequence[_params.Item], base: _params.ParameterSet, name: str, log: bool,
              target: float) -> lmfit.Parameters:
     """A copy of ``base`` with ``name``'s own internal parameter moved to meet ``target``."""
     start = _params.as_lmfit(base)  # lmfit.minimize's own Parameters

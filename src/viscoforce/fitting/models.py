@@ -107,14 +107,17 @@ class FitModel(lmfit.Model):
 
     def parameters_from(self, values: Mapping[str, float], x: np.ndarray, *,
                         expressions: bool = True, y: np.ndarray | None = None
-                        ) -> lmfit.Parameters | P.InternalParameters:
+                        ) -> lmfit.Parameters:
         """Parameters starting at ``values`` (SPEC names), with the bounds for data over ``x``.
 
-        ``expressions=False``: the internal parameters only, as
-        :class:`viscoforce.fitting._params.InternalParameters` (see
+        ``expressions=False``: the internal parameters only (see
         :func:`viscoforce.fitting._params.build_parameters`). ``y``: the data, for models whose
         bounded parameters take their window from it (hertz: baseline, slope).
         """
+        return P.build_parameters(self._fitted_layout(x, y), values, expressions=expressions)
+
+    def _fitted_layout(self, x: np.ndarray, y: np.ndarray | None) -> list[P.Item]:
+        """The layout with the windows that data over ``x`` (and ``y``) give its parameters."""
         layout = self.layout
         if self._bounded_windows is not None:
             windows = self._bounded_windows(x, y)
@@ -124,9 +127,8 @@ class FitModel(lmfit.Model):
             window = self._tau_window(x)
             layout = [P.Chain(i.names, window) if isinstance(i, P.Chain) and i.names[0].startswith(
                 "tau") else i for i in layout]
-        layout = [P.Chain(i.names, MODULUS_BOUNDS) if isinstance(i, P.Chain) and i.names[0] in (
+        return [P.Chain(i.names, MODULUS_BOUNDS) if isinstance(i, P.Chain) and i.names[0] in (
             "E_inf", "E0", "E") else i for i in layout]
-        return P.build_parameters(layout, values, expressions=expressions)
 
     def guess(self, data: np.ndarray, x: np.ndarray | None = None, **kws: Any) -> lmfit.Parameters:
         """Starting parameters from the data alone (complex k* over ω, or F over t)."""
@@ -143,8 +145,9 @@ class FitModel(lmfit.Model):
         What the fitting engine varies (``.to_lmfit()`` for lmfit's own minimiser).
         """
         x = np.asarray(x, dtype=float)
-        return self.parameters_from(self._guesser(np.asarray(data), x), x, expressions=False,
-                                    y=np.asarray(data))
+        y = np.asarray(data)
+        guess = self._guesser(y, x)  # first: its errors name the data's problem
+        return P.internal_parameters(self._fitted_layout(x, y), guess)
 
 
 def _signed(function: Callable[..., np.ndarray], independent: str,

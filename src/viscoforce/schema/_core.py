@@ -194,10 +194,26 @@ def plain_variable(dims: str | tuple[str, ...], values: Any,
     Numbers, booleans and text become a NumPy array here, which xarray takes as it is
     (``fastpath``): its conversion checks (datetimes, masked and pandas arrays) concern none of
     them, and cost a 0-d variable 2–3 µs of the ≈ 50 that a fit's result holds (issue 22).
-    Anything else takes the public constructor.
+
+    Parameters
+    ----------
+    dims : str or tuple of str
+        Dimension names, as for :class:`xarray.Variable`.
+    values : array_like
+        A plain NumPy array (not a subclass such as a masked array), a Python or NumPy number,
+        bool or text, or a list of them; anything else (and any dtype but bool, integer, float
+        or text) takes the public constructor.
+    attrs : mapping, optional
+        The variable's attributes.
+
+    Returns
+    -------
+    xarray.Variable
+        The same variable as ``xr.Variable(dims, values, attrs)``.
     """
-    data = np.asarray(values) if isinstance(
-        values, np.ndarray | float | int | str | bool | np.number | np.bool_ | list) else None
+    plain = (type(values) is np.ndarray
+             or isinstance(values, float | int | str | bool | np.number | np.bool_ | list))
+    data = np.asarray(values) if plain else None
     if data is None or data.dtype.kind not in "biufU":
         return xr.Variable(dims, values, attrs)
     return xr.Variable((dims,) if isinstance(dims, str) else tuple(dims), data, attrs,

@@ -120,7 +120,7 @@ def solve_gap(problem: ContactProblem, base: FloatArray, coupling: float, initia
     for it in range(1, max_iter + 1):
         jac = np.multiply(a_fortran, (-coupling) * law.pressure_derivative(h),
                           out=np.empty((n, n), order="F"))
-        jac.ravel(order="F")[:: n + 1] += 1.0  # the diagonal, through a view of the columns
+        np.einsum("ii->i", jac)[...] += 1.0  # the diagonal, a view in any memory order
         # LAPACK's getrf/getrs directly: scipy.linalg.lu_factor/lu_solve return the same
         # factors and solution through an argument layer that costs more than a small solve
         lu, piv, info = _GETRF(jac, overwrite_a=True)
