@@ -70,3 +70,16 @@ def test_a_dataset_from_a_file_or_a_selection_says_it_has_none(fitted, tmp_path)
             back.lmfit.fit_report()
     assert not fitted.isel(omega=slice(0, 3)).lmfit.available
     assert math.isfinite(float(fitted["E_ref"]))
+
+
+def test_a_fitted_dataset_pickles_without_its_fit(fitted):
+    """A result sent to another process (pickle: dask, multiprocessing) keeps every variable
+    and attribute; its fit (closures) stays behind, as with a file."""
+    import pickle
+
+    fitted.lmfit.fit_report()  # the accessor fully built (minimizer and result cached)
+    back = pickle.loads(pickle.dumps(fitted))
+    xr.testing.assert_identical(back, fitted)
+    assert fitted.lmfit.available and not back.lmfit.available
+    with pytest.raises(ParameterError, match="carries no lmfit result"):
+        back.lmfit.fit_report()

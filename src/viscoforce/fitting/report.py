@@ -18,8 +18,9 @@ evaluations, the first time it is asked for): its stderr are the covariance's, s
 reduced χ² when the data have no stderr — the curve fits' correction for autocorrelated
 residuals (``attrs["stderr_correction"]``) is in the dataset's ``<name>_stderr``, not here.
 
-A dataset read back from a file, or made by an operation that returns a new dataset (``isel``,
-``assign``, …), has only its variables: ``ds.lmfit`` then raises a ParameterError that says so.
+A dataset read back from a file, unpickled (sent to another process), or made by an operation
+that returns a new dataset (``isel``, ``assign``, …), has only its variables: ``ds.lmfit`` then
+raises a ParameterError that says so.
 A map keeps each pixel's report as text on request (``fit_map(..., reports=True)``: the variable
 ``fit_report``), which files keep.
 :func:`attach` is how the fitting functions give a result dataset its fit.
@@ -50,6 +51,14 @@ class LmfitAccessor:
         self._outcome: Outcome | None = None
         self._minimizer: lmfit.Minimizer | None = None
         self._result: lmfit.minimizer.MinimizerResult | None = None
+
+    def __reduce__(self) -> tuple[Any, tuple[xr.Dataset]]:
+        """Pickled without the fit (its closures cannot travel).
+
+        A dataset sent to another process (dask, multiprocessing, ``pickle``) keeps its
+        variables, as a file does.
+        """
+        return (LmfitAccessor, (self._ds,))
 
     @property
     def available(self) -> bool:
