@@ -245,6 +245,10 @@ class LinearizedState:
                 f"{self.relaxed_modulus:.6g} Pa: the state is the static equilibrium for its "
                 "E_inf only; build one for this material (linearized_state(problem, position, "
                 "material.relaxed_modulus))")
+        return self._stiffness_of(material, omega)
+
+    def _stiffness_of(self, material: ViscoelasticMaterial, omega: FloatArray) -> np.ndarray:
+        """:meth:`stiffness_for` of a material and frequencies the caller has checked."""
         return self.stiffness(2.0 * np.asarray(material.complex_compliance(omega), dtype=complex))
 
 
@@ -519,9 +523,8 @@ def _linear_stiffness(problem: ContactProblem, position: float, omega: FloatArra
                  MAX_SAMPLES, hint="request fewer frequencies")
     material = problem.material
     state = linearized_state(problem, position, material.relaxed_modulus)
-    # stiffness_for without its checks: the problem's own material, the state built for its E_inf
-    c = 2.0 * np.asarray(material.complex_compliance(omega), dtype=complex)
-    return state.stiffness(c), state.mean_force
+    # the problem's own material, the state built for its E_inf: stiffness_for's checks hold
+    return state._stiffness_of(material, omega), state.mean_force
 
 
 def linear_response(problem: ContactProblem, position: float, eta: float,

@@ -212,16 +212,7 @@ def at_bound(params: ParameterSet, *, rtol: float = 1e-6) -> list[str]:
 
 def reported_values(layout: Sequence[Item], internal: Mapping[str, float]) -> dict[str, float]:
     """SPEC values from internal values (:func:`to_reported` without the derivatives)."""
-    values: dict[str, float] = {}
-    for item in layout:
-        if isinstance(item, Chain):
-            total = 0.0
-            for name in item.names:
-                total += internal[f"log_{name}"]
-                values[name] = 10.0 ** total
-        else:
-            values[item.name] = internal[item.name]
-    return values
+    return decoder(layout, (), internal)(())
 
 
 def decoder(layout: Sequence[Item], varied: Sequence[str], fixed: Mapping[str, float]
@@ -229,8 +220,8 @@ def decoder(layout: Sequence[Item], varied: Sequence[str], fixed: Mapping[str, f
     """:func:`reported_values` as a function of the varied internal values alone.
 
     ``varied``: the internal names in the order of the values the function gets; ``fixed``:
-    the other internal values. The same arithmetic as :func:`reported_values` (a fit's inner
-    loop, without building a mapping of internal values per evaluation).
+    the other internal values (:func:`reported_values` is the decoder with every value fixed).
+    A fit's inner loop calls it without building a mapping of internal values per evaluation.
     """
     slots = {name: i for i, name in enumerate(varied)}
     plan: list[tuple[str, bool | None, int | None, float | None]] = []
