@@ -340,3 +340,26 @@ def test_bound_transforms_match_lmfits_per_parameter(low, high):
         value, grad = p.from_internal(u[i]), p.scale_gradient(u[i])
         assert x[i] == pytest.approx(value, rel=1e-15, abs=1e-15)
         assert g[i] == pytest.approx(grad, rel=1e-12, abs=1e-15)
+
+
+@pytest.mark.parametrize("seed", range(40))
+def test_spectrum_features_are_the_polyfit_vertex_and_numpys_medians(seed):
+    """The guess's phase peak (a closed-form vertex) is np.polyfit's parabola through the top
+    three points in log ω, clipped to them; the level medians are np.median's."""
+    from viscoforce.fitting.models import SpectrumFeatures
+
+    rng = np.random.default_rng(seed)
+    n = int(rng.integers(3, 40))
+    w = np.sort(np.exp(rng.uniform(0.0, 12.0, n)))
+    k = np.exp(rng.normal(size=n)) * np.exp(1j * rng.uniform(0.0, 1.5, n))
+    feats = SpectrumFeatures.of(k[::-1], w[::-1])  # any order
+    mag, phase, n_end = np.abs(k), np.angle(k), max(1, n // 10)
+    assert feats.k_low == float(np.median(mag[:n_end]))
+    assert feats.k_high == float(np.median(mag[-n_end:]))
+    i = int(np.argmax(phase))
+    peak = w[i]
+    if 0 < i < n - 1:
+        a = np.polyfit(np.log(w[i - 1:i + 2]), phase[i - 1:i + 2], 2)
+        if a[0] < 0:
+            peak = min(max(math.exp(-a[1] / (2 * a[0])), w[i - 1]), w[i + 1])
+    assert feats.omega_peak == pytest.approx(peak, rel=1e-9)

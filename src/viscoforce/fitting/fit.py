@@ -796,7 +796,7 @@ def add_derived_moduli(ds: xr.Dataset, poisson: float | None = None) -> xr.Datas
     from viscoforce.physics.tips import DEFAULT_POISSON
 
     nu = DEFAULT_POISSON if poisson is None else poisson
-    names = [str(n) for n in ds["param_i"].values]
+    names = [str(n) for n in ds.variables["param_i"].values]
     if ds.attrs.get("poisson") == nu and all(
             f"{n}_young" in ds.variables for n in names if PAPER_CONVENTION.fullmatch(n)):
         return ds  # already derived at this ν (result_dataset derives at the default)
@@ -826,19 +826,22 @@ def derived_variables(params: Mapping[str, tuple[Any, Any]], nu: float
         first = pair[0]
         unit = (str(first.attrs.get("units", "Pa")) if isinstance(first, xr.Variable)
                 else parameter_units(name))
-        for suffix, convert, what in (
-                ("young", lambda x: young_from_paper(x, nu), "Young's"),
-                ("shear", lambda x: shear_from_young(young_from_paper(x, nu), nu), "shear")):
-            for tail, source in zip(("", "_stderr"), pair, strict=True):
-                dims = source.dims if isinstance(source, xr.Variable) else ()
-                values = np.asarray(source.values if isinstance(source, xr.Variable) else (
-                    math.nan if source is None else source), dtype=float)
+        kind = "viscosity" if name == "mu" else "modulus"
+        converted = {}
+        for tail, source in zip(("", "_stderr"), pair, strict=True):
+            dims = source.dims if isinstance(source, xr.Variable) else ()
+            values = np.asarray(source.values if isinstance(source, xr.Variable) else (
+                math.nan if source is None else source), dtype=float)
+            young = young_from_paper(values, nu)  # checks the values (the message says how)
+            converted[tail] = dims, {"young": young, "shear": shear_from_young(young, nu)}
+        for suffix, what in (("young", "Young's"), ("shear", "shear")):
+            for tail, (dims, moduli) in converted.items():
+                value = moduli[suffix]
                 out[f"{name}_{suffix}{tail}"] = plain_variable(
-                    dims, convert(values) if values.ndim else float(convert(values)), {
+                    dims, value if dims else float(value), {
                         "units": unit, "poisson": float(nu),
-                        "long_name": f"{'standard error of ' if tail else ''}{what} "
-                                     f"{'viscosity' if name == 'mu' else 'modulus'} from {name} "
-                                     f"(nu = {nu:g})"})
+                        "long_name": f"{'standard error of ' if tail else ''}{what} {kind} "
+                                     f"from {name} (nu = {nu:g})"})
     return out
 
 

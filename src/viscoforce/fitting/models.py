@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import inspect
 import math
+import statistics
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
@@ -212,16 +213,16 @@ class SpectrumFeatures:
         mag, phase = np.abs(k), np.angle(k)
         n_end = max(1, w.size // 10)
         i = int(np.argmax(phase))
+        peak = float(w[i])
         if 0 < i < w.size - 1:  # parabola through the peak in log ω
-            x = np.log(w[i - 1:i + 2])
-            y = phase[i - 1:i + 2]
-            a = np.polyfit(x, y, 2)
-            peak = math.exp(-a[1] / (2 * a[0])) if a[0] < 0 else w[i]
-            peak = min(max(peak, w[i - 1]), w[i + 1])
-        else:
-            peak = float(w[i])
-        return cls(float(np.median(mag[:n_end])), float(np.median(mag[-n_end:])), float(w[0]),
-                   float(w[-1]), float(peak))
+            x0, x1, x2 = (math.log(v) for v in w[i - 1:i + 2].tolist())
+            y0, y1, y2 = phase[i - 1:i + 2].tolist()
+            left, right = (y1 - y0) / (x1 - x0), (y2 - y1) / (x2 - x1)
+            if right < left:  # concave: the vertex is between the outer two points
+                vertex = 0.5 * (x0 + x1) - left * (x2 - x0) / (2.0 * (right - left))
+                peak = min(max(math.exp(vertex), float(w[i - 1])), float(w[i + 1]))
+        return cls(statistics.median(mag[:n_end].tolist()),
+                   statistics.median(mag[-n_end:].tolist()), float(w[0]), float(w[-1]), peak)
 
     def sls_tau(self) -> float:
         """τ of a one-mode transfer (1 + iωτ)/(a + iωτ b): its phase peaks at ωτ = √(a/b)."""

@@ -268,7 +268,7 @@ def validate_spectrum(ds: xr.Dataset, *, require: Iterable[str] | None = None) -
     extra: tuple[str, ...] = ()
     for name in ("stiffness", "phase", "amplitude", "mean_force"):
         if name in ds.variables:
-            dims = ds[name].dims
+            dims = ds.variables[name].dims
             if name == "mean_force" and (not dims or dims[-1] != "omega"):
                 continue  # broadcast (scalar or per pixel): it does not give the extra dims
             if not dims or dims[-1] != "omega":
@@ -276,7 +276,7 @@ def validate_spectrum(ds: xr.Dataset, *, require: Iterable[str] | None = None) -
             extra = tuple(str(d) for d in dims[:-1])
             break
     check_variables(ds, "spectrum", SPECTRUM_VARIABLES, extra)
-    w = np.asarray(ds["omega"].values)
+    w = np.asarray(ds.variables["omega"].values)
     if not np.all(np.isfinite(w) & (w > 0)):
         raise SchemaError(f"spectrum: 'omega' must be finite and > 0 rad/s, got min {w.min()!r}")
     if "quality" in ds.variables:
