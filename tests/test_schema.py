@@ -733,3 +733,15 @@ def test_validators_reject_a_bad_require(validate, require, match):
 def test_other_builders_reject_bad_arguments(build, match):
     with pytest.raises(SchemaError, match=match):
         build()
+
+
+def test_flag_meanings_inverts_flag_attrs():
+    """The viewer names a map's quality codes from the file's own CF attributes."""
+    from viscoforce.fitting.maps import MAP_QUALITY
+    from viscoforce.schema._core import flag_attrs, flag_meanings
+
+    var = xr.Variable(("x",), np.array([0, 2], dtype=np.int8), flag_attrs(MAP_QUALITY))
+    assert flag_meanings(var) == MAP_QUALITY
+    assert flag_meanings(xr.Variable(("x",), np.array([0]))) == {}  # no attributes: no names
+    var.attrs["flag_meanings"] = "good"  # values and meanings disagree: not trusted
+    assert flag_meanings(var) == {}

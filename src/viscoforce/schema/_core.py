@@ -362,6 +362,20 @@ def flag_attrs(flags: Mapping[int, str], dtype: type = np.int8) -> dict[str, Any
             "flag_meanings": " ".join(flags.values())}
 
 
+def flag_meanings(var: xr.Variable) -> dict[int, str]:
+    """Code → meaning of a CF flag variable (``flag_values``, ``flag_meanings``; {} without).
+
+    The inverse of :func:`flag_attrs`: a map's ``quality`` carries
+    :data:`viscoforce.fitting.maps.MAP_QUALITY` this way, so a map read from a file names its
+    codes as the fit that wrote it did.
+    """
+    values = np.atleast_1d(np.asarray(var.attrs.get("flag_values", []))).tolist()
+    meanings = str(var.attrs.get("flag_meanings", "")).split()
+    if len(values) != len(meanings):
+        return {}
+    return {int(v): m for v, m in zip(values, meanings, strict=True)}
+
+
 def assemble(data_vars: Mapping[str, Any], coords: Mapping[str, Any] | None = None,
              attrs: Mapping[str, Any] | None = None, *,
              fresh: Collection[str] = ()) -> xr.Dataset:

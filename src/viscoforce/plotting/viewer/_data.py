@@ -19,6 +19,7 @@ import xarray as xr
 from viscoforce._validation import describe_value
 from viscoforce.exceptions import ParameterError, SchemaError
 from viscoforce.plotting.maps import _DIMENSIONS, _bad_pixels, _rows
+from viscoforce.schema._core import flag_meanings
 from viscoforce.units import format_quantity, unit_factor
 
 __all__ = ["MapView", "best_fit_curves", "map_view", "pixel_table"]
@@ -27,9 +28,6 @@ __all__ = ["MapView", "best_fit_curves", "map_view", "pixel_table"]
 HISTOGRAM_BINS = 20
 #: Points of a best-fit curve computed by :func:`best_fit_curves` (log-spaced over the data).
 FIT_POINTS = 60
-#: Names of the per-pixel quality codes (:data:`viscoforce.fitting.maps.MAP_QUALITY`).
-QUALITY_NAMES = {0: "good", 1: "optimiser_failed", 2: "bad_fit", 3: "not_determined",
-                 4: "at_bound"}
 
 
 @dataclass(frozen=True)
@@ -215,6 +213,7 @@ def pixel_table(fits: xr.Dataset) -> list[dict[str, Any]]:
     columns.update({n: _flat(fits, n, dims) for n in ("redchi", "chi2_pvalue")
                     if n in fits.variables})
     quality = _flat(fits, "quality", dims).astype(int)
+    quality_names = flag_meanings(fits.variables["quality"])
     shape = tuple(fits.sizes[d] for d in dims)
     rows = []
     for i, index in enumerate(np.ndindex(*shape)):
@@ -223,7 +222,7 @@ def pixel_table(fits: xr.Dataset) -> list[dict[str, Any]]:
                                "y": _number(ys[i]), "x": _number(xs[i])}
         row.update({n: _number(v[i]) for n, v in columns.items()})
         row["quality"] = int(quality[i])
-        row["quality_name"] = QUALITY_NAMES.get(int(quality[i]), str(int(quality[i])))
+        row["quality_name"] = quality_names.get(int(quality[i]), str(int(quality[i])))
         rows.append(row)
     return rows
 
