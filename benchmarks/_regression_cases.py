@@ -8,11 +8,12 @@ _previous.py) and in the current tree is used: ``ContactProblem.create``, ``PAPE
 omega)``, ``experiments.linear_response.linear_stiffness`` and ``solvers.static.equilibrium_gap``.
 
 Cold calls (``cold=True``): before each timed call, untimed, a new ``ContactProblem`` is built
-and every cache of ``viscoforce.experiments.linear_response`` is emptied (whatever the version
-has: ``linearized_state``'s LRU of static states; in the current tree also the finite-amplitude
-modes and results). That is what a user's first call on a problem costs once the grid's kernel
-exists: the unit kernel (``kernel._node_matrix_unit``, 30–55 ms, the same code in both versions,
-paid once per panel count and order) stays built. Warm calls (``cold=False``) repeat the call on
+and every cache of the linear response is emptied (whatever the version has:
+``linearized_state``'s LRU of static states; in the current tree also the decompositions and
+the finite-amplitude modes and results, :data:`LINEAR_MODULES`). That is what a user's first
+call on a problem costs once the grid's kernel exists: the unit kernel
+(``kernel._node_matrix_unit``, 30–55 ms, the same code in both versions, paid once per panel
+count and order) stays built. Warm calls (``cold=False``) repeat the call on
 one problem with the caches filled.
 
 The reference (:func:`reference_spectrum`) is the textbook route, independent of the library's
@@ -24,6 +25,8 @@ tests/test_amplitude_bias_modal.py). No eigen-decomposition, no cache.
 
 from __future__ import annotations
 
+import importlib
+import types
 import warnings
 
 import numpy as np
@@ -53,33 +56,62 @@ def paper_problem(position: float) -> vf.ContactProblem:
                                     material=vf.PAPER.material(), deepest_position=position)
 
 
-def linear_caches() -> list[str]:
-    """Names of the caches of the linear-response module that :func:`clear_linear_caches` empties.
+#: The modules whose caches a cold call empties, by the version that has them: the previous
+#: release keeps every cache in ``linear_response``; the current tree also in ``_modal`` (the
+#: decompositions) and ``finite_amplitude`` (the finite-amplitude modes and results).
+LINEAR_MODULES = ("viscoforce.experiments.linear_response", "viscoforce.experiments._modal",
+                  "viscoforce.experiments.finite_amplitude")
 
-    Anything with a ``cache_clear`` (``linearized_state``), any object with ``clear`` and
-    ``info`` (the LRU of static states or finite-amplitude modes) and any dict whose name ends
-    in ``_RESULTS`` (cached finite-amplitude results), whatever the version calls them.
-    """
-    module = linear_module
-    names = []
-    for name, obj in vars(module).items():
-        if isinstance(obj, dict):
-            if name.endswith("_RESULTS"):
-                names.append(name)
+
+def _linear_modules() -> list:
+    """The modules of :data:`LINEAR_MODULES` this version has (imported up front)."""
+    found = []
+    for name in LINEAR_MODULES:
+        try:
+            found.append(importlib.import_module(name))
+        except ModuleNotFoundError:
             continue
-        if isinstance(obj, type) or getattr(obj, "__module__", None) != module.__name__:
-            continue  # a class, or imported from elsewhere (e.g. the kernel's cache)
-        if callable(getattr(obj, "cache_clear", None)) or (
-                callable(getattr(obj, "clear", None)) and callable(getattr(obj, "info", None))):
-            names.append(name)
-    return sorted(names)
+    return found
+
+
+def _caches() -> dict[str, object]:
+    """Label → cache of every linear-response module (see :func:`linear_caches`)."""
+    out: dict[str, object] = {}
+    seen: set[int] = set()
+    for module in _linear_modules():
+        prefix = "" if module is linear_module else module.__name__.rsplit(".", 1)[-1] + "."
+        for name, obj in vars(module).items():
+            if isinstance(obj, type | types.ModuleType) or id(obj) in seen:
+                continue
+            if isinstance(obj, dict):
+                cache = name.endswith("_RESULTS")
+            elif isinstance(obj, types.FunctionType):  # functools caches: the module's own only
+                cache = (callable(getattr(obj, "cache_clear", None))
+                         and obj.__module__ == module.__name__)
+            else:  # a state cache object (clear and info), wherever its class is defined
+                cache = (callable(getattr(obj, "clear", None))
+                         and callable(getattr(obj, "info", None)))
+            if cache:
+                seen.add(id(obj))
+                out[prefix + name] = obj
+    return out
+
+
+def linear_caches() -> list[str]:
+    """Names of the linear-response caches that :func:`clear_linear_caches` empties.
+
+    In every module of :data:`LINEAR_MODULES` present: anything with a ``cache_clear``
+    (``linearized_state``), any object with ``clear`` and ``info`` (the LRUs of static states,
+    decompositions or finite-amplitude modes) and any dict whose name ends in ``_RESULTS``
+    (cached finite-amplitude results), whatever the version calls them. Names outside
+    ``linear_response`` carry their module's last part (``finite_amplitude._BIAS_MODES``).
+    """
+    return sorted(_caches())
 
 
 def clear_linear_caches() -> None:
     """Empty every cache named by :func:`linear_caches`."""
-    module = linear_module
-    for name in linear_caches():
-        obj = getattr(module, name)
+    for obj in _caches().values():
         (getattr(obj, "cache_clear", None) or obj.clear)()
 
 
@@ -251,8 +283,9 @@ def reference_case(position: float, eta: float, n_omega: int) -> Case:
 
 def amplitude_bias_case(position: float, n_omega: int) -> Case:
     """The library's b(ω) at the reference's check frequencies (value only; current tree)."""
+    from viscoforce.experiments.finite_amplitude import amplitude_bias as bias
+
     problem, omega = paper_problem(position), omegas(n_omega)
-    bias = linear_module.amplitude_bias
 
     def run():
         return bias(problem, position, check_frequencies(omega))

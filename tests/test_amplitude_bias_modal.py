@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 import viscoforce as vf
-from viscoforce.experiments import linear_response as lr
+from viscoforce.experiments import finite_amplitude as fa
 from viscoforce.physics.materials import PronySeries, StandardLinearSolid
 from viscoforce.solvers.static import equilibrium_gap
 
@@ -16,7 +16,7 @@ def _direct(problem, position, omega):
     material = problem.material
     e_inf = material.relaxed_modulus
     gap = equilibrium_gap(problem, position, e_inf).gap
-    d1, d2, d3 = lr._pressure_derivatives(problem, gap)
+    d1, d2, d3 = fa._pressure_derivatives(problem, gap)
     a, n, grid = problem.influence, gap.size, problem.grid
 
     def load(v):
@@ -47,8 +47,8 @@ def test_modal_bias_equals_the_direct_solves(position, material):
                                        deepest_position=min(position, 0.0) - 2e-9)
     omega = np.geomspace(10.0, 1e6, 7)
     ref = _direct(problem, position, omega)
-    np.testing.assert_allclose(lr.amplitude_bias(problem, position, omega), ref, rtol=1e-11)
+    np.testing.assert_allclose(fa.amplitude_bias(problem, position, omega), ref, rtol=1e-11)
     # cached results are copies: mutating one does not change the next call
-    first = lr.amplitude_bias(problem, position, omega)
+    first = fa.amplitude_bias(problem, position, omega)
     first[:] = 0
-    np.testing.assert_allclose(lr.amplitude_bias(problem, position, omega), ref, rtol=1e-11)
+    np.testing.assert_allclose(fa.amplitude_bias(problem, position, omega), ref, rtol=1e-11)

@@ -27,7 +27,8 @@ from viscoforce.cli import main
 from viscoforce.exceptions import ModelValidityWarning, ParameterError
 from viscoforce.experiments.choice import choose_spectrum
 from viscoforce.experiments.drives import Step, Triangle
-from viscoforce.experiments.linear_response import amplitude_bias, linear_stiffness
+from viscoforce.experiments.finite_amplitude import amplitude_bias
+from viscoforce.experiments.linear_response import linear_stiffness
 from viscoforce.fitting import fit_spectrum
 from viscoforce.schema import make_spectrum
 

@@ -11,7 +11,7 @@ import pytest
 import scipy.linalg
 
 from viscoforce.exceptions import ConvergenceError
-from viscoforce.experiments.linear_response import _lu_solve, _times
+from viscoforce.experiments._modal import lu_solve, times
 from viscoforce.solvers import newton
 
 RNG = np.random.default_rng(7)
@@ -27,11 +27,11 @@ def test_times_is_the_matrix_product(shape, layout):
     matrix = RNG.standard_normal((4, 6))
     z = _complex((shape[0], 2 * shape[1]) if len(shape) == 2 else (2 * shape[0],))
     z = z[..., ::2] if layout == "strided" else z[..., : z.shape[-1] // 2]
-    np.testing.assert_allclose(_times(matrix, z), matrix @ z, rtol=1e-13, atol=1e-13)
+    np.testing.assert_allclose(times(matrix, z), matrix @ z, rtol=1e-13, atol=1e-13)
     complex_matrix = _complex((4, 6))  # complex matrices and real z take numpy's product
-    np.testing.assert_allclose(_times(complex_matrix, z), complex_matrix @ z, rtol=1e-13)
+    np.testing.assert_allclose(times(complex_matrix, z), complex_matrix @ z, rtol=1e-13)
     real_z = RNG.standard_normal(shape)
-    np.testing.assert_allclose(_times(matrix, real_z), matrix @ real_z, rtol=1e-13)
+    np.testing.assert_allclose(times(matrix, real_z), matrix @ real_z, rtol=1e-13)
 
 
 @pytest.mark.parametrize("columns", [1, 5])
@@ -39,10 +39,10 @@ def test_lu_solve_of_complex_right_hand_sides_with_real_factors(columns):
     a = RNG.standard_normal((6, 6)) + 6 * np.eye(6)
     b = _complex((6, columns))
     lu = scipy.linalg.lu_factor(a)
-    np.testing.assert_allclose(_lu_solve(lu, b), np.linalg.solve(a, b), rtol=1e-13)
-    np.testing.assert_allclose(_lu_solve(lu, b), scipy.linalg.lu_solve(lu, b), rtol=1e-13)
+    np.testing.assert_allclose(lu_solve(lu, b), np.linalg.solve(a, b), rtol=1e-13)
+    np.testing.assert_allclose(lu_solve(lu, b), scipy.linalg.lu_solve(lu, b), rtol=1e-13)
     complex_lu = scipy.linalg.lu_factor(a + 1j * np.eye(6))
-    np.testing.assert_allclose(_lu_solve(complex_lu, b),
+    np.testing.assert_allclose(lu_solve(complex_lu, b),
                                np.linalg.solve(a + 1j * np.eye(6), b), rtol=1e-13)
 
 

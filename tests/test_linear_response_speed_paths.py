@@ -3,8 +3,8 @@
 - ``solve_gap`` (the Jacobian built in Fortran order and factored in place, the
   fraction-to-boundary pre-check, the undamped update without a product) takes the same trial
   steps as the textbook damped Newton of its module docstring, written here in the general form;
-- ``_lu_solve`` of real right-hand sides (LAPACK's getrs directly) equals ``scipy.linalg.lu_solve``;
-- ``_decompose`` (the balanced matrix built in place, no indexing when every node is active)
+- ``_modal.lu_solve`` of real right-hand sides (LAPACK's getrs directly) equals ``scipy.linalg.lu_solve``;
+- ``_modal.decompose`` (the balanced matrix built in place, no indexing when every node is active)
   diagonalises M' built by indexing, and its eigenvalues are those of M = A·diag(−p′);
 - ``amplitude_bias`` in its projected modal form (G = V⁻¹|D|^½A once, load integrals from the
   modes) equals the direct dense solves with nodes that carry no force derivative (the inactive
@@ -21,6 +21,8 @@ import viscoforce as vf
 from tests._laws import Wrapped
 from tests.test_amplitude_bias_modal import _direct
 from tests.test_linearized_state import _CutOff, direct_stiffness
+from viscoforce.experiments import _modal
+from viscoforce.experiments import finite_amplitude as fa
 from viscoforce.experiments import linear_response as lr
 from viscoforce.solvers.newton import solve_gap
 from viscoforce.solvers.static import STATIC_XTOL, equilibrium_gap
@@ -31,12 +33,12 @@ OMEGA = np.geomspace(10.0, 1e6, 7)
 
 @pytest.fixture(autouse=True)
 def _empty_caches():
-    """Every cache of the linear-response module empty, so that each test decomposes anew."""
+    """Every cache of the linear response empty, so that each test decomposes anew."""
     def clear():
         lr.linearized_state.cache_clear()
-        lr._DECOMPOSITIONS.clear()
-        lr._BIAS_MODES.clear()
-        lr._BIAS_RESULTS.clear()
+        _modal.DECOMPOSITIONS.clear()
+        fa._BIAS_MODES.clear()
+        fa._BIAS_RESULTS.clear()
 
     clear()
     yield
@@ -116,7 +118,7 @@ def test_lu_solve_of_real_right_hand_sides_is_scipys(rng, shape):
     a = rng.standard_normal((7, 7)) + 7.0 * np.eye(7)
     b = rng.standard_normal(shape)
     lu = scipy.linalg.lu_factor(a)
-    got = lr._lu_solve(lu, b)
+    got = _modal.lu_solve(lu, b)
     assert got.shape == b.shape and got.dtype == np.float64
     np.testing.assert_allclose(got, scipy.linalg.lu_solve(lu, b), rtol=1e-13, atol=0)
     np.testing.assert_allclose(got, np.linalg.solve(a, b), rtol=1e-12, atol=0)
@@ -128,7 +130,7 @@ def test_decomposition_diagonalises_the_balanced_linearisation(paper_law, positi
                                     material=SLS, deepest_position=position).grid
     law = paper_law if cutoff is None else _CutOff(paper_law, cutoff)
     problem = vf.ContactProblem(vf.PAPER.sphere(), law, SLS, grid)
-    dec = lr._decompose(problem, equilibrium_gap(problem, position, SLS.relaxed_modulus))
+    dec = _modal.decompose(problem, equilibrium_gap(problem, position, SLS.relaxed_modulus))
     s = -law.pressure_derivative(dec.sol.gap)
     active = np.flatnonzero(s != 0.0)
     assert (active.size == grid.size) == (cutoff is None)  # both branches
@@ -152,11 +154,11 @@ def test_bias_with_nodes_without_force_derivative_equals_the_direct_solves(make_
                                                                          paper_law):
     grid = make_problem(SLS, -5e-9).grid
     problem = vf.ContactProblem(vf.PAPER.sphere(), _CutOff(paper_law, 15e-9), SLS, grid)
-    modes = lr._BiasModes.build(problem, -5e-9, SLS.relaxed_modulus)
+    modes = fa._BiasModes.build(problem, -5e-9, SLS.relaxed_modulus)
     inactive = np.count_nonzero(modes.d1 == 0.0)
     assert 0 < inactive and modes.lam.size == grid.size - inactive
     assert np.all(modes.d1[modes.lam.size:] == 0.0)  # ordered: active nodes first
-    np.testing.assert_allclose(lr.amplitude_bias(problem, -5e-9, OMEGA),
+    np.testing.assert_allclose(fa.amplitude_bias(problem, -5e-9, OMEGA),
                                _direct(problem, -5e-9, OMEGA), rtol=1e-11)
 
 
@@ -175,9 +177,9 @@ def test_complex_eigenvectors_give_the_direct_solves(monkeypatch, make_problem, 
     if cutoff is not None:
         problem = vf.ContactProblem(vf.PAPER.sphere(), _CutOff(paper_law, cutoff), SLS,
                                     problem.grid)
-    modes = lr._BiasModes.build(problem, -5e-9, SLS.relaxed_modulus)
+    modes = fa._BiasModes.build(problem, -5e-9, SLS.relaxed_modulus)
     assert np.iscomplexobj(modes.project) and np.iscomplexobj(modes.expand)
-    np.testing.assert_allclose(lr.amplitude_bias(problem, -5e-9, OMEGA),
+    np.testing.assert_allclose(fa.amplitude_bias(problem, -5e-9, OMEGA),
                                _direct(problem, -5e-9, OMEGA), rtol=1e-11)
     k, _ = lr.linear_stiffness(problem, -5e-9, OMEGA)
     np.testing.assert_allclose(k, direct_stiffness(problem, -5e-9, OMEGA)[0], rtol=1e-10, atol=0)

@@ -322,6 +322,7 @@ def test_choose_spectrum_rejects_bad_arguments(make_problem):
 @pytest.fixture
 def no_compute(monkeypatch):
     """Make any simulation or static solve fail at once: a refusal test must never compute."""
+    from viscoforce.experiments import _modal
     from viscoforce.experiments import linear_response as lr_module
     from viscoforce.experiments import spectroscopy as sp_module
 
@@ -330,6 +331,7 @@ def no_compute(monkeypatch):
 
     monkeypatch.setattr(sp_module, "simulate", forbidden)
     monkeypatch.setattr(lr_module, "equilibrium_gap", forbidden)
+    monkeypatch.setattr(_modal, "equilibrium_gap", forbidden)
 
 
 def test_time_domain_spectrum_at_1e9_rad_s_is_refused_instantly(make_problem, no_compute):

@@ -20,7 +20,7 @@ whose scenes the tests check them on):
   2I₁(x)/x − 1 ≈ (κη)²/8 with x = κη (:func:`amplitude_error`, the rigid estimate). For the
   deformable system the spectrum choice solves the leading correction exactly, by third-order
   harmonic balance about the static state
-  (:func:`viscoforce.experiments.linear_response.amplitude_bias`, × 1.1): 5.5e-4 at Fig. 3 and
+  (:func:`viscoforce.experiments.finite_amplitude.amplitude_bias`, × 1.1): 5.5e-4 at Fig. 3 and
   3.7e-3 at −5 nm, κη = 0.1, against 5.5e-4 and 3.5e-3 measured (the soft wall makes the bias
   in contact 2.8× the rigid estimate);
 * **SVDA** — max over ω of |k*_SVDA/k*_exact − 1| = 0.585 κ|u0| (u0 the relaxed SVDA central

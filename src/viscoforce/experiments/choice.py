@@ -3,7 +3,7 @@
 The estimates, :class:`~viscoforce.choice.Choice` and the stepper choice live in
 :mod:`viscoforce.choice`; this module adds what needs the solver: the finite-amplitude bias of a
 linear spectrum by harmonic balance
-(:func:`~viscoforce.experiments.linear_response.amplitude_bias`).
+(:func:`~viscoforce.experiments.finite_amplitude.amplitude_bias`).
 """
 
 from __future__ import annotations
@@ -31,7 +31,7 @@ from viscoforce.choice import (
     svda_error,
 )
 from viscoforce.experiments._checks import require_frequencies, require_number, require_problem
-from viscoforce.experiments.linear_response import AMPLITUDE_SAFETY, finite_amplitude_error
+from viscoforce.experiments.finite_amplitude import AMPLITUDE_SAFETY, finite_amplitude_error
 from viscoforce.problem import ContactProblem
 from viscoforce.radial_grid import RadialGrid
 

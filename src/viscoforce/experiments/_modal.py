@@ -1,0 +1,184 @@
+"""The static state's balanced eigen-decomposition and the real-pair algebra on it.
+
+What :class:`~viscoforce.experiments.linear_response.LinearizedState` (the modal stiffness) and
+:mod:`viscoforce.experiments.finite_amplitude` (the finite-amplitude check) share: one static
+E_inf solve and one eigen-decomposition per state (:func:`decomposition`, cached), solves with
+V's LU factors, real matrix products on complex columns viewed as (re, im) pairs, and the bounded
+thread-safe cache (:class:`StateCache`) both keep their states in. The balancing and the choice of
+eigensolver are explained in :mod:`viscoforce.experiments.linear_response`.
+"""
+
+from __future__ import annotations
+
+import threading
+from collections import OrderedDict
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+import scipy.linalg
+from numpy.typing import NDArray
+
+from viscoforce._typing import FloatArray
+from viscoforce.problem import ContactProblem
+from viscoforce.solvers.newton import NewtonResult
+from viscoforce.solvers.static import equilibrium_gap
+
+#: Most static states each cache of the linear response keeps.
+STATE_CACHE_SIZE = 32
+
+
+@dataclass(frozen=True)
+class Decomposition:
+    """A static solution and the eigen-decomposition of its balanced linearisation.
+
+    On the nodes where s = −p′ ≠ 0 (``active``), D = W s (``d``), q = |D|^½ and
+    M' = q (A W⁻¹) q sign(D) = V Λ V⁻¹ (``lam``, ``vec``): what
+    :class:`~viscoforce.experiments.linear_response.LinearizedState` (the modal stiffness) and
+    the modes of :mod:`~viscoforce.experiments.finite_amplitude` (the finite-amplitude check)
+    both need, so a cold :func:`~viscoforce.experiments.linear_response.linear_response` solves and
+    decomposes once.
+    """
+
+    sol: NewtonResult
+    #: p′ [Pa/m] at every node (the finite-amplitude check needs it too).
+    d1: FloatArray
+    active: NDArray[np.intp]
+    d: FloatArray
+    q: FloatArray
+    lam: NDArray[np.complex128]
+    #: Eigenvectors: real when every eigenvalue is (scipy's convention), else complex.
+    vec: NDArray[np.complex128] | FloatArray
+    #: LU factors of ``vec`` (scipy.linalg.lu_factor): V⁻¹ applied without forming it.
+    lu: tuple[NDArray[np.complex128] | FloatArray, NDArray[np.intc]]
+    #: V⁻¹ q, the modal coordinates of the unit drive (both users need it).
+    unit_modes: NDArray[np.complex128] | FloatArray
+
+
+def decompose(problem: ContactProblem, sol: NewtonResult) -> Decomposition:
+    """The :class:`Decomposition` of the static solution ``sol`` of ``problem``."""
+    d1 = problem.surface_force.pressure_derivative(sol.gap)
+    stiff = -d1  # s = −p′ (> 0 where repulsive)
+    area = problem.grid.area_weights
+    active = np.flatnonzero(stiff != 0.0)
+    if active.size == stiff.size:  # every node (the paper's law): no copies by index
+        d, kernel = area * stiff, problem.influence
+    else:
+        area = area[active]
+        d, kernel = area * stiff[active], problem.influence[np.ix_(active, active)]
+    # D = W s on the nodes that carry a force derivative, and M' = q (A W⁻¹) q sign(D), built
+    # in place in LAPACK's (Fortran) order so that eig overwrites it without a copy
+    q = np.sqrt(np.abs(d))
+    balanced = np.divide(kernel, area[None, :], order="F")
+    balanced *= q[:, None]
+    balanced *= np.copysign(q, d)[None, :]
+    lam, vec = scipy.linalg.eig(balanced, overwrite_a=True, check_finite=False)
+    # scipy returns real eigenvectors when every eigenvalue is real (a repulsive law: M' is
+    # similar to a symmetric-definite matrix up to the kernel's small asymmetry); they stay real,
+    # so that V's factors and every product with them run in real arithmetic (_times)
+    lu = scipy.linalg.lu_factor(vec, check_finite=False)
+    return Decomposition(sol=sol, d1=d1, active=active, d=d, q=q,
+                          lam=np.asarray(lam, dtype=complex), vec=vec, lu=lu,
+                          unit_modes=lu_solve(lu, q))
+
+
+def pairs(z: np.ndarray) -> np.ndarray:
+    """A complex 1-D or 2-D array as real rows of interleaved (re, im) pairs (a view)."""
+    z = np.ascontiguousarray(z, dtype=complex)
+    return z.view(float).reshape(z.shape[0], -1)
+
+
+def from_pairs(real: np.ndarray, rows: int, tail: tuple[int, ...]) -> np.ndarray:
+    """The complex array of ``rows`` × ``tail`` whose (re, im) pairs are ``real``'s rows."""
+    return np.ascontiguousarray(real).view(complex).reshape(rows, *tail)
+
+
+def times(matrix: np.ndarray, z: np.ndarray) -> np.ndarray:
+    """``matrix @ z`` for a real matrix and complex 1-D or 2-D ``z``: one real product on pairs.
+
+    NumPy would promote the real matrix to complex and multiply by its zero imaginary parts
+    (4× the work); viewing z's columns as interleaved real pairs gives the same sums.
+    """
+    if np.iscomplexobj(matrix) or not np.iscomplexobj(z) or z.ndim > 2:
+        return matrix @ z
+    return from_pairs(matrix @ pairs(z), matrix.shape[0], z.shape[1:])
+
+
+def lu_solve(lu: tuple[np.ndarray, np.ndarray], b: np.ndarray) -> np.ndarray:
+    """``scipy.linalg.lu_solve`` with real factors: LAPACK directly (complex ``b`` as pairs)."""
+    if np.iscomplexobj(lu[0]) or b.ndim > 2:
+        return scipy.linalg.lu_solve(lu, b, check_finite=False)
+    paired = np.iscomplexobj(b)  # real and imaginary parts: one real solve
+    out, info = DGETRS(lu[0], lu[1], pairs(b) if paired else b)  # no lu_solve argument layer
+    if info != 0:  # pragma: no cover - factors of a nonsingular V
+        raise np.linalg.LinAlgError(f"LAPACK dgetrs reported illegal argument {-info}")
+    return from_pairs(out, b.shape[0], b.shape[1:]) if paired else out
+
+
+#: LAPACK's real LU solve (what scipy.linalg.lu_solve calls for float64 factors).
+DGETRS = scipy.linalg.lapack.get_lapack_funcs("getrs", (np.empty((1, 1)),))
+
+
+# ── the bounded cache of static states ───────────────────────────────────────────────────────────
+
+class StateCache:
+    """Least-recently-used map of static states by key (thread-safe), at most ``maxsize``.
+
+    What it holds (a :class:`~viscoforce.experiments.linear_response.LinearizedState`, a
+    :class:`Decomposition`, the finite-amplitude modes) is built from the key's static state.
+    The key is everything the static state depends on: the sphere, the surface-force law, the
+    grid (all frozen, hashable dataclasses), E_inf and the position or load. The material
+    itself is not part of it, so varying τ or E0 reuses the state. A state holds O(N) numbers,
+    not the problem or its influence matrix. Unhashable keys (a user's mutable law) bypass it.
+    """
+
+    def __init__(self, maxsize: int):
+        self.maxsize = maxsize
+        self._data: OrderedDict[tuple, Any] = OrderedDict()
+        self._lock = threading.Lock()
+        self.hits = 0
+        self.misses = 0
+
+    def get(self, key: tuple, build: Callable[[], Any]) -> Any:
+        """The entry of ``key``, built by ``build()`` (and kept) when it is missing."""
+        try:
+            hash(key)
+        except TypeError:  # a user's law or grid that is not hashable: no caching
+            return build()
+        with self._lock:
+            if key in self._data:
+                self._data.move_to_end(key)
+                self.hits += 1
+                return self._data[key]
+            self.misses += 1
+        state = build()  # outside the lock: two threads may build the same state once each
+        with self._lock:
+            self._data[key] = state
+            self._data.move_to_end(key)
+            while len(self._data) > self.maxsize:
+                self._data.popitem(last=False)
+        return state
+
+    def clear(self) -> None:
+        with self._lock:
+            self._data.clear()
+            self.hits = self.misses = 0
+
+    def info(self) -> dict[str, int]:
+        with self._lock:
+            return {"hits": self.hits, "misses": self.misses, "maxsize": self.maxsize,
+                    "currsize": len(self._data)}
+
+
+#: The last few decompositions (O(N²) each), shared by the state and the finite-amplitude check.
+DECOMPOSITIONS = StateCache(4)
+
+
+def decomposition(problem: ContactProblem, position: float, modulus: float) -> Decomposition:
+    """The cached :class:`Decomposition` of the static E_inf state at ``position``."""
+    key = (problem.sphere, problem.surface_force, problem.grid, float(modulus), float(position))
+    return DECOMPOSITIONS.get(key, lambda: decompose(
+        problem, equilibrium_gap(problem, position, modulus)))
+
+
