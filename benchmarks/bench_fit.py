@@ -68,7 +68,7 @@ import viscoforce as vf  # noqa: E402
 from viscoforce import PAPER  # noqa: E402
 from viscoforce.experiments.linear_response import linear_stiffness, linearized_state  # noqa: E402
 from viscoforce.fitting import _params, fit_spectrum, maps  # noqa: E402
-from viscoforce.fitting.fit import spectrum_data  # noqa: E402
+from viscoforce.fitting.data import spectrum_data  # noqa: E402
 from viscoforce.fitting.maps import fit_map, pixel_data  # noqa: E402
 from viscoforce.fitting.models import make_model  # noqa: E402
 from viscoforce.physics.materials import PronySeries, StandardLinearSolid  # noqa: E402

@@ -60,7 +60,8 @@ import viscoforce as vf  # noqa: E402
 from viscoforce import PAPER  # noqa: E402
 from viscoforce.experiments.linear_response import linear_stiffness, linearized_state  # noqa: E402
 from viscoforce.fitting import _params  # noqa: E402
-from viscoforce.fitting.fit import FitData, fit_data, fit_spectrum, spectrum_data  # noqa: E402
+from viscoforce.fitting.data import FitData, spectrum_data  # noqa: E402
+from viscoforce.fitting.fit import fit_data, fit_spectrum  # noqa: E402
 from viscoforce.fitting.maps import fit_block  # noqa: E402
 from viscoforce.fitting.models import check_fixed, make_model  # noqa: E402
 from viscoforce.physics.materials import StandardLinearSolid  # noqa: E402

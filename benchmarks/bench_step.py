@@ -71,13 +71,11 @@ from viscoforce import PAPER  # noqa: E402
 from viscoforce.experiments.drives import MeasuredTrace, Step, Triangle  # noqa: E402
 from viscoforce.fitting import models as M  # noqa: E402
 from viscoforce.fitting.curves import fit_step, trajectory_data  # noqa: E402
-from viscoforce.fitting.fit import (  # noqa: E402
-    add_derived_moduli,
-    fit_once,
-    result_dataset,
-    validity_note,
-    warn_fit,
-)
+from viscoforce.fitting.fit import result_dataset  # noqa: E402
+from viscoforce.fitting.model_error import validity_note  # noqa: E402
+from viscoforce.fitting.moduli import add_derived_moduli  # noqa: E402
+from viscoforce.fitting.outcome import fit_once  # noqa: E402
+from viscoforce.fitting.verdict import warn_fit  # noqa: E402
 from viscoforce.physics.materials import StandardLinearSolid  # noqa: E402
 from viscoforce.physics.paper import paper_pressure_law  # noqa: E402
 from viscoforce.physics.particle import Sphere  # noqa: E402

@@ -238,7 +238,8 @@ def cmd(*parts: str) -> str:
 
 def jpk_hold(path: Path) -> dict[str, Any]:
     from viscoforce.fitting.curves import fit_hold, hold_data
-    from viscoforce.fitting.fit import FitData, fit_data
+    from viscoforce.fitting.data import FitData
+    from viscoforce.fitting.fit import fit_data
     from viscoforce.fitting.identify import IDENTIFIABILITY
     from viscoforce.io.instruments import load_instrument
 
@@ -544,7 +545,8 @@ def hertz_window_fits(data, fit, tip) -> dict[str, Any]:
     baseline) first reaches FORCE_CUT of its maximum; ``deep_half``: the contact samples of the
     first half of the indentation depth removed (the free part and the deeper half kept).
     """
-    from viscoforce.fitting.fit import FitData, fit_data
+    from viscoforce.fitting.data import FitData
+    from viscoforce.fitting.fit import fit_data
 
     x, y = data.x, data.y
     cp, b, s = (float(fit[k]) for k in ("contact_point", "baseline", "baseline_slope"))
@@ -640,8 +642,9 @@ def header_tip_check(path: Path, curves, caught: list[warnings.WarningMessage]
 def hertz_file(path: Path, curves) -> dict[str, Any]:
     """Hertz on the approach of every curve of one file (a map also through ``fit_map``)."""
     from viscoforce.fitting.curves import curve_data, fit_curve
-    from viscoforce.fitting.fit import add_derived_moduli, fit_data
+    from viscoforce.fitting.fit import fit_data
     from viscoforce.fitting.maps import fit_map, map_summary
+    from viscoforce.fitting.moduli import add_derived_moduli
 
     tip, tip_source = hertz_tip(curves)
     n = int(curves.sizes["curve"])
@@ -816,7 +819,7 @@ def window_shift(w: dict[str, Any], name: str) -> str:
 def creep_params(fit, pause_s: float) -> dict[str, dict[str, Any]]:
     """Each creep parameter: value, stderr, identifiability, its bound (bound_text), and for
     a τ whether it exceeds the pause."""
-    from viscoforce.fitting.fit import bound_text
+    from viscoforce.fitting.verdict import bound_text
 
     labels = ident_labels(fit)
     out = {}
@@ -840,7 +843,8 @@ def creep_windows(data, taus: dict[str, dict[str, Any]], modes: int,
     The refits' identifiability is the local test (stderr > value, none, or at a bound), not
     the profile: profiling every refit would triple the run time.
     """
-    from viscoforce.fitting.fit import FitData, fit_data
+    from viscoforce.fitting.data import FitData
+    from viscoforce.fitting.fit import fit_data
 
     size = data.x.size
     cut = int(round(WINDOW_CUT * size))
@@ -870,9 +874,9 @@ def creep_windows(data, taus: dict[str, dict[str, Any]], modes: int,
 def creep_file(path: Path, curves) -> dict[str, Any]:
     """Creep (modes by BIC) on the constant-force pause of every curve of one file."""
     from viscoforce.fitting.curves import curve_data, fit_curve
-    from viscoforce.fitting.fit import residual_lag1
     from viscoforce.fitting.maps import fit_map, map_summary
     from viscoforce.fitting.models import make_model
+    from viscoforce.fitting.outcome import residual_lag1
 
     n = int(curves.sizes["curve"])
     caught: list[warnings.WarningMessage] = []

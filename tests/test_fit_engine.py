@@ -16,8 +16,9 @@ import pytest
 
 from viscoforce import PAPER
 from viscoforce.fitting import _engine
-from viscoforce.fitting.fit import FitData, _residual, _vector_residual, spectrum_data
+from viscoforce.fitting.data import FitData, spectrum_data
 from viscoforce.fitting.models import make_model
+from viscoforce.fitting.outcome import _residual, _vector_residual
 from viscoforce.schema import make_spectrum
 
 OMEGA = np.geomspace(10.0, 1e6, 20)
@@ -191,22 +192,20 @@ def test_engine_keeps_parameters_that_do_not_vary():
     _assert_same(theirs, ours)
 
 
-# ── the other starts of a several-mode fit (fit._settled) ──────────────────────────────────────
+# ── the other starts of a several-mode fit (outcome._settled) ──────────────────────────────────────
 
 PRONY = {"k_inf": 1.0, "dk_1": 2.0, "dk_2": 1.0, "tau_1": 1e-4, "tau_2": 1e-2}
 
 
 def _count_fits(monkeypatch):
-    from viscoforce.fitting import fit as fit_module
-
     calls = []
-    real = fit_module._engine.leastsq
+    real = _engine.leastsq
 
     def counting(residual, params, **kwargs):
         calls.append(1)
         return real(residual, params, **kwargs)
 
-    monkeypatch.setattr(fit_module._engine, "leastsq", counting)
+    monkeypatch.setattr(_engine, "leastsq", counting)
     return calls
 
 
@@ -216,7 +215,7 @@ def _count_fits(monkeypatch):
     (False, True, 2),   # unknown stderr: no chi-square test, so never settled
 ])
 def test_other_starts_run_only_for_a_fit_not_settled(monkeypatch, weighted, settle, fits):
-    from viscoforce.fitting.fit import _settled, fit_once
+    from viscoforce.fitting.outcome import _settled, fit_once
 
     model = make_model("prony", 2)
     data = _spectrum_data(model, PRONY, 11, weighted=weighted)
@@ -227,7 +226,7 @@ def test_other_starts_run_only_for_a_fit_not_settled(monkeypatch, weighted, sett
 
 
 def test_a_fit_on_a_bound_is_not_settled():
-    from viscoforce.fitting.fit import _settled, fit_once
+    from viscoforce.fitting.outcome import _settled, fit_once
 
     model = make_model("prony", 2)
     data = _spectrum_data(model, PRONY, 11)

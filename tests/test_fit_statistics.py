@@ -29,8 +29,10 @@ from viscoforce.exceptions import (
 )
 from viscoforce.fitting import fit_spectrum
 from viscoforce.fitting.curves import fit_hold
-from viscoforce.fitting.fit import fit_data, residual_lag1, spectrum_data
+from viscoforce.fitting.data import spectrum_data
+from viscoforce.fitting.fit import fit_data
 from viscoforce.fitting.measured import MARGIN
+from viscoforce.fitting.outcome import residual_lag1
 from viscoforce.physics.materials import PronySeries, StandardLinearSolid
 from viscoforce.schema import make_spectrum
 
@@ -375,7 +377,7 @@ def test_relaxation_stderr_hold_for_ar1_noise_over_replicas():
 
 
 def fit_data_curve(force, t):
-    from viscoforce.fitting.fit import FitData
+    from viscoforce.fitting.data import FitData
 
     return fit_data(FitData(t, force, None, {"data_points": t.size}), "relaxation",
                     profile=False)

@@ -17,7 +17,8 @@ from viscoforce import PAPER
 from viscoforce.exceptions import AccuracyWarning, ModelValidityError, ParameterError
 from viscoforce.experiments.linear_response import linear_stiffness
 from viscoforce.fitting import fit_spectrum, make_model
-from viscoforce.fitting.fit import fit_data, spectrum_data
+from viscoforce.fitting.data import spectrum_data
+from viscoforce.fitting.fit import fit_data
 from viscoforce.fitting.maps import fit_map
 from viscoforce.fitting.models import svda_position
 from viscoforce.physics.materials import PronySeries, StandardLinearSolid
@@ -310,7 +311,7 @@ def test_a_relaxation_time_outside_the_window_is_not_a_confident_number():
 
 
 def test_fit_data_of_a_relaxation_recovers_two_exponentials():
-    from viscoforce.fitting.fit import FitData
+    from viscoforce.fitting.data import FitData
 
     t = np.linspace(0, 30, 3000)
     f = 1e-8 + 5e-8 * np.exp(-t / 0.5) + 2e-8 * np.exp(-t / 8.0)

@@ -17,7 +17,8 @@ import pytest
 from tests.conftest import REAL_DATA_DIR
 from viscoforce.exceptions import DataWarning, GoodnessOfFitWarning, ParameterError
 from viscoforce.fitting.curves import creep_data, curve_data, fit_curve
-from viscoforce.fitting.fit import FitData, fit_data
+from viscoforce.fitting.data import FitData
+from viscoforce.fitting.fit import fit_data
 from viscoforce.physics.tips import parse_tip, young_from_paper
 from viscoforce.schema import make_curves
 

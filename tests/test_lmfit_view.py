@@ -11,7 +11,8 @@ import xarray as xr
 
 from tests.test_identifiability_auto import _structural
 from viscoforce.exceptions import ParameterError
-from viscoforce.fitting.fit import FitData, fit_data, fit_spectrum
+from viscoforce.fitting.data import FitData
+from viscoforce.fitting.fit import fit_data, fit_spectrum
 from viscoforce.fitting.models import make_model
 
 

@@ -114,7 +114,8 @@ def test_every_fit_result_validates(name, modes, fixed):
     """The fitting code assembles its results unchecked (make_fit_result(check=False))."""
     import warnings
 
-    from viscoforce.fitting.fit import fit_data, spectrum_data
+    from viscoforce.fitting.data import spectrum_data
+    from viscoforce.fitting.fit import fit_data
     from viscoforce.fitting.models import make_model
     from viscoforce.schema.fit import validate_fit_result
 

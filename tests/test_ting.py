@@ -475,8 +475,8 @@ def test_fit_recovers_the_material_and_the_contact_point(material, truth, kernel
 
 
 def test_fit_recovers_a_fitted_drag(rng):
-    from viscoforce.fitting.fit import fit_once
     from viscoforce.fitting.models import ModelSpec
+    from viscoforce.fitting.outcome import fit_once
     from viscoforce.fitting.ting import ting_data, ting_model
 
     data = ting_data(_curves(PronyRelaxation.from_material(StandardLinearSolid(3e3, 1e3, 0.03)),

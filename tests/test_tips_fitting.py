@@ -9,7 +9,7 @@ import pytest
 
 from viscoforce.exceptions import ParameterError
 from viscoforce.fitting import fit_spectrum
-from viscoforce.fitting.fit import add_derived_moduli
+from viscoforce.fitting.moduli import add_derived_moduli
 from viscoforce.physics.materials import StandardLinearSolid
 from viscoforce.physics.tips import Cone, Flat, Paraboloid, Pyramid, Sphere
 from viscoforce.schema import make_spectrum

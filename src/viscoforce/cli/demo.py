@@ -150,8 +150,9 @@ def _real(folder: Path, out: Path, report: dict[str, Any]) -> None:
     from viscoforce.cli._output import format_value
     from viscoforce.cli.model import _save_figure
     from viscoforce.experiments.modulation import modulation_spectrum
-    from viscoforce.fitting.fit import bound_text, fit_spectrum
+    from viscoforce.fitting.fit import fit_spectrum
     from viscoforce.fitting.maps import fit_map, map_summary
+    from viscoforce.fitting.verdict import bound_text
     from viscoforce.io.instruments import load_instrument
     from viscoforce.plotting import bode_plot
 

@@ -526,8 +526,8 @@ def show_value(value: float | None, unit: str, digits: int = DIGITS) -> str:
 def _single_json(result) -> dict[str, Any]:
     import numpy as np
 
-    from viscoforce.fitting.fit import bound_text
     from viscoforce.fitting.identify import IDENTIFIABILITY
+    from viscoforce.fitting.verdict import bound_text
 
     names = [str(n) for n in result["param_i"].values]
     codes = (np.asarray(result["identifiability"].values).reshape(-1).tolist()

@@ -3,7 +3,8 @@
 The only layer that imports lmfit (and, in :mod:`viscoforce.fitting.maps`, dask.distributed).
 """
 
-from viscoforce.fitting.fit import CRITERIA, fit_data, fit_spectrum, spectrum_data
+from viscoforce.fitting.data import spectrum_data
+from viscoforce.fitting.fit import CRITERIA, fit_data, fit_spectrum
 from viscoforce.fitting.models import (
     CONTACT_MATERIALS,
     MODEL_NAMES,

@@ -20,17 +20,14 @@ import numpy as np
 import xarray as xr
 
 from viscoforce.exceptions import ConvergenceError, ParameterError
-from viscoforce.fitting.fit import (
-    FitData,
-    Outcome,
-    add_derived_moduli,
-    fit_data,
-    result_dataset,
-    validity_note,
-    warn_fit,
-)
+from viscoforce.fitting.data import FitData
+from viscoforce.fitting.fit import fit_data, result_dataset
+from viscoforce.fitting.model_error import validity_note
 from viscoforce.fitting.models import make_model
+from viscoforce.fitting.moduli import add_derived_moduli
+from viscoforce.fitting.outcome import Outcome
 from viscoforce.fitting.report import carry
+from viscoforce.fitting.verdict import warn_fit
 from viscoforce.problem import ContactProblem
 from viscoforce.schema import select_curve, validate_curves, validate_trajectory
 
@@ -504,7 +501,7 @@ def _fit_step_stage(data: FitData, fixed: dict[str, Any], *, final: bool = False
     import lmfit
 
     from viscoforce.fitting import _params
-    from viscoforce.fitting.fit import _outcome, _residual
+    from viscoforce.fitting.outcome import _outcome, _residual
 
     model = make_model("step", **fixed)
     if warm is not None:

@@ -24,7 +24,7 @@ the user's setting. While the cluster starts, this process fits pixels itself.
 Every pixel gets a ``quality`` code (:data:`MAP_QUALITY`, the rule in :data:`QUALITY_RULE`), so
 that a map warns pixel by pixel where a single fit would warn once: the optimiser failed, the
 χ² p-value says the model does not describe the pixel's data (``chi2_pvalue`` <
-:data:`~viscoforce.fitting.fit.PVALUE_WARN`, with known stderr only), a parameter is not
+:data:`~viscoforce.fitting.verdict.PVALUE_WARN`, with known stderr only), a parameter is not
 determined by the data, or a parameter ended on a bound. :func:`map_summary` summarises the
 good pixels only and counts the others by reason.
 """
@@ -45,16 +45,8 @@ import xarray as xr
 
 from viscoforce.exceptions import ClusterError, ParameterError, ViscoforceError
 from viscoforce.fitting.curves import curve_data
-from viscoforce.fitting.fit import (
-    PVALUE_WARN,
-    FitData,
-    add_derived_moduli,
-    local_identifiability,
-    pixel_fit_data,
-    select,
-    spectrum_arrays,
-    summary,
-)
+from viscoforce.fitting.data import FitData, pixel_fit_data, spectrum_arrays
+from viscoforce.fitting.fit import local_identifiability, select, summary
 from viscoforce.fitting.identify import IDENTIFIABILITY
 from viscoforce.fitting.map_cost import (
     OVERLAP_METHODS,
@@ -66,7 +58,9 @@ from viscoforce.fitting.map_cost import (
     start_method,
 )
 from viscoforce.fitting.models import SPECTRUM_MODELS
+from viscoforce.fitting.moduli import add_derived_moduli
 from viscoforce.fitting.report import fit_report
+from viscoforce.fitting.verdict import PVALUE_WARN
 from viscoforce.schema import validate_fit_result, validate_spectrum
 from viscoforce.schema.fit import SUCCESS_FLAGS, parameter_units
 
@@ -338,7 +332,7 @@ def fit_map(ds: xr.Dataset, model: str, *, modes: int | str = 1, criterion: str 
         Curve segment of a curve-model map (default: the model's own segment).
     poisson : float, optional
         Poisson's ratio in [0, 0.5] (default 0.5) of the derived ``<name>_young`` and
-        ``<name>_shear`` (:func:`viscoforce.fitting.fit.add_derived_moduli`).
+        ``<name>_shear`` (:func:`viscoforce.fitting.moduli.add_derived_moduli`).
     identifiability : {"local", "profile"}
         How each parameter's identifiability is judged: ``"local"`` (stderr > |value|, none,
         or at a bound) costs nothing; ``"profile"`` walks the profile likelihood (several refits

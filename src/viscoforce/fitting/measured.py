@@ -31,21 +31,13 @@ import numpy as np
 import xarray as xr
 
 from viscoforce.exceptions import ConvergenceError, ModelValidityError, ParameterError
-from viscoforce.fitting.fit import (
-    CRITERIA,
-    Outcome,
-    _check_modes,
-    _data_indentation,
-    _warn_model_bias,
-    contact_bias,
-    fit_once,
-    result_dataset,
-    spectrum_data,
-    validity_note,
-    warn_fit,
-)
+from viscoforce.fitting.data import _data_indentation, spectrum_data
+from viscoforce.fitting.fit import CRITERIA, _check_modes, result_dataset
+from viscoforce.fitting.model_error import _warn_model_bias, contact_bias, validity_note
 from viscoforce.fitting.models import MAX_AUTO_MODES, check_fixed, make_model
+from viscoforce.fitting.outcome import Outcome, fit_once
 from viscoforce.fitting.report import carry
+from viscoforce.fitting.verdict import warn_fit
 
 #: Criterion margin of the measured-data chooser: a richer candidate is kept only when its
 #: criterion beats every simpler one by more than this (ΔBIC 6: strong evidence).
@@ -87,7 +79,7 @@ def fit_measured_auto(spectrum: xr.Dataset, *, modes: int | str = "auto", criter
     criterion : {"bic", "aic"}
         The information criterion.
     weights : {"stderr", "relative"}, optional
-        Residual weights (:func:`viscoforce.fitting.fit.spectrum_data`).
+        Residual weights (:func:`viscoforce.fitting.data.spectrum_data`).
     profile : bool or "auto"
         Limits and identifiability of the kept fit (:data:`viscoforce.fitting.fit.PROFILE_CHOICES`).
     **fixed

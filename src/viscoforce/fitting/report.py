@@ -37,7 +37,7 @@ import xarray as xr
 from viscoforce.exceptions import ParameterError
 
 if TYPE_CHECKING:  # pragma: no cover
-    from viscoforce.fitting.fit import Outcome
+    from viscoforce.fitting.outcome import Outcome
 
 __all__ = ["LmfitAccessor", "attach", "fit_report"]
 
@@ -108,7 +108,7 @@ class LmfitAccessor:
 
 def lmfit_minimizer(outcome: Outcome) -> lmfit.Minimizer:
     """An :class:`lmfit.Minimizer` of a fit, at its best values, with the SPEC names too."""
-    from viscoforce.fitting.fit import _residual
+    from viscoforce.fitting.outcome import _residual
 
     model = outcome.model
     params = model.parameters_from(outcome.values, outcome.data.x, expressions=True,

@@ -55,18 +55,8 @@ from viscoforce._validation import (
 from viscoforce.exceptions import ConvergenceError, ParameterError
 from viscoforce.fitting import _params as P
 from viscoforce.fitting.curves import _segment_types, _source, segment_runs
-from viscoforce.fitting.fit import (
-    AUTOCORRELATED_MODELS,
-    CRITERIA,
-    FitData,
-    Outcome,
-    _share_effective_size,
-    add_derived_moduli,
-    fit_once,
-    residual_lag1,
-    result_dataset,
-    warn_fit,
-)
+from viscoforce.fitting.data import FitData
+from viscoforce.fitting.fit import CRITERIA, _share_effective_size, result_dataset
 from viscoforce.fitting.models import (
     EXPONENT_BOUNDS,
     MAX_AUTO_MODES,
@@ -85,7 +75,10 @@ from viscoforce.fitting.models import (
     moduli_names,
     tau_names,
 )
+from viscoforce.fitting.moduli import add_derived_moduli
+from viscoforce.fitting.outcome import AUTOCORRELATED_MODELS, Outcome, fit_once, residual_lag1
 from viscoforce.fitting.report import carry
+from viscoforce.fitting.verdict import warn_fit
 from viscoforce.physics.ting import (
     PowerLawRelaxation,
     PronyRelaxation,

@@ -1,0 +1,240 @@
+"""What a fit sees: x, y and weights (:class:`FitData`) of one spectrum or pixel.
+
+A spectrum's points flagged in ``quality`` and those with a NaN stiffness or phase are left out
+(with a note); the complex weights 1/σ_re + i/σ_im come from ``stiffness_stderr`` and
+``phase_stderr`` (or 1/|k*|, relative): :mod:`viscoforce.fitting.fit` says what each weighting
+means for the statistics.
+"""
+
+from __future__ import annotations
+
+import math
+import warnings
+from collections.abc import Mapping
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+import xarray as xr
+
+from viscoforce.exceptions import DataWarning, ModelValidityError, ParameterError
+from viscoforce.schema import validate_spectrum
+
+#: Spectrum weightings (``weights=``): the data's stderr or relative 1/|k*| (None: stderr when
+#: the data have them, else relative with a DataWarning).
+WEIGHTINGS = ("stderr", "relative")
+
+
+@dataclass(frozen=True)
+class FitData:
+    """What a fit sees: x (ω [rad/s] or t [s]), y (k* [N/m] or F [N]) and weights.
+
+    ``weighting`` is ``"stderr"`` (weights = 1/σ of the data: χ² is absolute), ``"relative"``
+    or ``"unweighted"`` (χ² up to an unknown scale); ``notes`` say what was done to the data
+    (points left out, fallbacks), each a sentence a DataWarning or a map's message can carry.
+    """
+
+    x: np.ndarray
+    y: np.ndarray
+    weights: np.ndarray | None
+    source: Mapping[str, Any]
+    weighting: str = "unweighted"
+    notes: tuple[str, ...] = ()
+    #: Degrees of freedom of each point's stderr where they were estimated from few values
+    #: (lock-in: 2 × the residual-spectrum bins); None: taken as exact.
+    sigma_dof: np.ndarray | None = None
+
+    @property
+    def sigma_known(self) -> bool:
+        """Whether the weights are the data's own 1/σ (χ² absolute)."""
+        return self.weighting == "stderr"
+
+    @property
+    def n_values(self) -> int:
+        """Real numbers fitted (2 per complex point)."""
+        return self.y.size * (2 if np.iscomplexobj(self.y) else 1)
+
+
+def spectrum_data(ds: xr.Dataset, *, weights: str | None = None) -> FitData:
+    """ω, k* and weights of one spectrum (1-D over ``omega``), flagged and NaN points left out.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        One spectrum (:mod:`viscoforce.schema.spectrum`) over ``omega`` only.
+    weights : {"stderr", "relative"}, optional
+        The residual weights (module docstring); None: the data's stderr where present, else
+        relative. The notes of :func:`pixel_fit_data` (points left out, fallbacks) are issued
+        as DataWarnings.
+
+    Returns
+    -------
+    FitData
+        ω [rad/s], k* [N/m], complex weights 1/σ_re + i/σ_im, provenance, weighting, notes.
+
+    Raises
+    ------
+    ParameterError
+        Extra dims, negative stiffness on a point not flagged, no point left, ``weights="stderr"``
+        on data without stderr.
+    """
+    validate_spectrum(ds, require=("stiffness", "phase"))
+    extra = [d for d in ds.variables["stiffness"].dims if d != "omega"]
+    if extra:
+        raise ParameterError(f"one spectrum is over 'omega' only; this one also has {extra} "
+                             "(fit it as a map, or select one)")
+    arrays = spectrum_arrays(ds, ())
+    source = {"data_kind": "spectrum"}
+    if "source" in ds.attrs:
+        source["data_source"] = str(ds.attrs["source"])
+    data = pixel_fit_data(np.asarray(ds.variables["omega"].values, dtype=float),
+                          {k: v[0] for k, v in arrays.items()}, source, weights=weights)
+    for note in data.notes:
+        warnings.warn(note, DataWarning, stacklevel=3)
+    return data
+
+
+def spectrum_arrays(ds: xr.Dataset, dims: tuple[str, ...]) -> dict[str, np.ndarray]:
+    """The spectrum's variables as (pixel, omega) arrays (pixels in C order over ``dims``).
+
+    Keys: ``stiffness``, ``phase`` [rad], ``stiffness_stderr``, ``phase_stderr`` [rad] (NaN when
+    absent), ``quality`` (0 when absent), ``mean_indentation`` (NaN when absent),
+    ``stderr_bins`` (the lock-in's ``lockin_stderr_bins``; 0 when absent: exact stderr).
+    """
+    order = (*dims, "omega")
+    n_omega = ds.sizes["omega"]
+    n_pixels = int(np.prod([ds.sizes[d] for d in dims]))
+    shape = tuple(ds.sizes[d] for d in order)
+
+    def grab(name: str, fill: float) -> np.ndarray:
+        if name not in ds.variables:
+            return np.full((n_pixels, n_omega), fill)
+        da = ds.variables[name]  # scalar, per pixel, per frequency or per point: broadcast
+        wanted = tuple(d for d in order if d in da.dims)
+        values = np.asarray((da if da.dims == wanted else da.transpose(*wanted)).values,
+                            dtype=float)
+        index = tuple(slice(None) if d in da.dims else None for d in order)
+        return np.broadcast_to(values[index], shape).reshape(n_pixels, n_omega)
+
+    out = {"stiffness": grab("stiffness", np.nan), "phase": np.radians(grab("phase", np.nan)),
+           "stiffness_stderr": grab("stiffness_stderr", np.nan),
+           "phase_stderr": np.radians(grab("phase_stderr", np.nan)),
+           "quality": grab("quality", 0.0), "mean_indentation": grab("mean_indentation", np.nan),
+           "stderr_bins": grab("lockin_stderr_bins", 0.0)}
+    return out
+
+
+def pixel_fit_data(omega: np.ndarray, a: Mapping[str, np.ndarray],
+                   source: Mapping[str, Any], *, weights: str | None = None) -> FitData:
+    """FitData of one pixel's arrays (see :func:`spectrum_arrays`), with the checks of one spectrum.
+
+    Points flagged in ``quality`` and points whose stiffness or phase is NaN/inf are left out
+    (the latter with a note). ``weights`` as in :func:`spectrum_data`; what was done is in the
+    result's ``notes`` (no warning here: maps carry the notes per pixel).
+    """
+    if weights is not None and weights not in WEIGHTINGS:
+        raise ParameterError(f"weights must be one of {', '.join(WEIGHTINGS)} or None, got "
+                             f"{weights!r}")
+    stiffness, phase = a["stiffness"], a["phase"]
+    keep = a["quality"] == 0
+    if not keep.any():
+        raise ParameterError(f"every one of the {omega.size} spectrum points is flagged in "
+                             "'quality' (see its comment): nothing to fit; correct the phase "
+                             "lag (load --phase-lag) or inspect the data")
+    notes: list[str] = []
+    bad = keep & ~(np.isfinite(stiffness) & np.isfinite(phase))
+    if bad.any():
+        shown = ", ".join(f"{w:.4g}" for w in omega[bad])
+        notes.append(f"stiffness or phase is NaN/inf at omega = {shown} rad/s: "
+                     f"{int(bad.sum())} point(s) left out of the fit")
+        keep = keep & ~bad
+        if not keep.any():
+            raise ParameterError("no spectrum point is left to fit: every unflagged point has "
+                                 "a NaN/inf stiffness or phase")
+    negative = keep & (stiffness <= 0)
+    if negative.any():
+        i = int(np.flatnonzero(negative)[0])
+        raise ParameterError(f"stiffness must be > 0 N/m, got {stiffness[i]!r} at omega = "
+                             f"{omega[i]:.4g} rad/s (point {i})")
+    k = stiffness * np.exp(1j * phase)
+    with np.errstate(invalid="ignore", divide="ignore"):  # left-out points may be NaN
+        w, weighting, note = _spectrum_weights(omega, k, stiffness, phase, a, keep, weights)
+    notes.extend(note)
+    info = {**source, "data_points": int(keep.sum()), "data_flagged": int((~keep).sum())}
+    depth = a["mean_indentation"]
+    if np.isfinite(depth[keep]).any():
+        info["mean_indentation"] = float(np.nanmedian(depth[keep]))
+    sigma_dof = None
+    bins = np.asarray(a.get("stderr_bins", np.zeros_like(stiffness)), dtype=float)[keep]
+    if weighting == "stderr" and np.any(bins > 0):
+        sigma_dof = np.where(bins > 0, 2.0 * bins, np.inf)
+    return FitData(omega[keep], k[keep], w[keep], info, weighting, tuple(notes), sigma_dof)
+
+
+def _spectrum_weights(omega: np.ndarray, k: np.ndarray, stiffness: np.ndarray,
+                      phase: np.ndarray, a: Mapping[str, np.ndarray], keep: np.ndarray,
+                      weights: str | None) -> tuple[np.ndarray, str, list[str]]:
+    """Complex weights 1/σ_re + i/σ_im, the weighting and the notes (module docstring)."""
+    relative = (1.0 + 1j) / np.abs(k)
+    if weights == "relative":
+        return relative, "relative", []
+    s_err, p_err = a["stiffness_stderr"], a["phase_stderr"]
+    given = np.isfinite(s_err) | np.isfinite(p_err)
+    if not given[keep].any():
+        if weights == "stderr":
+            raise ParameterError("weights='stderr' needs stiffness_stderr or phase_stderr in "
+                                 "the data; these have none (use weights='relative')")
+        return relative, "relative", [
+            "the spectrum has no stiffness_stderr/phase_stderr: the fit weights every point by "
+            "1/|k*| (relative), scales the covariance by the reduced chi-square and gives no "
+            "p-value (pass weights='relative', --weights relative, to choose this)"]
+    p_err = np.where(np.isfinite(p_err), p_err, s_err / stiffness)
+    s_err = np.where(np.isfinite(s_err), s_err, p_err * stiffness)
+    c, s = np.cos(phase), np.sin(phase)
+    with np.errstate(invalid="ignore"):
+        sig_re = np.sqrt((c * s_err) ** 2 + (stiffness * s * p_err) ** 2)
+        sig_im = np.sqrt((s * s_err) ** 2 + (stiffness * c * p_err) ** 2)
+    usable = np.isfinite(sig_re) & np.isfinite(sig_im) & (sig_re > 0) & (sig_im > 0)
+    notes = []
+    missing = keep & ~usable
+    if not (keep & usable).any():
+        if weights == "stderr":
+            raise ParameterError("weights='stderr': every stderr of the points fitted is "
+                                 "missing or zero")
+        return relative, "relative", [
+            "every stderr of the points fitted is missing or zero: the fit weights every point "
+            "by 1/|k*| (relative), scales the covariance by the reduced chi-square and gives "
+            "no p-value"]
+    if missing.any():
+        ok = keep & usable
+        rel_re = float(np.median(sig_re[ok] / np.abs(k[ok])))
+        rel_im = float(np.median(sig_im[ok] / np.abs(k[ok])))
+        sig_re = np.where(missing, rel_re * np.abs(k), sig_re)
+        sig_im = np.where(missing, rel_im * np.abs(k), sig_im)
+        shown = ", ".join(f"{w:.4g}" for w in omega[missing])
+        notes.append(f"stderr missing or zero at omega = {shown} rad/s: those points are "
+                     f"weighted by the median relative error of the others ({rel_re:.3g}, "
+                     f"{rel_im:.3g} of |k*| in the real and imaginary parts)")
+    with np.errstate(divide="ignore"):
+        return 1.0 / sig_re + 1j / sig_im, "stderr", notes
+
+
+def _data_indentation(spectrum: xr.Dataset, data: FitData | None = None) -> float:
+    """The operating indentation δ0: the median ``mean_indentation`` of the points fitted.
+
+    The same rule as a map's pixels (:func:`pixel_fit_data`), so a spectrum fitted alone and as
+    a one-pixel map uses the same δ0.
+    """
+    if "mean_indentation" not in spectrum.variables:
+        raise ModelValidityError(
+            "the contact model needs the operating indentation: this spectrum has no "
+            "mean_indentation (no contact point found, or pre-contact); give --indentation D0")
+    value = (float(data.source["mean_indentation"]) if data is not None
+             and "mean_indentation" in data.source else math.nan)
+    if not math.isfinite(value):
+        value = float(np.nanmedian(spectrum["mean_indentation"].values))
+    if not value > 0:
+        raise ModelValidityError(
+            f"the contact model refuses a pre-contact spectrum: median mean_indentation "
+            f"{value!r} m is not > 0 (use --model svda or exact, or give --indentation D0)")
+    return value

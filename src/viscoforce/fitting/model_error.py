@@ -1,0 +1,114 @@
+"""The model error of a spectrum fit: estimated where the theory allows, said why where not.
+
+An svda fit's bias comes from the SVDA's stiffness error over the moduli's sensitivity
+(:func:`svda_bias`); a contact fit's from Hertz contact's error against the exact model
+(:func:`contact_bias`). Above 1 % the fit warns; :func:`validity_note` is the sentence each
+result carries in ``attrs["validity"]``.
+"""
+
+from __future__ import annotations
+
+import math
+import warnings
+from collections.abc import Mapping
+from typing import Any
+
+import numpy as np
+import xarray as xr
+
+from viscoforce.choice import WARN_ERROR, hertz_error
+from viscoforce.exceptions import ApproximationWarning
+from viscoforce.fitting.models import material_from
+from viscoforce.fitting.verdict import _scalar
+from viscoforce.svda import svda_error_estimate, svda_stiffness_kernel
+
+#: What the validity of each model rests on when no estimate is made (``attrs["validity"]``).
+VALIDITY = {
+    "exact": "the exact small-amplitude model: its error is the grid's (~1e-9 on the default "
+             "grid) and the finite-amplitude bias of the measurement",
+    "prony": "phenomenological (no geometry, no surface force): no model error to estimate",
+    "relaxation": "phenomenological sum of exponentials: no model error to estimate",
+    "step": "the exact model along the measured drive: its error is the stepper's",
+    "contact": "not estimated: Hertz contact's bias needs the surface force's decay length "
+               "(debye_length, --debye-length)",
+    "svda": "not estimated",
+    "hertz": "elastic contact of the tip's shape on a half-space (Sneddon/Hertz/Bilodeau): "
+             "valid for indentations small against the sample's thickness, with no adhesion; a "
+             "viscoelastic sample's E is an effective modulus at the approach speed",
+    "creep": "phenomenological sum of exponentials of the tip position: its times are the creep "
+             "compliance's exactly for a flat punch, to first order in dz/indentation for a "
+             "sphere, paraboloid, cone or pyramid",
+}
+
+#: Relative step of the moduli sensitivity of an svda fit (its bias estimate).
+SENSITIVITY_STEP = 1e-4
+
+
+def validity_note(model: str, ds: xr.Dataset) -> str:
+    """One sentence on the model error of a fit: the estimate made, or why there is none."""
+    if "validity" in ds.attrs:
+        return str(ds.attrs["validity"])
+    if "estimated_model_error" in ds.attrs:
+        return (f"estimated model error {float(ds.attrs['estimated_model_error']):.2g} "
+                f"(relative, on the moduli)")
+    return VALIDITY.get(model, "not estimated")
+
+
+def svda_bias(ds: xr.Dataset, spectrum: xr.Dataset, position: float, radius: float,
+              P: float, debye_length: float) -> tuple[float, str]:  # noqa: N803
+    """Estimated relative bias of an svda fit's moduli and the reason.
+
+    A stiffness error δ (0.6 κ|u0| at the fitted E_inf, :func:`viscoforce.svda.svda_error_estimate`)
+    biases the moduli by ≈ δ / s, s = |∂ln k*/∂ln E| (E0, E_inf scaled together), which is small
+    before contact: the SVDA error is O(κ|u0|) and so is s.
+    """
+    values = {n: _scalar(ds, n) for n in ("E0", "E_inf", "tau")}
+    error = float(svda_error_estimate(position, values["E_inf"], radius, P, debye_length))
+    omega = np.asarray(spectrum.variables["omega"].values, dtype=float)
+    kernel = (position, values["E0"], values["E_inf"], values["tau"], radius, P)
+    k = svda_stiffness_kernel(omega, *kernel, 1.0 / debye_length)
+    scaled = (position, *(v * (1 + SENSITIVITY_STEP) for v in kernel[1:3]), *kernel[3:])
+    k_up = svda_stiffness_kernel(omega, *scaled, 1.0 / debye_length)
+    sensitivity = float(np.max(np.abs(k_up / k - 1.0))) / SENSITIVITY_STEP
+    return error / sensitivity, (
+        f"stiffness error 0.6 kappa|u0| ~{error:.1e} over the moduli sensitivity "
+        f"|dln k*/dln E| = {sensitivity:.2g} at the fitted E_inf = {values['E_inf']:.3g} Pa")
+
+
+def contact_bias(ds: xr.Dataset, fixed: Mapping[str, Any], omega: np.ndarray,
+                 decay_length: float) -> tuple[float, str]:
+    """Estimated relative bias of a contact fit against the exact model, and the reason.
+
+    :func:`viscoforce.choice.hertz_error` at the fitted material: 2 × 1.5 |E*(ω_max)|/E_inf /
+    (κδ0), measured for materials with a relaxed modulus (SLS, Prony). The power-law and
+    structural materials have none (E → 0 as ω → 0): their bias is not estimated (NaN, with the
+    reason), rather than extrapolated.
+    """
+    modes = int(ds.variables["modes"].values)
+    kind = str(ds.attrs.get("material", fixed.get("material") or "sls"))
+    if kind not in ("sls", "prony"):
+        return math.nan, (f"not estimated: the Hertz-contact estimate needs a relaxed modulus, "
+                          f"which material {kind} does not have")
+    values = {str(n): _scalar(ds, n) for n in ds.variables["param_i"].values}
+    return hertz_error(material_from(values, modes), float(fixed["indentation"]), decay_length,
+                       float(np.max(omega)))
+
+
+def _warn_model_bias(ds: xr.Dataset, model: str, bias: float, reason: str) -> None:
+    """Warn (ApproximationWarning) when a fit's estimated model bias exceeds 1 %.
+
+    A NaN bias (no estimate possible) is recorded in ``attrs["validity"]`` with its reason.
+    """
+    if math.isnan(bias):
+        ds.attrs["validity"] = reason
+        return
+    ds.attrs["estimated_model_error"] = bias
+    if bias > WARN_ERROR:
+        lead = "the SVDA is about" if model == "svda" else "Hertz contact is about"
+        fix = ("use model 'exact' (or 'auto')" if model == "svda" else
+               "if the surface force is the double layer of that decay length, use model "
+               "'exact' with --h0 or --mean-force (or 'auto' with them)")
+        warnings.warn(
+            f"{lead} {100 * bias:.2g} % off as a model of these data: the fitted moduli are "
+            f"biased by about that much ({reason}); {fix}", ApproximationWarning, stacklevel=3)
+

@@ -1,0 +1,109 @@
+"""What a single fit says about itself: goodness of fit, identifiability and autocorrelation.
+
+:func:`warn_fit` issues the warnings of one fit's result dataset; :func:`bound_text` words a
+parameter the data bound on one side only ("E0 > 2.1e+04 Pa").
+"""
+
+from __future__ import annotations
+
+import math
+import warnings
+from typing import Any
+
+import numpy as np
+import xarray as xr
+
+from viscoforce.exceptions import AccuracyWarning, DataWarning, GoodnessOfFitWarning
+
+#: χ² p-value below which a fit with known stderr warns that the model does not fit the data.
+PVALUE_WARN = 1e-3
+#: Lag-1 residual autocorrelation above which a curve fit warns (its stderr are corrected).
+LAG1_WARN = 0.5
+
+
+def _scalar(ds: xr.Dataset, name: Any) -> float:
+    """A scalar variable of ``ds`` as a float (read from the Variable: no DataArray is built)."""
+    return float(ds.variables[str(name)].values)
+
+
+def bound_text(ds: xr.Dataset, name: str) -> str | None:
+    """How a parameter that is not determined should be reported (None when it is determined).
+
+    ``"E0 > 2.1e+04 Pa"`` (lower bound only), ``"mu < 3.2 Pa s"``, ``"tau not determined"``.
+    """
+    if "identifiability" not in ds.variables:
+        return None
+    codes = dict(zip((str(n) for n in ds["param_i"].values),
+                     np.asarray(ds["identifiability"].values).reshape(-1).tolist(), strict=True))
+    code = int(codes.get(name, 0))
+    unit = str(ds[name].attrs.get("units", ""))
+    if code == 1 and f"{name}_lower" in ds.variables:
+        return f"{name} > {_scalar(ds, f'{name}_lower'):.3g} {unit}".rstrip()
+    if code == 2 and f"{name}_upper" in ds.variables:
+        return f"{name} < {_scalar(ds, f'{name}_upper'):.3g} {unit}".rstrip()
+    if code == 0:
+        return None
+    return f"{name} not determined"
+
+
+def warn_unidentified(ds: xr.Dataset, *, stacklevel: int = 3) -> list[str]:
+    """Warn (AccuracyWarning) about fitted parameters the data do not determine; return them.
+
+    With the profile likelihood (``identifiability``): a parameter bounded on one side only is
+    reported as that bound (e.g. "E0 > 2e4 Pa": the likelihood is flat towards larger values),
+    one flat on both sides as not determined. Without it, the local test: stderr above the
+    value, or none (the covariance is singular).
+    """
+    names = [str(n) for n in ds.variables["param_i"].values]
+    if "identifiability" in ds.variables:
+        codes = np.asarray(ds.variables["identifiability"].values).reshape(-1)
+        bad = [n for n, c in zip(names, codes, strict=True) if int(c) != 0]
+    else:
+        bad = [n for n in names
+               if not np.isfinite(_scalar(ds, f"{n}_stderr")) or
+               abs(_scalar(ds, f"{n}_stderr")) > abs(_scalar(ds, n))]
+    if bad:
+        shown = "; ".join(
+            f"{bound_text(ds, n) or n} (fitted {_scalar(ds, n):.4g} ± "
+            f"{_scalar(ds, f'{n}_stderr'):.3g})" for n in bad)
+        warnings.warn(
+            f"the data do not determine {', '.join(bad)}: {shown}; report the bound, fix the "
+            "parameter, fit fewer parameters, or measure where the spectrum depends on it",
+            AccuracyWarning, stacklevel=stacklevel)
+    return bad
+
+
+def warn_goodness(ds: xr.Dataset, *, stacklevel: int = 3) -> bool:
+    """Warn (GoodnessOfFitWarning) when the χ² p-value is below :data:`PVALUE_WARN`."""
+    p = _scalar(ds, "chi2_pvalue") if "chi2_pvalue" in ds.variables else math.nan
+    if math.isfinite(p) and p < PVALUE_WARN:
+        warnings.warn(
+            f"the model does not describe these data: chi-square {ds.attrs.get('chisqr', math.nan):.4g}"
+            f"{_calibrated_text(ds)} for {ds.attrs.get('dof', '?')} degrees of freedom (redchi "
+            f"{_scalar(ds, 'redchi'):.3g}), p = {p:.2g} < {PVALUE_WARN:g}; its stderr assume it "
+            "does. Try another model or material (--model auto), or check the data's stderr",
+            GoodnessOfFitWarning, stacklevel=stacklevel)
+        return True
+    return False
+
+
+def _calibrated_text(ds: xr.Dataset) -> str:
+    calibrated = float(ds.attrs.get("chisqr_calibrated", math.nan))
+    if math.isfinite(calibrated) and not math.isclose(calibrated, float(ds.attrs["chisqr"])):
+        return f" ({calibrated:.4g} with the residuals' stderr-dof calibration)"
+    return ""
+
+
+def warn_fit(ds: xr.Dataset, *, stacklevel: int = 4) -> None:
+    """The warnings of a single fit: autocorrelated residuals, goodness of fit, identifiability."""
+    rho = float(ds.attrs.get("residual_lag1", math.nan))
+    if math.isfinite(rho) and rho > LAG1_WARN:
+        warnings.warn(
+            f"the residuals are strongly autocorrelated (lag-1 {rho:.3g}): the stderr are "
+            f"multiplied by sqrt((1+rho)/(1-rho)) = {float(ds.attrs['stderr_correction']):.3g} "
+            f"(effective sample size {float(ds.attrs['effective_samples']):.4g} of "
+            f"{int(ds.attrs.get('data_points', 0))}); they hold for AR(1) noise only. The model "
+            "may miss structure in the data (drift, more modes): compare windows or replicas",
+            DataWarning, stacklevel=stacklevel)
+    warn_goodness(ds, stacklevel=stacklevel)
+    warn_unidentified(ds, stacklevel=stacklevel)
