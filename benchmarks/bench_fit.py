@@ -69,8 +69,9 @@ from viscoforce import PAPER  # noqa: E402
 from viscoforce.experiments.linear_response import linear_stiffness, linearized_state  # noqa: E402
 from viscoforce.fitting import _params, fit_spectrum, maps  # noqa: E402
 from viscoforce.fitting.data import spectrum_data  # noqa: E402
-from viscoforce.fitting.maps import fit_map, pixel_data  # noqa: E402
+from viscoforce.fitting.maps import fit_map  # noqa: E402
 from viscoforce.fitting.models import make_model  # noqa: E402
+from viscoforce.fitting.pixels import pixel_data  # noqa: E402
 from viscoforce.physics.materials import PronySeries, StandardLinearSolid  # noqa: E402
 from viscoforce.physics.paper import paper_pressure_law  # noqa: E402
 from viscoforce.physics.particle import Sphere  # noqa: E402

@@ -14,7 +14,7 @@ the fits are weighted), for each model below:
   real numbers, the chain parameters decoded as 10**(sum of logs) by ``_params.reported_values``;
 - ``local`` and ``profile``: the library call with ``identifiability="local"`` (no limits) and
   ``"profile"`` (the profile likelihood of every parameter), for information;
-- ``pixel``: what one pixel of a map costs (``fitting.maps.fit_block`` on the prepared data: the
+- ``pixel``: what one pixel of a map costs (``fitting.pixels.fit_block`` on the prepared data: the
   guess, the fit and the summary, no dataset per pixel), for information.
 
 Cases: ``svda`` (h0 = 2 nm, the paper's system), ``contact`` (SLS, Hertz sphere R = 10 µm,
@@ -62,8 +62,8 @@ from viscoforce.experiments.linear_response import linear_stiffness, linearized_
 from viscoforce.fitting import _params  # noqa: E402
 from viscoforce.fitting.data import FitData, spectrum_data  # noqa: E402
 from viscoforce.fitting.fit import fit_data, fit_spectrum  # noqa: E402
-from viscoforce.fitting.maps import fit_block  # noqa: E402
 from viscoforce.fitting.models import check_fixed, make_model  # noqa: E402
+from viscoforce.fitting.pixels import fit_block  # noqa: E402
 from viscoforce.physics.materials import StandardLinearSolid  # noqa: E402
 from viscoforce.physics.paper import paper_pressure_law  # noqa: E402
 from viscoforce.physics.particle import Sphere  # noqa: E402

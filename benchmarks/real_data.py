@@ -333,7 +333,8 @@ def hold_row(r: dict[str, Any]) -> tuple[str, str, str]:
 # ── 2. the 15-curve relaxation zip ───────────────────────────────────────────────────────────────
 
 def zip_map(path: Path) -> dict[str, Any]:
-    from viscoforce.fitting.maps import fit_map, map_summary
+    from viscoforce.fitting.maps import fit_map
+    from viscoforce.fitting.pixels import map_summary
     from viscoforce.io.instruments import load_instrument
 
     caught: list[warnings.WarningMessage] = []
@@ -394,7 +395,8 @@ def chooser(spec) -> dict[str, Any]:
 
 
 def material_map(spec, key: str) -> dict[str, Any]:
-    from viscoforce.fitting.maps import fit_map, map_summary
+    from viscoforce.fitting.maps import fit_map
+    from viscoforce.fitting.pixels import map_summary
 
     caught: list[warnings.WarningMessage] = []
     with recording(caught):
@@ -643,8 +645,9 @@ def hertz_file(path: Path, curves) -> dict[str, Any]:
     """Hertz on the approach of every curve of one file (a map also through ``fit_map``)."""
     from viscoforce.fitting.curves import curve_data, fit_curve
     from viscoforce.fitting.fit import fit_data
-    from viscoforce.fitting.maps import fit_map, map_summary
+    from viscoforce.fitting.maps import fit_map
     from viscoforce.fitting.moduli import add_derived_moduli
+    from viscoforce.fitting.pixels import map_summary
 
     tip, tip_source = hertz_tip(curves)
     n = int(curves.sizes["curve"])
@@ -874,9 +877,10 @@ def creep_windows(data, taus: dict[str, dict[str, Any]], modes: int,
 def creep_file(path: Path, curves) -> dict[str, Any]:
     """Creep (modes by BIC) on the constant-force pause of every curve of one file."""
     from viscoforce.fitting.curves import curve_data, fit_curve
-    from viscoforce.fitting.maps import fit_map, map_summary
+    from viscoforce.fitting.maps import fit_map
     from viscoforce.fitting.models import make_model
     from viscoforce.fitting.outcome import residual_lag1
+    from viscoforce.fitting.pixels import map_summary
 
     n = int(curves.sizes["curve"])
     caught: list[warnings.WarningMessage] = []

@@ -46,7 +46,7 @@ def test_each_pixel_has_its_model_at_the_data_frequencies(spectra):
 
 
 def test_a_pixel_without_data_has_no_curve():
-    from viscoforce.fitting.maps import fit_block
+    from viscoforce.fitting.pixels import fit_block
 
     assert fit_block(["no data"], "prony", 1, "bic", {}, omega=OMEGA) == [
         {"success": False, "message": "no data"}]

@@ -17,13 +17,8 @@ import xarray as xr
 from viscoforce.closed_form import sls_complex_compliance
 from viscoforce.exceptions import ParameterError
 from viscoforce.fitting.identify import IDENTIFIABILITY
-from viscoforce.fitting.maps import (
-    IDENTIFIABILITY_METHODS,
-    MAP_QUALITY,
-    fit_map,
-    map_summary,
-    pixel_quality,
-)
+from viscoforce.fitting.maps import IDENTIFIABILITY_METHODS, fit_map
+from viscoforce.fitting.pixels import MAP_QUALITY, map_summary, pixel_quality
 from viscoforce.schema import make_curves, make_spectrum, validate_fit_result, validate_spectrum
 
 OMEGA = np.geomspace(10.0, 1e5, 20)  # [rad/s]

@@ -16,7 +16,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from hypothesis.extra import numpy as hnp
 
-from viscoforce.fitting.maps import _assemble
+from viscoforce.fitting.pixels import _assemble
 from viscoforce.schema import (
     make_curves,
     make_equilibrium,

@@ -737,7 +737,7 @@ def test_other_builders_reject_bad_arguments(build, match):
 
 def test_flag_meanings_inverts_flag_attrs():
     """The viewer names a map's quality codes from the file's own CF attributes."""
-    from viscoforce.fitting.maps import MAP_QUALITY
+    from viscoforce.fitting.pixels import MAP_QUALITY
     from viscoforce.schema._core import flag_attrs, flag_meanings
 
     var = xr.Variable(("x",), np.array([0, 2], dtype=np.int8), flag_attrs(MAP_QUALITY))

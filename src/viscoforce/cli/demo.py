@@ -151,7 +151,8 @@ def _real(folder: Path, out: Path, report: dict[str, Any]) -> None:
     from viscoforce.cli.model import _save_figure
     from viscoforce.experiments.modulation import modulation_spectrum
     from viscoforce.fitting.fit import fit_spectrum
-    from viscoforce.fitting.maps import fit_map, map_summary
+    from viscoforce.fitting.maps import fit_map
+    from viscoforce.fitting.pixels import map_summary
     from viscoforce.fitting.verdict import bound_text
     from viscoforce.io.instruments import load_instrument
     from viscoforce.plotting import bode_plot

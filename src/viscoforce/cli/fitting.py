@@ -594,7 +594,7 @@ def _single_json(result) -> dict[str, Any]:
 
 
 def _map_json(result) -> dict[str, Any]:
-    from viscoforce.fitting.maps import map_summary
+    from viscoforce.fitting.pixels import map_summary
 
     return {"model": result.attrs["model"], **map_summary(result),
             "n_failed": int(result.attrs["n_failed"])}

@@ -4,7 +4,7 @@
 ``fit MAP --out fits.nc``) or of a spectrum map. Pixels sit on their ``x``/``y`` coordinates
 (the instrument's grid positions [m], drawn in µm) as touching cells, so there are no gaps;
 a map without ``x``/``y`` is drawn on its two dims' indices. Pixels whose fit failed or does not
-describe its data (``quality``, :data:`viscoforce.fitting.maps.MAP_QUALITY`), or where the
+describe its data (``quality``, :data:`viscoforce.fitting.pixels.MAP_QUALITY`), or where the
 drawn parameter is not determined, are left grey and counted in the title, so a colour never
 stands for a value the fit does not support. The colour bar is in a unit chosen
 for the values (kPa, GPa, ms, …) and logarithmic for positive values spanning more than a

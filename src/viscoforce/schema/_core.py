@@ -366,7 +366,7 @@ def flag_meanings(var: xr.Variable) -> dict[int, str]:
     """Code → meaning of a CF flag variable (``flag_values``, ``flag_meanings``; {} without).
 
     The inverse of :func:`flag_attrs`: a map's ``quality`` carries
-    :data:`viscoforce.fitting.maps.MAP_QUALITY` this way, so a map read from a file names its
+    :data:`viscoforce.fitting.pixels.MAP_QUALITY` this way, so a map read from a file names its
     codes as the fit that wrote it did.
     """
     values = np.atleast_1d(np.asarray(var.attrs.get("flag_values", []))).tolist()
