@@ -54,7 +54,7 @@ _LAZY = {
     "fit_hold": "viscoforce.fitting.curves",
     "fit_step": "viscoforce.fitting.curves",
     "fit_map": "viscoforce.fitting.maps",
-    "map_summary": "viscoforce.fitting.maps",
+    "map_summary": "viscoforce.fitting.pixels",
     "make_model": "viscoforce.fitting.models",
     "bode_plot": "viscoforce.plotting", "hysteresis_plot": "viscoforce.plotting",
     "contact_radius_plot": "viscoforce.plotting", "profile_plot": "viscoforce.plotting",
