@@ -345,10 +345,10 @@ class StepTimers:
     def __init__(self):
         from viscoforce import svda
         from viscoforce.experiments import linear_response
-        from viscoforce.fitting import fit, models
+        from viscoforce.fitting import fit, models, spectrum_models
 
         self.targets = {"evaluations": [(svda, "svda_stiffness_kernel"),
-                                        (models, "exact_stiffness")],
+                                        (spectrum_models, "exact_stiffness")],
                         "states": [(linear_response, "linearized_state")],
                         "guess": [(models.FitModel, "guess")],
                         "spectrum_data": [(fit, "spectrum_data")],

@@ -69,6 +69,8 @@ from _common import (  # noqa: E402
 
 from viscoforce import PAPER  # noqa: E402
 from viscoforce.experiments.drives import MeasuredTrace, Step, Triangle  # noqa: E402
+from viscoforce.fitting import base as B  # noqa: E402
+from viscoforce.fitting import guesses as G  # noqa: E402
 from viscoforce.fitting import models as M  # noqa: E402
 from viscoforce.fitting.curves import fit_step, trajectory_data  # noqa: E402
 from viscoforce.fitting.fit import result_dataset  # noqa: E402
@@ -97,15 +99,15 @@ WRONG = StandardLinearSolid(3e9, 5e8, 1e-4)
 
 # ── the old model, kept verbatim as the reference ────────────────────────────────────────────────
 
-def old_step_model(problem: ContactProblem, position_trace) -> M.FitModel:
+def old_step_model(problem: ContactProblem, position_trace) -> B.FitModel:
     """The ``step`` FitModel before issue 22: one ``simulate`` per evaluation, FD Jacobian."""
     trace_t, trace_h = (np.asarray(a, dtype=float) for a in position_trace)
     drive = MeasuredTrace(trace_t, trace_h)
-    spec = M.ModelSpec("step", 1, M.check_fixed("step", {"problem": problem,
+    spec = B.ModelSpec("step", 1, M.check_fixed("step", {"problem": problem,
                                                          "position_trace": position_trace}))
 
     def function(t, v):
-        run = S.simulate(problem.with_material(M.material_from(v, 1)), drive, t_end=float(t[-1]),
+        run = S.simulate(problem.with_material(B.material_from(v, 1)), drive, t_end=float(t[-1]),
                          t_eval=np.asarray(t, dtype=float), output_kinks=False, progress=False)
         return run["force"].values
 
@@ -121,14 +123,14 @@ def old_step_model(problem: ContactProblem, position_trace) -> M.FitModel:
             return lambda e: abs(float(problem.load(problem.pressure(
                 equilibrium_gap(problem, position, e).gap))))
 
-        e_inf = M._solve_modulus(load(end), max(abs(float(f[-1])), 1e-15), 1e9)
-        e0 = M._solve_modulus(load(peak_position), max(abs(float(f[i_peak])), 1e-15), 2 * e_inf)
+        e_inf = G._solve_modulus(load(end), max(abs(float(f[-1])), 1e-15), 1e9)
+        e0 = G._solve_modulus(load(peak_position), max(abs(float(f[i_peak])), 1e-15), 2 * e_inf)
         tail = np.abs(f[i_peak:] - f[-1])
         below = np.flatnonzero(tail < tail[0] / math.e)
         tau = float(t[i_peak + below[0]] - t[i_peak]) if below.size else float(np.ptp(t)) / 5
         return {"E_inf": e_inf, "E0": max(e0, 1.05 * e_inf), "tau": max(tau, 1e-9)}
 
-    return M.FitModel(spec, function, M._material_layout(1), "t", guesser, M._time_window)
+    return B.FitModel(spec, function, B._material_layout(1), "t", guesser, G._time_window)
 
 
 def old_fit_step(trajectory, *, problem):

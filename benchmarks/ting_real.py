@@ -54,9 +54,9 @@ from scipy.special import gamma  # noqa: E402
 
 import viscoforce  # noqa: E402
 from viscoforce.exceptions import ViscoforceError  # noqa: E402
+from viscoforce.fitting.base import ModelSpec  # noqa: E402
 from viscoforce.fitting.curves import fit_curve  # noqa: E402
 from viscoforce.fitting.fit import result_dataset, summary  # noqa: E402
-from viscoforce.fitting.models import ModelSpec  # noqa: E402
 from viscoforce.fitting.moduli import add_derived_moduli  # noqa: E402
 from viscoforce.fitting.outcome import fit_once  # noqa: E402
 from viscoforce.fitting.ting import (  # noqa: E402

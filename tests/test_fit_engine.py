@@ -345,7 +345,7 @@ def test_bound_transforms_match_lmfits_per_parameter(low, high):
 def test_spectrum_features_are_the_polyfit_vertex_and_numpys_medians(seed):
     """The guess's phase peak (a closed-form vertex) is np.polyfit's parabola through the top
     three points in log ω, clipped to them; the level medians are np.median's."""
-    from viscoforce.fitting.models import SpectrumFeatures
+    from viscoforce.fitting.guesses import SpectrumFeatures
 
     rng = np.random.default_rng(seed)
     n = int(rng.integers(3, 40))

@@ -121,7 +121,7 @@ def test_structural_recovery_is_unbiased_with_honest_stderr_over_replicas():
 
 def test_structural_guess_lands_within_a_factor_two():
     truth_k = ROOT * structural_complex_modulus(OMEGA, **STRUCTURAL)
-    from viscoforce.fitting.models import structural_guess
+    from viscoforce.fitting.spectrum_models import structural_guess
 
     guess = structural_guess(truth_k / ROOT, OMEGA, 1.0)
     for n, v in STRUCTURAL.items():

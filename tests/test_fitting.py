@@ -20,7 +20,7 @@ from viscoforce.fitting import fit_spectrum, make_model
 from viscoforce.fitting.data import spectrum_data
 from viscoforce.fitting.fit import fit_data
 from viscoforce.fitting.maps import fit_map
-from viscoforce.fitting.models import svda_position
+from viscoforce.fitting.spectrum_models import svda_position
 from viscoforce.physics.materials import PronySeries, StandardLinearSolid
 from viscoforce.physics.paper import paper_pressure_law
 from viscoforce.physics.particle import Sphere

@@ -26,8 +26,8 @@ from viscoforce import PAPER
 from viscoforce.exceptions import ParameterError
 from viscoforce.experiments.drives import MeasuredTrace, Step, Triangle
 from viscoforce.fitting import make_model
+from viscoforce.fitting.curve_models import StepResponse, corners
 from viscoforce.fitting.curves import fit_step
-from viscoforce.fitting.models import StepResponse, corners
 from viscoforce.physics.materials import StandardLinearSolid
 from viscoforce.physics.paper import paper_pressure_law
 from viscoforce.physics.particle import Sphere

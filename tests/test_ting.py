@@ -475,7 +475,7 @@ def test_fit_recovers_the_material_and_the_contact_point(material, truth, kernel
 
 
 def test_fit_recovers_a_fitted_drag(rng):
-    from viscoforce.fitting.models import ModelSpec
+    from viscoforce.fitting.base import ModelSpec
     from viscoforce.fitting.outcome import fit_once
     from viscoforce.fitting.ting import ting_data, ting_model
 
@@ -512,7 +512,7 @@ def test_ting_forms_of_a_structural_fit(rng):
 
 
 def test_ting_model_refuses_bad_inputs():
-    from viscoforce.fitting.models import ModelSpec
+    from viscoforce.fitting.base import ModelSpec
     from viscoforce.fitting.ting import add_ting_forms, ting_kernel, ting_model
 
     trace = (np.linspace(0, 1, 20), np.linspace(0, 1e-6, 20))

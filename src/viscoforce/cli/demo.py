@@ -122,7 +122,7 @@ def _synthetic(folder: Path, out: Path, report: dict[str, Any]) -> Any:
 def _loop(fit, problem, out: Path, report: dict[str, Any]) -> None:
     from viscoforce.cli.model import _save_figure
     from viscoforce.experiments.drives import Triangle
-    from viscoforce.fitting.models import material_from
+    from viscoforce.fitting.base import material_from
     from viscoforce.plotting import hysteresis_plot
     from viscoforce.solvers.simulate import simulate
 

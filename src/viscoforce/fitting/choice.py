@@ -25,10 +25,12 @@ from viscoforce.choice import (
     svda_error,
 )
 from viscoforce.exceptions import ConvergenceError, ModelValidityError, ParameterError
+from viscoforce.fitting.base import material_from
 from viscoforce.fitting.data import FitData, spectrum_data
 from viscoforce.fitting.fit import fit_data
 from viscoforce.fitting.model_error import svda_bias, validity_note
-from viscoforce.fitting.models import check_fixed, material_from, svda_position
+from viscoforce.fitting.models import check_fixed
+from viscoforce.fitting.spectrum_models import svda_position
 from viscoforce.fitting.verdict import _scalar, warn_fit
 from viscoforce.problem import ContactProblem
 

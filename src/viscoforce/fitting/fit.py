@@ -44,6 +44,7 @@ import xarray as xr
 
 from viscoforce.exceptions import ConvergenceError, ParameterError
 from viscoforce.fitting import _params
+from viscoforce.fitting.base import MAX_AUTO_MODES, MAX_MODES, MODAL_MODELS, MODEL_NAMES, SPECTRUM_MODELS
 from viscoforce.fitting.data import FitData, _data_indentation, spectrum_data
 from viscoforce.fitting.identify import (
     IDENTIFIABILITY,
@@ -53,19 +54,11 @@ from viscoforce.fitting.identify import (
     quadratic_limits,
 )
 from viscoforce.fitting.model_error import _warn_model_bias, contact_bias, svda_bias, validity_note
-from viscoforce.fitting.models import (
-    MAX_AUTO_MODES,
-    MAX_MODES,
-    MODAL_MODELS,
-    MODEL_NAMES,
-    SPECTRUM_MODELS,
-    check_fixed,
-    make_model,
-    svda_position,
-)
+from viscoforce.fitting.models import check_fixed, make_model
 from viscoforce.fitting.moduli import add_derived_moduli, derived_attrs, derived_variables
 from viscoforce.fitting.outcome import Outcome, fit_once, summary_stderr
 from viscoforce.fitting.report import attach
+from viscoforce.fitting.spectrum_models import svda_position
 from viscoforce.fitting.verdict import warn_fit
 from viscoforce.schema import make_fit_result, plain_variable
 

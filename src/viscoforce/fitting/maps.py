@@ -46,6 +46,7 @@ import numpy as np
 import xarray as xr
 
 from viscoforce.exceptions import ClusterError, ParameterError, ViscoforceError
+from viscoforce.fitting.base import SPECTRUM_MODELS
 from viscoforce.fitting.data import FitData
 from viscoforce.fitting.map_cost import (
     OVERLAP_METHODS,
@@ -56,7 +57,6 @@ from viscoforce.fitting.map_cost import (
     probe_indices,
     start_method,
 )
-from viscoforce.fitting.models import SPECTRUM_MODELS
 from viscoforce.fitting.moduli import add_derived_moduli
 from viscoforce.fitting.pixels import _assemble, fit_block, pixel_data
 
@@ -216,7 +216,8 @@ def fit_map(ds: xr.Dataset, model: str, *, modes: int | str = 1, criterion: str 
         An unknown model or option value (the message names the allowed values), an
         unreachable scheduler, or no pixel that could be fitted.
     """
-    from viscoforce.fitting.models import MODEL_NAMES, check_fixed
+    from viscoforce.fitting.base import MODEL_NAMES
+    from viscoforce.fitting.models import check_fixed
 
     if not isinstance(model, str) or model not in MODEL_NAMES:
         raise ParameterError(f"model must be one of {', '.join(MODEL_NAMES)}, got {model!r}")

@@ -31,10 +31,11 @@ import numpy as np
 import xarray as xr
 
 from viscoforce.exceptions import ConvergenceError, ModelValidityError, ParameterError
+from viscoforce.fitting.base import MAX_AUTO_MODES
 from viscoforce.fitting.data import _data_indentation, spectrum_data
 from viscoforce.fitting.fit import CRITERIA, _check_modes, result_dataset
 from viscoforce.fitting.model_error import _warn_model_bias, contact_bias, validity_note
-from viscoforce.fitting.models import MAX_AUTO_MODES, check_fixed, make_model
+from viscoforce.fitting.models import check_fixed, make_model
 from viscoforce.fitting.outcome import Outcome, fit_once
 from viscoforce.fitting.report import carry
 from viscoforce.fitting.verdict import warn_fit

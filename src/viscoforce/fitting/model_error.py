@@ -18,7 +18,7 @@ import xarray as xr
 
 from viscoforce.choice import WARN_ERROR, hertz_error
 from viscoforce.exceptions import ApproximationWarning
-from viscoforce.fitting.models import material_from
+from viscoforce.fitting.base import material_from
 from viscoforce.fitting.verdict import _scalar
 from viscoforce.svda import svda_error_estimate, svda_stiffness_kernel
 

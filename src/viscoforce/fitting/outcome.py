@@ -20,9 +20,9 @@ import numpy as np
 
 from viscoforce.exceptions import ConvergenceError, ParameterError
 from viscoforce.fitting import _engine, _params
+from viscoforce.fitting.base import FitModel
 from viscoforce.fitting.data import FitData
 from viscoforce.fitting.identify import Profile, profile_parameters
-from viscoforce.fitting.models import FitModel
 
 
 @dataclass

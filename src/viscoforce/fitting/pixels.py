@@ -18,11 +18,11 @@ import numpy as np
 import xarray as xr
 
 from viscoforce.exceptions import ParameterError, ViscoforceError
+from viscoforce.fitting.base import SPECTRUM_MODELS
 from viscoforce.fitting.curves import curve_data
 from viscoforce.fitting.data import FitData, pixel_fit_data, spectrum_arrays
 from viscoforce.fitting.fit import local_identifiability, select, summary
 from viscoforce.fitting.identify import IDENTIFIABILITY
-from viscoforce.fitting.models import SPECTRUM_MODELS
 from viscoforce.fitting.report import fit_report
 from viscoforce.fitting.verdict import PVALUE_WARN
 from viscoforce.schema import validate_fit_result, validate_spectrum

@@ -54,10 +54,7 @@ from viscoforce._validation import (
 )
 from viscoforce.exceptions import ConvergenceError, ParameterError
 from viscoforce.fitting import _params as P
-from viscoforce.fitting.curves import _segment_types, _source, segment_runs
-from viscoforce.fitting.data import FitData
-from viscoforce.fitting.fit import CRITERIA, _share_effective_size, result_dataset
-from viscoforce.fitting.models import (
+from viscoforce.fitting.base import (
     EXPONENT_BOUNDS,
     MAX_AUTO_MODES,
     MAX_MODES,
@@ -65,16 +62,15 @@ from viscoforce.fitting.models import (
     REFERENCE_FREQUENCY,
     FitModel,
     ModelSpec,
-    _material_guess,
     _material_layout,
-    _time_window,
-    baseline_windows,
-    contact_window,
-    hertz_guess,
-    hertz_linear,
     moduli_names,
     tau_names,
 )
+from viscoforce.fitting.curve_models import baseline_windows, contact_window, hertz_guess, hertz_linear
+from viscoforce.fitting.curves import _segment_types, _source, segment_runs
+from viscoforce.fitting.data import FitData
+from viscoforce.fitting.fit import CRITERIA, _share_effective_size, result_dataset
+from viscoforce.fitting.guesses import _material_guess, _time_window
 from viscoforce.fitting.moduli import add_derived_moduli
 from viscoforce.fitting.outcome import AUTOCORRELATED_MODELS, Outcome, fit_once, residual_lag1
 from viscoforce.fitting.report import carry

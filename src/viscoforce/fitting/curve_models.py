@@ -1,0 +1,351 @@
+"""The force-curve models of the SPEC table: relaxation, creep, hertz, step (and ting's entry).
+
+Each builder takes a :class:`~viscoforce.fitting.base.ModelSpec` and returns a
+:class:`~viscoforce.fitting.base.FitModel` of a force over time (relaxation, step), a force over
+the tip position (hertz) or a tip position over time (creep); build them with
+:func:`viscoforce.fitting.models.make_model`.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Mapping
+from typing import Any
+
+import numpy as np
+
+from viscoforce.exceptions import ParameterError
+from viscoforce.fitting import _params as P
+from viscoforce.fitting.base import (
+    MODULUS_BOUNDS,
+    FitModel,
+    ModelSpec,
+    _material_layout,
+    material_from,
+)
+from viscoforce.fitting.guesses import _solve_modulus, _spread, _time_window
+from viscoforce.fitting.spectrum_models import _need
+from viscoforce.problem import ContactProblem
+
+
+def _exponential_model(spec: ModelSpec, level: str, step: str) -> FitModel:
+    """``level`` + Σ ``step``_i e^{−t/τ_i}: the relaxation (F_inf, dF_i) and creep (z_inf, dz_i)."""
+    modes = spec.modes
+    dfs = [f"{step}_{i}" for i in range(1, modes + 1)]
+    taus = [f"tau_{i}" for i in range(1, modes + 1)]
+
+    def function(t: np.ndarray, v: Mapping[str, float]) -> np.ndarray:
+        f = np.full(np.shape(t), v[level], dtype=float)
+        for df, tau in zip(dfs, taus, strict=True):
+            f += v[df] * np.exp(-t / v[tau])
+        return f
+
+    def guesser(f: np.ndarray, t: np.ndarray) -> dict[str, float]:
+        order = np.argsort(t)
+        t, f = t[order], np.asarray(f, dtype=float)[order]
+        n_end = max(2, t.size // 20)
+        f_inf, f_start = float(np.median(f[-n_end:])), float(np.median(f[:max(2, t.size // 200)]))
+        excess = f - f_inf
+        target = (f_start - f_inf) / math.e
+        crossed = np.flatnonzero(np.sign(excess - target) != np.sign(f_start - f_inf - target))
+        t0 = float(t[crossed[0]] - t[0]) if crossed.size else float(np.ptp(t)) / 3
+        tau = max(t0, float(np.ptp(t)) / t.size)
+        out = {level: f_inf, **{df: (f_start - f_inf) / modes for df in dfs}}
+        out.update(zip(taus, _spread(tau, modes, _time_window(t)), strict=True))
+        return out
+
+    layout: list[P.Item] = [P.Signed(level), *(P.Signed(df) for df in dfs),
+                            P.Chain(tuple(taus))]
+    return FitModel(spec, function, layout, "t", guesser, _time_window)
+
+
+def _relaxation_model(spec: ModelSpec) -> FitModel:
+    return _exponential_model(spec, "F_inf", "dF")
+
+
+def _creep_model(spec: ModelSpec) -> FitModel:
+    return _exponential_model(spec, "z_inf", "dz")
+
+
+def _hertz_model(spec: ModelSpec) -> FitModel:
+    """F(z) = b + s·(z − c) + E·shape(max(z − c, 0)) over the tip position z toward the sample.
+
+    ``E`` the paper's modulus, ``contact_point`` c [m], ``baseline`` b [N] (the free-cantilever
+    force at contact) and ``baseline_slope`` s [N/m] (a tilted baseline, kept in contact); the
+    tip's ``force_shape`` (:mod:`viscoforce.physics.tips`) gives the indentation law.
+    """
+    (tip,) = _need(spec, "tip")
+    window = spec.fixed.get("contact_window")
+
+    def function(z: np.ndarray, v: Mapping[str, float]) -> np.ndarray:
+        z = np.asarray(z, dtype=float)
+        delta = np.maximum(z - v["contact_point"], 0.0)
+        return (v["baseline"] + v["baseline_slope"] * (z - v["contact_point"])
+                + v["E"] * tip.force_shape(delta))
+
+    def guesser(f: np.ndarray, z: np.ndarray) -> dict[str, float]:
+        return hertz_guess(tip, np.asarray(z, dtype=float), np.asarray(f, dtype=float))
+
+    def windows(z: np.ndarray, f: np.ndarray | None = None) -> dict[str, tuple[float, float]]:
+        out = {"contact_point": window if window is not None else contact_window(tip, z)}
+        if f is not None:
+            out.update(baseline_windows(f, z))
+        return out
+
+    layout: list[P.Item] = [P.Chain(("E",)), P.Bounded("contact_point", -1.0, 1.0),
+                            P.Bounded("baseline", -1.0, 1.0),
+                            P.Bounded("baseline_slope", -1.0, 1.0)]
+    return FitModel(spec, function, layout, "z", guesser, bounded_windows=windows)
+
+
+def baseline_windows(f: np.ndarray, z: np.ndarray) -> dict[str, tuple[float, float]]:
+    """Bounds of ``baseline`` [N] and ``baseline_slope`` [N/m] from the force span and the tip travel.
+
+    Wide (2 force spans beyond the data, 10 spans over the travel): they only give the bounded
+    parameters an O(1) internal scale for the optimiser's finite differences.
+    """
+    f = np.asarray(f, dtype=float)
+    span = float(np.ptp(f)) or float(np.max(np.abs(f))) or 1e-12
+    z_span = float(np.ptp(z)) or 1e-9
+    return {"baseline": (float(np.min(f)) - 2 * span, float(np.max(f)) + 2 * span),
+            "baseline_slope": (-10 * span / z_span, 10 * span / z_span)}
+
+
+def contact_window(tip: Any, z: np.ndarray) -> tuple[float, float]:
+    """Where a contact point may lie [m]: within the approach, no deeper than the tip allows."""
+    lo, hi = float(np.min(z)), float(np.max(z))
+    deepest = getattr(tip, "max_indentation", None)
+    if deepest is not None:
+        lo = max(lo, hi - 0.99 * float(deepest))
+    return lo, hi
+
+
+#: Contact points tried by the Hertz guess (each with a linear least-squares E and baseline).
+HERTZ_GUESS_POINTS = 64
+
+
+def hertz_linear(tip: Any, z: np.ndarray, f: np.ndarray, contact: float
+                 ) -> tuple[np.ndarray, float]:
+    """(E, baseline, slope) by linear least squares at a given contact point, and the SSE."""
+    delta = np.maximum(z - contact, 0.0)
+    design = np.column_stack([tip.force_shape(delta), np.ones_like(z), z - contact])
+    scale = np.max(np.abs(design), axis=0)
+    scale[scale == 0] = 1.0
+    coef, *_ = np.linalg.lstsq(design / scale, f, rcond=None)
+    coef = coef / scale
+    return coef, float(np.sum((design @ coef - f) ** 2))
+
+
+def hertz_guess(tip: Any, z: np.ndarray, f: np.ndarray) -> dict[str, float]:
+    """A start for the Hertz fit: the best of a grid of contact points, each linear in the rest.
+
+    Given the contact point the model is linear in (E, baseline, slope); the grid spans the
+    contact window (:func:`contact_window`), then one refinement between its neighbours.
+    """
+    lo, hi = contact_window(tip, z)
+    inner = np.sort(z[(z >= lo) & (z <= hi)])
+    if inner.size < 4:
+        raise ParameterError("the approach has fewer than 4 points where contact may lie")
+    # candidates: quantiles of the data (dense where the data are), excluding the last points
+    grid = np.quantile(inner, np.linspace(0.02, 0.98, HERTZ_GUESS_POINTS))
+    best = None
+    for _ in range(2):
+        for c in grid:
+            coef, sse = hertz_linear(tip, z, f, float(c))
+            if coef[0] > 0 and (best is None or sse < best[1]):
+                best = (float(c), sse, coef)
+        if best is None:
+            break
+        step = float(np.median(np.diff(grid))) if grid.size > 1 else float(np.ptp(z)) / 10
+        grid = np.linspace(best[0] - step, best[0] + step, 21)
+        grid = grid[(grid >= lo) & (grid <= hi)]
+    if best is None:
+        raise ParameterError("no contact point in the approach gives a positive modulus: the "
+                             "force does not rise with the tip position (is this the approach "
+                             "segment of a repulsive contact?)")
+    c, _, coef = best
+    e = min(max(float(coef[0]), MODULUS_BOUNDS[0] * 10), MODULUS_BOUNDS[1] / 10)
+    return {"E": e, "contact_point": c, "baseline": float(coef[1]),
+            "baseline_slope": float(coef[2])}
+
+
+#: A sample of a position trace lying within this fraction of the trace's largest |h0| of the
+#: straight line through its neighbours is not a corner (:func:`corners`).
+COLLINEAR_RTOL = 1e-12
+
+
+def corners(t: np.ndarray, h: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The samples of a piecewise-linear trace (t, h0) where it bends, and its two ends.
+
+    A sample on the straight line through the kept sample before it and the sample after it (to
+    :data:`COLLINEAR_RTOL` of max |h0|, i.e. to rounding) is dropped: the piecewise-linear
+    interpolant of what is kept is the same function h0(t). A simulated step or triangle keeps
+    its corners only; a measured (noisy) trace keeps every sample. The time loop then restarts
+    its step history only where the drive really has a kink (at each sample of the full trace it
+    restarts at every one: more rejected steps and Newton iterations for the same drive).
+    """
+    t, h = np.asarray(t, dtype=float), np.asarray(h, dtype=float)
+    if t.size < 3:
+        return t, h
+    tol = COLLINEAR_RTOL * float(np.max(np.abs(h)))
+    keep = [0]
+    for i in range(1, t.size - 1):
+        a = keep[-1]
+        line = h[a] + (h[i + 1] - h[a]) * ((t[i] - t[a]) / (t[i + 1] - t[a]))
+        if abs(h[i] - line) > tol:
+            keep.append(i)
+    keep.append(t.size - 1)
+    return t[keep], h[keep]
+
+
+class StepResponse:
+    """The step model's force along one drive, with its exact sensitivities, last run kept.
+
+    Each run integrates the force and its forward sensitivities to the material together
+    (:func:`viscoforce.solvers.simulate.simulate_force`: the force of ``simulate(...,
+    output_kinks=False)``, the sensitivities by back-substitution with each step's Newton
+    factorisation). A least-squares fit asks for the residual and then the Jacobian at the same
+    parameters: the second comes from the kept run, so an iteration costs one simulation instead
+    of one per parameter plus one (finite differences). Each run's Newton solves start from the
+    previous run's gaps moved along their sensitivities (first order in the parameter change),
+    which changes where Newton starts, not the converged force.
+
+    Parameters
+    ----------
+    problem : ContactProblem
+        System and grid (its material is replaced by each evaluation's).
+    drive : SeparationHistory
+        The measured or simulated position history h0(t) [m].
+    tol : float, optional
+        Local error tolerance of the adaptive steps [m] (default that of ``simulate``).
+    """
+
+    #: Largest change of ln E0, ln E_inf or ln τ from where the kept step grid was chosen over
+    #: which a run repeats that grid (otherwise the steps are chosen afresh).
+    REGRID = 0.05
+    #: Largest such change over which the last run's gaps, moved along their sensitivities, are
+    #: better Newton starts than the stepper's own extrapolation in time.
+    WARM = 0.3
+
+    def __init__(self, problem: ContactProblem, drive: Any, *, tol: float | None = None):
+        self.problem, self.drive, self.tol = problem, drive, tol
+        #: Repeat the step grid of the last adaptive run near its parameters (see class doc).
+        self.reuse_grid = True
+        #: Simulations run (adaptive, on a kept grid) and Newton iterations (bookkeeping).
+        self.runs = self.grid_runs = self.newton = 0
+        self._kept: dict[str, Any] | None = None
+        self._grid: tuple[np.ndarray, np.ndarray] | None = None  # (step times, ln SPEC)
+
+    def forget(self) -> None:
+        """Drop the kept result and grid: the next evaluation is a fresh adaptive simulation.
+
+        Only the Newton starts (the last run's gaps and their sensitivities) are kept.
+        """
+        self._grid = None
+        if self._kept is not None:
+            self._kept = {k: v for k, v in self._kept.items() if k in self._WARM}
+
+    def warm_from(self, other: StepResponse) -> None:
+        """Take the Newton starts of ``other``'s last run (same drive; e.g. the search stage's)."""
+        if other._kept is not None:
+            self._kept = {k: other._kept[k] for k in self._WARM}
+
+    _WARM = ("rho", "logs", "step_time", "step_gap", "dgap")
+
+    @staticmethod
+    def _prony(values: Mapping[str, float]) -> np.ndarray:
+        """ρ = (c_g, c_1, ln τ) = (2/E0, 2/E_inf − 2/E0, ln τ) of an SLS."""
+        e0, e_inf, tau = float(values["E0"]), float(values["E_inf"]), float(values["tau"])
+        return np.array([2.0 / e0, 2.0 / e_inf - 2.0 / e0, math.log(tau)])
+
+    def _run(self, t: np.ndarray, values: Mapping[str, float]) -> tuple[np.ndarray, np.ndarray]:
+        from viscoforce.exceptions import ConvergenceError, GapClosureError
+        from viscoforce.solvers.simulate import simulate_force
+
+        key = (float(values["E0"]), float(values["E_inf"]), float(values["tau"]))
+        kept = self._kept
+        same_t = kept is not None and "t" in kept and np.array_equal(kept["t"], t)
+        if same_t and kept["key"] == key:
+            return kept["force"], kept["log_gradient"]
+        rho, logs = self._prony(values), np.log(key)
+        warm = grid = None
+        if kept is not None and np.max(np.abs(logs - kept["logs"])) <= self.WARM:
+            # Newton starts by step time (the outputs need not be the same)
+            moved = kept["step_gap"] + np.einsum("j,ijn->in", rho - kept["rho"], kept["dgap"])
+            warm = (kept["step_time"], np.maximum(moved, 0.5 * kept["step_gap"]))
+            if (same_t and self.reuse_grid and self._grid is not None
+                    and np.max(np.abs(logs - self._grid[1])) <= self.REGRID):
+                grid = self._grid[0]
+        problem = self.problem.with_material(material_from(values, 1))
+        options = {"t_end": float(t[-1]), "t_eval": t, "tol": self.tol, "sensitivities": True}
+        run = None
+        if grid is not None:
+            try:
+                run = simulate_force(problem, self.drive, warm_start=warm, grid=grid, **options)
+                self.grid_runs += 1
+            except (ConvergenceError, GapClosureError):
+                run = None  # the kept grid is too coarse here: choose the steps afresh
+        if run is None:
+            run = simulate_force(problem, self.drive, warm_start=warm, **options)
+            self.runs += 1
+            self._grid = (run.step_time, logs)
+        self.newton += run.newton
+        e0, e_inf, _ = key
+        # ∂F/∂(ln E0, ln E_inf, ln τ) from ∂F/∂ρ
+        d_cg, d_c1, d_tau = run.sensitivity.T
+        log_grad = np.column_stack([(d_c1 - d_cg) * (2.0 / e0), -d_c1 * (2.0 / e_inf), d_tau])
+        self._kept = {"key": key, "t": np.array(t), "force": run.force, "log_gradient": log_grad,
+                      "rho": rho, "logs": logs, "step_time": run.step_time,
+                      "step_gap": run.step_gap,
+                      "dgap": run.step_gap_sensitivity}
+        return run.force, log_grad
+
+    def force(self, t: np.ndarray, values: Mapping[str, float]) -> np.ndarray:
+        """F(t) [N] for the SLS of ``values`` (``E0``, ``E_inf``, ``tau``)."""
+        return self._run(np.asarray(t, dtype=float), values)[0]
+
+    def log_gradient(self, t: np.ndarray, values: Mapping[str, float]) -> dict[str, np.ndarray]:
+        """∂F/∂ln(name) [N] at ``t`` for each SPEC name (exact for the discrete scheme)."""
+        grad = self._run(np.asarray(t, dtype=float), values)[1]
+        return dict(zip(("E0", "E_inf", "tau"), grad.T, strict=True))
+
+
+def _step_model(spec: ModelSpec) -> FitModel:
+    (problem, position_trace) = _need(spec, "problem", "position_trace")
+    from viscoforce.experiments.drives import MeasuredTrace
+
+    trace_t, trace_h = (np.asarray(a, dtype=float) for a in position_trace)
+    response = StepResponse(problem, MeasuredTrace(*corners(trace_t, trace_h)),
+                            tol=spec.fixed.get("tol"))
+
+    def guesser(f: np.ndarray, t: np.ndarray) -> dict[str, float]:
+        start = spec.fixed.get("start")
+        if start is not None:
+            return dict(start)
+        from viscoforce.solvers.static import equilibrium_gap
+
+        f = np.asarray(f, dtype=float)
+        i_peak = int(np.argmax(np.abs(f - f[0])))
+        end = float(np.interp(t[-1], trace_t, trace_h))
+        peak_position = float(np.interp(t[i_peak], trace_t, trace_h))
+
+        def load(position: float) -> Callable[[float], float]:
+            return lambda e: abs(float(problem.load(problem.pressure(
+                equilibrium_gap(problem, position, e).gap))))
+
+        e_inf = _solve_modulus(load(end), max(abs(float(f[-1])), 1e-15), 1e9)
+        e0 = _solve_modulus(load(peak_position), max(abs(float(f[i_peak])), 1e-15), 2 * e_inf)
+        tail = np.abs(f[i_peak:] - f[-1])
+        below = np.flatnonzero(tail < tail[0] / math.e)
+        tau = float(t[i_peak + below[0]] - t[i_peak]) if below.size else float(np.ptp(t)) / 5
+        return {"E_inf": e_inf, "E0": max(e0, 1.05 * e_inf), "tau": max(tau, 1e-9)}
+
+    model = FitModel(spec, response.force, _material_layout(1), "t", guesser, _time_window)
+    model.response = response  # type: ignore[attr-defined]
+    return model
+
+
+def _ting_model(spec: ModelSpec) -> FitModel:
+    from viscoforce.fitting.ting import ting_model
+
+    return ting_model(spec)
