@@ -7,7 +7,7 @@ k* = E*(ω)·√(Rδ0) + iωB with each material family and compares them by the
 criterion (BIC by default; AIC with ``criterion="aic"``):
 
 - ``sls`` (3 parameters) and ``prony n`` (2n + 1; n = 2, 3, … while the criterion improves, at
-  most :data:`~viscoforce.fitting.models.MAX_AUTO_MODES`, leaving at least :data:`MIN_DOF`
+  most :data:`~viscoforce.fitting.base.MAX_AUTO_MODES`, leaving at least :data:`MIN_DOF`
   degrees of freedom);
 - ``power-law``: the paper's liquid-like creep C(t) = 1/E0 + C1 t^m (3), and ``power-law+mu``
   with a Newtonian viscosity in parallel (4);
