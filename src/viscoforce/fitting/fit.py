@@ -346,7 +346,7 @@ def fit_data(data: FitData, name: str, *, modes: int | str = 1, criterion: str =
         What the fit sees (:func:`~viscoforce.fitting.data.spectrum_data`,
         :func:`viscoforce.fitting.curves.hold_data`).
     name : str
-        A model of :data:`viscoforce.fitting.models.MODEL_NAMES`.
+        A model of :data:`viscoforce.fitting.base.MODEL_NAMES`.
     modes : int or "auto"
         Relaxation modes; "auto" tries 1, 2, … (:func:`select`).
     criterion : {"bic", "aic"}

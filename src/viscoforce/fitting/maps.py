@@ -159,7 +159,7 @@ def fit_map(ds: xr.Dataset, model: str, *, modes: int | str = 1, criterion: str 
         A spectrum with extra dims (any variable but ``stiffness`` and ``phase`` may span a
         subset of them: scalar, per pixel or per frequency), or a curves dataset.
     model : str
-        Model name (:data:`~viscoforce.fitting.models.MODEL_NAMES`).
+        Model name (:data:`~viscoforce.fitting.base.MODEL_NAMES`).
     modes : int or "auto"
         Relaxation modes; ``"auto"`` chooses per pixel by ``criterion``.
     criterion : {"bic", "aic"}
