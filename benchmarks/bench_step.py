@@ -123,14 +123,14 @@ def old_step_model(problem: ContactProblem, position_trace) -> B.FitModel:
             return lambda e: abs(float(problem.load(problem.pressure(
                 equilibrium_gap(problem, position, e).gap))))
 
-        e_inf = G._solve_modulus(load(end), max(abs(float(f[-1])), 1e-15), 1e9)
-        e0 = G._solve_modulus(load(peak_position), max(abs(float(f[i_peak])), 1e-15), 2 * e_inf)
+        e_inf = G.solve_modulus(load(end), max(abs(float(f[-1])), 1e-15), 1e9)
+        e0 = G.solve_modulus(load(peak_position), max(abs(float(f[i_peak])), 1e-15), 2 * e_inf)
         tail = np.abs(f[i_peak:] - f[-1])
         below = np.flatnonzero(tail < tail[0] / math.e)
         tau = float(t[i_peak + below[0]] - t[i_peak]) if below.size else float(np.ptp(t)) / 5
         return {"E_inf": e_inf, "E0": max(e0, 1.05 * e_inf), "tau": max(tau, 1e-9)}
 
-    return B.FitModel(spec, function, B._material_layout(1), "t", guesser, G._time_window)
+    return B.FitModel(spec, function, B.material_layout(1), "t", guesser, G.time_window)
 
 
 def old_fit_step(trajectory, *, problem):

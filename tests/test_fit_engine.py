@@ -362,3 +362,19 @@ def test_spectrum_features_are_the_polyfit_vertex_and_numpys_medians(seed):
         if a[0] < 0:
             peak = min(max(math.exp(-a[1] / (2 * a[0])), w[i - 1]), w[i + 1])
     assert feats.omega_peak == pytest.approx(peak, rel=1e-9)
+
+
+def test_spectrum_features_survive_a_repeated_frequency_and_keep_numpys_nan():
+    """A frequency measured twice beside the phase peak defines no parabola: the peak point is
+    the peak (no division by zero); a NaN level stays NaN as np.median gives it, so the guess
+    refuses it by name instead of starting from a wrong value."""
+    from viscoforce.fitting.guesses import SpectrumFeatures
+
+    w = np.array([10.0, 100.0, 100.0, 1000.0, 1e4])
+    k = np.exp(1j * np.array([0.1, 0.3, 0.5, 0.2, 0.1]))
+    feats = SpectrumFeatures.of(k, w)
+    assert 100.0 <= feats.omega_peak <= 1000.0
+    k_nan = np.array([np.nan, 1.0, 1.0, 1.0, 1.0]) * np.exp(1j * np.array([0.1, 0.3, 0.5, 0.2, 0.1]))
+    assert math.isnan(SpectrumFeatures.of(k_nan, w).k_low)
+    with pytest.raises(ValueError, match="must be > 0 and finite"):
+        make_model("prony").guess(k_nan, w)

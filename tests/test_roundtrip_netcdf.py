@@ -16,7 +16,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from hypothesis.extra import numpy as hnp
 
-from viscoforce.fitting.pixels import _assemble
+from viscoforce.fitting.pixels import assemble_map
 from viscoforce.schema import (
     make_curves,
     make_equilibrium,
@@ -200,7 +200,7 @@ def test_fit_map_result_with_messages_roundtrip(engine, data, tmp_path_factory):
                       "aic": 0.0, "bic": 0.0, "success": True, "modes": 1}
     coords = {d: np.arange(s) * 1e-6 for d, s in zip(dims, shape, strict=True)} if grid else {}
     layout = {"shape": dict(zip(dims, shape, strict=True)), "coords": coords}
-    ds = _assemble(results, dims, layout, "svda", None, n)
+    ds = assemble_map(results, dims, layout, "svda", None, n)
     validate_fit_result(ds)
     assert ds.message.dims == dims
     back = roundtrip(ds, tmp_path_factory.mktemp("map") / "fits.nc", engine)

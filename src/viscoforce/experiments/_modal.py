@@ -76,7 +76,7 @@ def decompose(problem: ContactProblem, sol: NewtonResult) -> Decomposition:
     lam, vec = scipy.linalg.eig(balanced, overwrite_a=True, check_finite=False)
     # scipy returns real eigenvectors when every eigenvalue is real (a repulsive law: M' is
     # similar to a symmetric-definite matrix up to the kernel's small asymmetry); they stay real,
-    # so that V's factors and every product with them run in real arithmetic (_times)
+    # so that V's factors and every product with them run in real arithmetic (times)
     lu = scipy.linalg.lu_factor(vec, check_finite=False)
     return Decomposition(sol=sol, d1=d1, active=active, d=d, q=q,
                           lam=np.asarray(lam, dtype=complex), vec=vec, lu=lu,
@@ -180,5 +180,3 @@ def decomposition(problem: ContactProblem, position: float, modulus: float) -> D
     key = (problem.sphere, problem.surface_force, problem.grid, float(modulus), float(position))
     return DECOMPOSITIONS.get(key, lambda: decompose(
         problem, equilibrium_gap(problem, position, modulus)))
-
-

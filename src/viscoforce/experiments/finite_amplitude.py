@@ -58,7 +58,9 @@ def warn_large_eta(problem: ContactProblem, position: float, eta: float,
     """Warn when ``eta`` is too large for a small-amplitude spectrum (bias above 1 %).
 
     Cheap pre-screen: 2.5 × the rigid estimate; if that exceeds 1 %, the harmonic-balance bias
-    (:func:`amplitude_bias`) at the given frequencies decides.
+    (:func:`amplitude_bias`) at the given frequencies decides. The warning points at the caller
+    of the function that calls this one (``stacklevel=3``: the user's call of
+    :func:`~viscoforce.experiments.linear_response.linear_response`).
     """
     decay = problem.surface_force.decay_length
     if AMPLITUDE_SAFETY * amplitude_error(eta, decay) <= WARN_ERROR:
@@ -110,9 +112,10 @@ class _BiasModes:
     y, has modal coordinates z = c G y / (1 + cΛ) with G = V⁻¹ |D|^½ A_a: (V's LU solve done
     once, here), active part x_a = P z with P = |D|^-½ V, and inactive part
     x_i = c A_i: y − c A_ia s_a P z. The first order's right-hand side 1 has z = g / (1 + cΛ),
-    g = V⁻¹ |D|^½ 1 (:attr:`_Decomposition.unit_modes`). The load integral of p′x is ρ z with
-    ρ = (L p′)_a P (p′ = 0 off the active nodes), so the third order is never formed at the
-    nodes. Per frequency, each order is a column of one or two real matrix products.
+    g = V⁻¹ |D|^½ 1 (:attr:`~viscoforce.experiments._modal.Decomposition.unit_modes`). The load
+    integral of p′x is ρ z with ρ = (L p′)_a P (p′ = 0 off the active nodes), so the third order
+    is never formed at the nodes. Per frequency, each order is a column of one or two real matrix
+    products.
     """
 
     #: p′, p″, p‴ [Pa/m, Pa/m², Pa/m³] at the ordered nodes.
@@ -182,6 +185,7 @@ class _BiasModes:
         return self.load_modes @ z
 
 
+#: The finite-amplitude modes of a static state (at most ``STATE_CACHE_SIZE``).
 _BIAS_MODES = StateCache(STATE_CACHE_SIZE)
 #: Most finite-amplitude results kept, by (state, material, frequencies).
 BIAS_CACHE_SIZE = 256

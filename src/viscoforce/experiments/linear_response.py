@@ -279,7 +279,10 @@ def _require_compliance(compliance: Any) -> NDArray[np.complex128]:
     return c
 
 
+#: The static states of :func:`linearized_state` (at most ``STATE_CACHE_SIZE``).
 _STATES = StateCache(STATE_CACHE_SIZE)
+
+
 def linearized_state(problem: ContactProblem, position: float | None = None,
                      relaxed_modulus: float | None = None, *,
                      load: float | None = None) -> LinearizedState:

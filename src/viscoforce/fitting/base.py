@@ -51,6 +51,8 @@ CURVE_MODELS = ("relaxation", "hertz", "creep", "ting")
 
 #: Largest number of modes tried by ``modes="auto"``.
 MAX_AUTO_MODES = 4
+#: Most relaxation modes of one model (a fit needs several data points per mode).
+MAX_MODES = 12
 
 
 #: Decades beyond the measured window that a relaxation time may reach (its bounds).
@@ -183,7 +185,8 @@ def tau_names(modes: int, *, single: str = "tau") -> list[str]:
     return [single] if modes == 1 and single else [f"tau_{i}" for i in range(1, modes + 1)]
 
 
-def _material_layout(modes: int) -> list[P.Item]:
+def material_layout(modes: int) -> list[P.Item]:
+    """The parameter layout of an n-mode material: the moduli chain, then the times chain."""
     return [P.Chain(tuple(reversed(moduli_names(modes)))), P.Chain(tuple(tau_names(modes)))]
 
 
@@ -195,5 +198,9 @@ def material_from(values: Mapping[str, float], modes: int) -> ViscoelasticMateri
     return PronySeries.from_moduli(moduli, [values[n] for n in tau_names(modes)])
 
 
-#: Most relaxation modes of one model (a fit needs several data points per mode).
-MAX_MODES = 12
+def need(spec: ModelSpec, *names: str) -> list[Any]:
+    """The fixed inputs ``names`` of a model's spec (raise naming those it lacks)."""
+    missing = [n for n in names if spec.fixed.get(n) is None]
+    if missing:
+        raise ParameterError(f"model {spec.name!r} needs {', '.join(missing)}")
+    return [spec.fixed[n] for n in names]

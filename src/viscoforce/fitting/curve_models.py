@@ -20,11 +20,11 @@ from viscoforce.fitting.base import (
     MODULUS_BOUNDS,
     FitModel,
     ModelSpec,
-    _material_layout,
     material_from,
+    material_layout,
+    need,
 )
-from viscoforce.fitting.guesses import _solve_modulus, _spread, _time_window
-from viscoforce.fitting.spectrum_models import _need
+from viscoforce.fitting.guesses import solve_modulus, spread, time_window
 from viscoforce.problem import ContactProblem
 
 
@@ -51,12 +51,12 @@ def _exponential_model(spec: ModelSpec, level: str, step: str) -> FitModel:
         t0 = float(t[crossed[0]] - t[0]) if crossed.size else float(np.ptp(t)) / 3
         tau = max(t0, float(np.ptp(t)) / t.size)
         out = {level: f_inf, **{df: (f_start - f_inf) / modes for df in dfs}}
-        out.update(zip(taus, _spread(tau, modes, _time_window(t)), strict=True))
+        out.update(zip(taus, spread(tau, modes, time_window(t)), strict=True))
         return out
 
     layout: list[P.Item] = [P.Signed(level), *(P.Signed(df) for df in dfs),
                             P.Chain(tuple(taus))]
-    return FitModel(spec, function, layout, "t", guesser, _time_window)
+    return FitModel(spec, function, layout, "t", guesser, time_window)
 
 
 def _relaxation_model(spec: ModelSpec) -> FitModel:
@@ -74,7 +74,7 @@ def _hertz_model(spec: ModelSpec) -> FitModel:
     force at contact) and ``baseline_slope`` s [N/m] (a tilted baseline, kept in contact); the
     tip's ``force_shape`` (:mod:`viscoforce.physics.tips`) gives the indentation law.
     """
-    (tip,) = _need(spec, "tip")
+    (tip,) = need(spec, "tip")
     window = spec.fixed.get("contact_window")
 
     def function(z: np.ndarray, v: Mapping[str, float]) -> np.ndarray:
@@ -311,7 +311,7 @@ class StepResponse:
 
 
 def _step_model(spec: ModelSpec) -> FitModel:
-    (problem, position_trace) = _need(spec, "problem", "position_trace")
+    (problem, position_trace) = need(spec, "problem", "position_trace")
     from viscoforce.experiments.drives import MeasuredTrace
 
     trace_t, trace_h = (np.asarray(a, dtype=float) for a in position_trace)
@@ -333,14 +333,14 @@ def _step_model(spec: ModelSpec) -> FitModel:
             return lambda e: abs(float(problem.load(problem.pressure(
                 equilibrium_gap(problem, position, e).gap))))
 
-        e_inf = _solve_modulus(load(end), max(abs(float(f[-1])), 1e-15), 1e9)
-        e0 = _solve_modulus(load(peak_position), max(abs(float(f[i_peak])), 1e-15), 2 * e_inf)
+        e_inf = solve_modulus(load(end), max(abs(float(f[-1])), 1e-15), 1e9)
+        e0 = solve_modulus(load(peak_position), max(abs(float(f[i_peak])), 1e-15), 2 * e_inf)
         tail = np.abs(f[i_peak:] - f[-1])
         below = np.flatnonzero(tail < tail[0] / math.e)
         tau = float(t[i_peak + below[0]] - t[i_peak]) if below.size else float(np.ptp(t)) / 5
         return {"E_inf": e_inf, "E0": max(e0, 1.05 * e_inf), "tau": max(tau, 1e-9)}
 
-    model = FitModel(spec, response.force, _material_layout(1), "t", guesser, _time_window)
+    model = FitModel(spec, response.force, material_layout(1), "t", guesser, time_window)
     model.response = response  # type: ignore[attr-defined]
     return model
 

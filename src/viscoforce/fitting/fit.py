@@ -30,7 +30,7 @@ This module selects the modes, builds the result dataset and holds the entry poi
 (:mod:`viscoforce.fitting.data`), one least-squares fit (:mod:`viscoforce.fitting.outcome`), the
 warnings of a result (:mod:`viscoforce.fitting.verdict`), the model error of a spectrum fit
 (:mod:`viscoforce.fitting.model_error`), the field's moduli (:mod:`viscoforce.fitting.moduli`)
-and the theory's model choice (:mod:`viscoforce.fitting.choice`).
+and the theory's model choice (:mod:`viscoforce.fitting.auto`).
 """
 
 from __future__ import annotations
@@ -263,7 +263,7 @@ def _fixed_attrs(fixed: Mapping[str, Any]) -> dict[str, Any]:
     return out
 
 
-# ── public entry points ─────────────────────────────────────────────────────────────────────────
+# ── selection of the modes ──────────────────────────────────────────────────────────────────────
 
 def _check_modes(name: str, modes: Any) -> int | str:
     if isinstance(modes, str) and modes == "auto":
@@ -332,6 +332,8 @@ def _share_effective_size(outcomes: list[Outcome]) -> None:
     for o in curve:
         o.n_effective = n_eff
 
+
+# ── public entry points ─────────────────────────────────────────────────────────────────────────
 
 def fit_data(data: FitData, name: str, *, modes: int | str = 1, criterion: str = "bic",
              max_modes: int = MAX_AUTO_MODES, profile: bool | str = "auto",
@@ -440,7 +442,7 @@ def fit_spectrum(spectrum: xr.Dataset, model: str, *, modes: int | str | None = 
             return add_derived_moduli(fit_measured_auto(
                 spectrum, modes="auto" if modes is None else modes, criterion=criterion,
                 weights=weights, profile=profile, **fixed), poisson)
-        from viscoforce.fitting.choice import fit_spectrum_auto  # it fits through this module
+        from viscoforce.fitting.auto import fit_spectrum_auto  # it fits through this module
 
         return add_derived_moduli(fit_spectrum_auto(
             spectrum, modes=1 if modes is None else modes, criterion=criterion,

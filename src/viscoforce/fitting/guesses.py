@@ -2,7 +2,7 @@
 
 Every model's :meth:`~viscoforce.fitting.base.FitModel.guess` starts here: the low- and
 high-frequency levels and the phase peak of a spectrum (:class:`SpectrumFeatures`), the moduli
-whose relaxed and glassy stiffness match them (:func:`_moduli_from_levels`), and the windows a
+whose relaxed and glassy stiffness match them (:func:`moduli_from_levels`), and the windows a
 relaxation time may take over the measured frequencies or times.
 """
 
@@ -40,12 +40,12 @@ class SpectrumFeatures:
         if 0 < i < w.size - 1:  # parabola through the peak in log ω
             x0, x1, x2 = (math.log(v) for v in w[i - 1:i + 2].tolist())
             y0, y1, y2 = phase[i - 1:i + 2].tolist()
-            left, right = (y1 - y0) / (x1 - x0), (y2 - y1) / (x2 - x1)
-            if right < left:  # concave: the vertex is between the outer two points
-                vertex = 0.5 * (x0 + x1) - left * (x2 - x0) / (2.0 * (right - left))
-                peak = min(max(math.exp(vertex), float(w[i - 1])), float(w[i + 1]))
-        return cls(statistics.median(mag[:n_end].tolist()),
-                   statistics.median(mag[-n_end:].tolist()), float(w[0]), float(w[-1]), peak)
+            if x0 < x1 < x2:  # a repeated frequency defines no parabola: the peak point
+                left, right = (y1 - y0) / (x1 - x0), (y2 - y1) / (x2 - x1)
+                if right < left:  # concave: the vertex is between the outer two points
+                    vertex = 0.5 * (x0 + x1) - left * (x2 - x0) / (2.0 * (right - left))
+                    peak = min(max(math.exp(vertex), float(w[i - 1])), float(w[i + 1]))
+        return cls(_median(mag[:n_end]), _median(mag[-n_end:]), float(w[0]), float(w[-1]), peak)
 
     def sls_tau(self) -> float:
         """τ of a one-mode transfer (1 + iωτ)/(a + iωτ b): its phase peaks at ωτ = √(a/b)."""
@@ -53,7 +53,14 @@ class SpectrumFeatures:
         return math.sqrt(ratio) / self.omega_peak
 
 
-def _spread(center: float, modes: int, window: tuple[float, float]) -> list[float]:
+def _median(values: np.ndarray) -> float:
+    """np.median of a few values without its array machinery (NaN in, NaN out, as numpy)."""
+    if not np.isfinite(values).all():
+        return float(np.median(values))
+    return statistics.median(values.tolist())
+
+
+def spread(center: float, modes: int, window: tuple[float, float]) -> list[float]:
     """``modes`` values log-spaced around ``center`` within ``window`` (a decade apart at most)."""
     if modes == 1:
         return [center]
@@ -63,26 +70,28 @@ def _spread(center: float, modes: int, window: tuple[float, float]) -> list[floa
     return [10 ** (c + step * (i - (modes - 1) / 2)) for i in range(modes)]
 
 
-def _geometric(high: float, low: float, modes: int) -> list[float]:
+def geometric(high: float, low: float, modes: int) -> list[float]:
     """E0 … E_inf: ``modes`` + 1 values from ``high`` down to ``low``, geometric."""
     high = max(high, low * (1 + 1e-3))
     return [high * (low / high) ** (i / modes) for i in range(modes + 1)]
 
 
-def _material_guess(e_high: float, e_low: float, tau: float, modes: int,
-                    window: tuple[float, float]) -> dict[str, float]:
-    out = dict(zip(moduli_names(modes), _geometric(e_high, e_low, modes), strict=True))
-    out.update(zip(tau_names(modes), _spread(tau, modes, window), strict=True))
+def material_guess(e_high: float, e_low: float, tau: float, modes: int,
+                   window: tuple[float, float]) -> dict[str, float]:
+    """Moduli geometric from ``e_high`` down to ``e_low`` and times spread around ``tau``."""
+    out = dict(zip(moduli_names(modes), geometric(e_high, e_low, modes), strict=True))
+    out.update(zip(tau_names(modes), spread(tau, modes, window), strict=True))
     return out
 
 
-def _omega_window(omega: np.ndarray) -> tuple[float, float]:
+def omega_window(omega: np.ndarray) -> tuple[float, float]:
     """Bounds of a creep or relaxation time measured over ``omega`` [s]."""
     margin = 10 ** TAU_MARGIN_DECADES
     return 1.0 / (np.max(omega) * margin), margin / np.min(omega)
 
 
-def _time_window(t: np.ndarray) -> tuple[float, float]:
+def time_window(t: np.ndarray) -> tuple[float, float]:
+    """Bounds of a relaxation time measured at times ``t`` [s]: finest step to whole span."""
     steps = np.diff(np.sort(t))
     dt = float(np.min(steps[steps > 0])) if np.any(steps > 0) else 1e-6
     span = float(np.ptp(t)) or dt
@@ -90,7 +99,7 @@ def _time_window(t: np.ndarray) -> tuple[float, float]:
     return dt / margin, span * margin
 
 
-def _solve_modulus(stiffness: Callable[[float], float], target: float, start: float) -> float:
+def solve_modulus(stiffness: Callable[[float], float], target: float, start: float) -> float:
     """E with stiffness(E) = target by a secant in log–log (stiffness grows like a power of E)."""
     lo_bound, hi_bound = MODULUS_BOUNDS
     e1, k1 = start, stiffness(start)
@@ -108,7 +117,7 @@ def _solve_modulus(stiffness: Callable[[float], float], target: float, start: fl
     return e2
 
 
-def _moduli_from_levels(function: Callable[[np.ndarray, dict[str, float]], np.ndarray],
+def moduli_from_levels(function: Callable[[np.ndarray, dict[str, float]], np.ndarray],
                         feats: SpectrumFeatures, start: float) -> tuple[float, float]:
     """E_inf and E0 whose relaxed and glassy |k*| match the spectrum's low and high levels."""
     slow, fast = 1e-4 / feats.omega_high, 1e4 / feats.omega_low
@@ -117,11 +126,11 @@ def _moduli_from_levels(function: Callable[[np.ndarray, dict[str, float]], np.nd
         return float(abs(function(np.array([feats.omega_low]), {
             "E_inf": e, "E0": 1.001 * e, "tau": slow})[0]))
 
-    e_inf = _solve_modulus(relaxed, feats.k_low, start)
+    e_inf = solve_modulus(relaxed, feats.k_low, start)
 
     def glassy(e: float) -> float:
         return float(abs(function(np.array([feats.omega_high]), {
             "E_inf": e_inf, "E0": max(e, 1.0001 * e_inf), "tau": fast})[0]))
 
-    e0 = _solve_modulus(glassy, max(feats.k_high, feats.k_low * 1.01), 2 * e_inf)
+    e0 = solve_modulus(glassy, max(feats.k_high, feats.k_low * 1.01), 2 * e_inf)
     return e_inf, max(e0, 1.05 * e_inf)

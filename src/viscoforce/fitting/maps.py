@@ -58,7 +58,7 @@ from viscoforce.fitting.map_cost import (
     start_method,
 )
 from viscoforce.fitting.moduli import add_derived_moduli
-from viscoforce.fitting.pixels import _assemble, fit_block, pixel_data
+from viscoforce.fitting.pixels import assemble_map, fit_block, pixel_data
 
 #: Seconds to wait for a scheduler before giving up.
 CONNECT_TIMEOUT = 10.0
@@ -247,7 +247,7 @@ def fit_map(ds: xr.Dataset, model: str, *, modes: int | str = 1, criterion: str 
     results = [r if r is not None else {"success": False, "message": "lost"}
                for r in run.results]
     out = add_derived_moduli(
-        _assemble(results, dims, layout, model, criterion if modes == "auto" else None, n,
+        assemble_map(results, dims, layout, model, criterion if modes == "auto" else None, n,
                   profile=profile, omega=run.omega), poisson)
     out.attrs.update(execution)
     if model == "ting" and fixed.get("material") == "structural":

@@ -19,7 +19,7 @@ import xarray as xr
 from viscoforce.choice import WARN_ERROR, hertz_error
 from viscoforce.exceptions import ApproximationWarning
 from viscoforce.fitting.base import material_from
-from viscoforce.fitting.verdict import _scalar
+from viscoforce.fitting.verdict import scalar_value
 from viscoforce.svda import svda_error_estimate, svda_stiffness_kernel
 
 #: What the validity of each model rests on when no estimate is made (``attrs["validity"]``).
@@ -62,7 +62,7 @@ def svda_bias(ds: xr.Dataset, spectrum: xr.Dataset, position: float, radius: flo
     biases the moduli by ≈ δ / s, s = |∂ln k*/∂ln E| (E0, E_inf scaled together), which is small
     before contact: the SVDA error is O(κ|u0|) and so is s.
     """
-    values = {n: _scalar(ds, n) for n in ("E0", "E_inf", "tau")}
+    values = {n: scalar_value(ds, n) for n in ("E0", "E_inf", "tau")}
     error = float(svda_error_estimate(position, values["E_inf"], radius, P, debye_length))
     omega = np.asarray(spectrum.variables["omega"].values, dtype=float)
     kernel = (position, values["E0"], values["E_inf"], values["tau"], radius, P)
@@ -89,7 +89,7 @@ def contact_bias(ds: xr.Dataset, fixed: Mapping[str, Any], omega: np.ndarray,
     if kind not in ("sls", "prony"):
         return math.nan, (f"not estimated: the Hertz-contact estimate needs a relaxed modulus, "
                           f"which material {kind} does not have")
-    values = {str(n): _scalar(ds, n) for n in ds.variables["param_i"].values}
+    values = {str(n): scalar_value(ds, n) for n in ds.variables["param_i"].values}
     return hertz_error(material_from(values, modes), float(fixed["indentation"]), decay_length,
                        float(np.max(omega)))
 
@@ -111,4 +111,3 @@ def _warn_model_bias(ds: xr.Dataset, model: str, bias: float, reason: str) -> No
         warnings.warn(
             f"{lead} {100 * bias:.2g} % off as a model of these data: the fitted moduli are "
             f"biased by about that much ({reason}); {fix}", ApproximationWarning, stacklevel=3)
-

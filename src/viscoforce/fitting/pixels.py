@@ -2,7 +2,7 @@
 
 :func:`pixel_data` turns a map (a spectrum with extra dims, or a curves dataset) into one
 :class:`~viscoforce.fitting.data.FitData` per pixel, or the reason it has none;
-:func:`fit_block` fits a block of them (in this process or in a worker); :func:`_assemble`
+:func:`fit_block` fits a block of them (in this process or in a worker); :func:`assemble_map`
 makes the map's dataset of their results, each pixel with its ``quality`` code
 (:data:`MAP_QUALITY`, the rule in :data:`QUALITY_RULE`); :func:`map_summary` summarises the good
 pixels. Where the blocks are fitted is :mod:`viscoforce.fitting.maps`' business.
@@ -207,9 +207,13 @@ def _identifiability(result: dict[str, Any]) -> dict[str, int]:
                                  [n for n in names if n in bound])
 
 
-def _assemble(results: list[dict[str, Any]], dims: tuple[str, ...], layout: dict[str, Any],
-              model: str, criterion: str | None, n: int, *,
-              profile: bool = False, omega: np.ndarray | None = None) -> xr.Dataset:
+def assemble_map(results: list[dict[str, Any]], dims: tuple[str, ...], layout: dict[str, Any],
+                 model: str, criterion: str | None, n: int, *,
+                 profile: bool = False, omega: np.ndarray | None = None) -> xr.Dataset:
+    """The map's dataset of the pixels' ``results`` (:func:`fit_block`) over ``dims``.
+
+    Raises :class:`~viscoforce.exceptions.ParameterError` when no pixel could be fitted.
+    """
     names: list[str] = []
     for r in results:
         for name in r.get("names", ()):

@@ -23,28 +23,22 @@ from viscoforce.fitting.base import (
     REFERENCE_FREQUENCY,
     FitModel,
     ModelSpec,
-    _material_layout,
     material_from,
+    material_layout,
     moduli_names,
+    need,
     tau_names,
 )
 from viscoforce.fitting.guesses import (
     SpectrumFeatures,
-    _geometric,
-    _material_guess,
-    _moduli_from_levels,
-    _omega_window,
-    _spread,
+    geometric,
+    material_guess,
+    moduli_from_levels,
+    omega_window,
+    spread,
 )
 from viscoforce.physics.materials import ViscoelasticMaterial
 from viscoforce.problem import ContactProblem
-
-
-def _need(spec: ModelSpec, *names: str) -> list[Any]:
-    missing = [n for n in names if spec.fixed.get(n) is None]
-    if missing:
-        raise ParameterError(f"model {spec.name!r} needs {', '.join(missing)}")
-    return [spec.fixed[n] for n in names]
 
 
 def _position_choice(spec: ModelSpec) -> tuple[float | None, float | None]:
@@ -74,7 +68,7 @@ def svda_position(mean_force: float, E_inf: float, radius: float, P: float,  # n
 
 
 def _svda_model(spec: ModelSpec) -> FitModel:
-    radius, p_amp, debye = _need(spec, "radius", "P", "debye_length")
+    radius, p_amp, debye = need(spec, "radius", "P", "debye_length")
     position, mean_force = _position_choice(spec)
 
     def mean_position(v: Mapping[str, float]) -> float:
@@ -93,11 +87,11 @@ def _svda_model(spec: ModelSpec) -> FitModel:
 
     def guesser(k: np.ndarray, omega: np.ndarray) -> dict[str, float]:
         feats = SpectrumFeatures.of(k, omega)
-        e_inf, e0 = _moduli_from_levels(function, feats, 1e9)
+        e_inf, e0 = moduli_from_levels(function, feats, 1e9)
         check_svda_precontact(mean_position({"E_inf": e_inf}), e_inf, radius, p_amp, debye)
         return {"E_inf": e_inf, "E0": e0, "tau": feats.sls_tau()}
 
-    model = FitModel(spec, function, _material_layout(1), "omega", guesser, _omega_window)
+    model = FitModel(spec, function, material_layout(1), "omega", guesser, omega_window)
     model.mean_position = mean_position  # type: ignore[attr-defined]
     return model
 
@@ -117,7 +111,7 @@ def check_svda_precontact(position: float, E_inf: float, radius: float, P: float
 
 
 def _exact_model(spec: ModelSpec) -> FitModel:
-    (problem,) = _need(spec, "problem")
+    (problem,) = need(spec, "problem")
     position, mean_force = _position_choice(spec)
     modes = spec.modes
 
@@ -129,15 +123,15 @@ def _exact_model(spec: ModelSpec) -> FitModel:
 
     def guesser(k: np.ndarray, omega: np.ndarray) -> dict[str, float]:
         feats = SpectrumFeatures.of(k, omega)
-        e_inf, e0 = _moduli_from_levels(function, feats, problem.material.relaxed_modulus)
-        return _material_guess(e0, e_inf, feats.sls_tau(), modes, _omega_window(omega))
+        e_inf, e0 = moduli_from_levels(function, feats, problem.material.relaxed_modulus)
+        return material_guess(e0, e_inf, feats.sls_tau(), modes, omega_window(omega))
 
-    return FitModel(spec, function, _material_layout(modes), "omega", guesser, _omega_window)
+    return FitModel(spec, function, material_layout(modes), "omega", guesser, omega_window)
 
 
 def _expand_one_mode(v: Mapping[str, float], modes: int) -> dict[str, float]:
     """An n-mode parameter set equivalent to the one-mode ``v`` (all modes at ``tau``)."""
-    moduli = _geometric(v["E0"], v["E_inf"], modes)
+    moduli = geometric(v["E0"], v["E_inf"], modes)
     out = dict(zip(moduli_names(modes), moduli, strict=True))
     out.update({n: v["tau"] * (1 + 1e-9 * i) for i, n in enumerate(tau_names(modes))})
     return out
@@ -155,7 +149,7 @@ def exact_stiffness(problem: ContactProblem, position: float | None, mean_force:
 
 
 def _contact_model(spec: ModelSpec) -> FitModel:
-    (depth,) = _need(spec, "indentation")
+    (depth,) = need(spec, "indentation")
     tip = contact_tip(spec.fixed.get("radius"), spec.fixed.get("tip"))
     drag = float(spec.fixed.get("drag") or 0.0)
     kind = spec.fixed.get("material", "sls")
@@ -185,7 +179,7 @@ def _contact_model(spec: ModelSpec) -> FitModel:
         modulus = (k - 1j * omega * drag) / root
         return _contact_guess(kind, modes, newtonian, f_ref, modulus, omega)
 
-    window = _omega_window if kind in ("sls", "prony") else None
+    window = omega_window if kind in ("sls", "prony") else None
     fixed = {**spec.fixed, "reference_frequency": f_ref} if kind == "structural" else dict(
         spec.fixed)
     fixed["tip"] = tip
@@ -252,7 +246,7 @@ def _contact_layout(kind: str, modes: int, newtonian: bool) -> list[P.Item]:
     if kind == "power-law":
         return [P.Chain(("E0",)), P.Chain(("C1",)), P.Bounded("m", *EXPONENT_BOUNDS),
                 *([P.Chain(("mu",))] if newtonian else [])]
-    return _material_layout(modes)
+    return material_layout(modes)
 
 
 def _contact_guess(kind: str, modes: int, newtonian: bool, f_ref: float, modulus: np.ndarray,
@@ -270,7 +264,7 @@ def _contact_guess(kind: str, modes: int, newtonian: bool, f_ref: float, modulus
             out["mu"] = _viscosity_guess(modulus, omega)
         return out
     e_inf, e0 = feats.k_low, max(feats.k_high, 1.05 * feats.k_low)
-    return _material_guess(e0, e_inf, feats.sls_tau(), modes, _omega_window(omega))
+    return material_guess(e0, e_inf, feats.sls_tau(), modes, omega_window(omega))
 
 
 def structural_guess(modulus: np.ndarray, omega: np.ndarray, reference_frequency: float
@@ -331,9 +325,9 @@ def _prony_model(spec: ModelSpec) -> FitModel:
         total = max(feats.k_high - feats.k_low, 0.05 * feats.k_low)
         tau = 1.0 / (feats.omega_peak * math.sqrt(max(feats.k_high / feats.k_low, 1.0001)))
         out = {"k_inf": k_inf, **{dk: total / modes for dk in dks}}
-        out.update(zip(taus, _spread(tau, modes, _omega_window(omega)), strict=True))
+        out.update(zip(taus, spread(tau, modes, omega_window(omega)), strict=True))
         return out
 
     layout: list[P.Item] = [P.Chain(("k_inf",)), *(P.Chain((dk,)) for dk in dks),
                             P.Chain(tuple(taus))]
-    return FitModel(spec, function, layout, "omega", guesser, _omega_window)
+    return FitModel(spec, function, layout, "omega", guesser, omega_window)

@@ -62,7 +62,7 @@ from viscoforce.fitting.base import (
     REFERENCE_FREQUENCY,
     FitModel,
     ModelSpec,
-    _material_layout,
+    material_layout,
     moduli_names,
     tau_names,
 )
@@ -70,7 +70,7 @@ from viscoforce.fitting.curve_models import baseline_windows, contact_window, he
 from viscoforce.fitting.curves import _segment_types, _source, segment_runs
 from viscoforce.fitting.data import FitData
 from viscoforce.fitting.fit import CRITERIA, _share_effective_size, result_dataset
-from viscoforce.fitting.guesses import _material_guess, _time_window
+from viscoforce.fitting.guesses import material_guess, time_window
 from viscoforce.fitting.moduli import add_derived_moduli
 from viscoforce.fitting.outcome import AUTOCORRELATED_MODELS, Outcome, fit_once, residual_lag1
 from viscoforce.fitting.report import carry
@@ -412,7 +412,7 @@ def ting_model(spec: ModelSpec) -> FitModel:
     if not fit_drag:
         stored["drag"] = drag
     return FitModel(ModelSpec(spec.name, modes, stored), function, layout, "t", guesser,
-                    tau_window=_time_window if material != "structural" else None,
+                    tau_window=time_window if material != "structural" else None,
                     bounded_windows=windows)
 
 
@@ -420,7 +420,7 @@ def _layout(material: str, modes: int, newtonian: bool) -> list[P.Item]:
     if material == "structural":
         return [P.Chain(("E_ref",), MODULUS_BOUNDS), P.Bounded("alpha", *EXPONENT_BOUNDS),
                 *([P.Chain(("mu",))] if newtonian else [])]
-    return _material_layout(modes)
+    return material_layout(modes)
 
 
 # ── the guess ───────────────────────────────────────────────────────────────────────────────
@@ -474,8 +474,8 @@ def _guess(f: np.ndarray, t: np.ndarray, z: np.ndarray, velocity: np.ndarray, ti
         return out
     e_inf = _clip_modulus(amplitude)
     e0 = _clip_modulus(amplitude * shape["E0"])
-    out.update(_material_guess(e0, e_inf, shape["tau"], modes,
-                               _time_window(t)) if modes > 1 else
+    out.update(material_guess(e0, e_inf, shape["tau"], modes,
+                               time_window(t)) if modes > 1 else
                {"E0": e0, "E_inf": e_inf, "tau": shape["tau"]})
     return out
 

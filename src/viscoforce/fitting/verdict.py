@@ -21,7 +21,7 @@ PVALUE_WARN = 1e-3
 LAG1_WARN = 0.5
 
 
-def _scalar(ds: xr.Dataset, name: Any) -> float:
+def scalar_value(ds: xr.Dataset, name: Any) -> float:
     """A scalar variable of ``ds`` as a float (read from the Variable: no DataArray is built)."""
     return float(ds.variables[str(name)].values)
 
@@ -38,9 +38,9 @@ def bound_text(ds: xr.Dataset, name: str) -> str | None:
     code = int(codes.get(name, 0))
     unit = str(ds[name].attrs.get("units", ""))
     if code == 1 and f"{name}_lower" in ds.variables:
-        return f"{name} > {_scalar(ds, f'{name}_lower'):.3g} {unit}".rstrip()
+        return f"{name} > {scalar_value(ds, f'{name}_lower'):.3g} {unit}".rstrip()
     if code == 2 and f"{name}_upper" in ds.variables:
-        return f"{name} < {_scalar(ds, f'{name}_upper'):.3g} {unit}".rstrip()
+        return f"{name} < {scalar_value(ds, f'{name}_upper'):.3g} {unit}".rstrip()
     if code == 0:
         return None
     return f"{name} not determined"
@@ -60,12 +60,12 @@ def warn_unidentified(ds: xr.Dataset, *, stacklevel: int = 3) -> list[str]:
         bad = [n for n, c in zip(names, codes, strict=True) if int(c) != 0]
     else:
         bad = [n for n in names
-               if not np.isfinite(_scalar(ds, f"{n}_stderr")) or
-               abs(_scalar(ds, f"{n}_stderr")) > abs(_scalar(ds, n))]
+               if not np.isfinite(scalar_value(ds, f"{n}_stderr")) or
+               abs(scalar_value(ds, f"{n}_stderr")) > abs(scalar_value(ds, n))]
     if bad:
         shown = "; ".join(
-            f"{bound_text(ds, n) or n} (fitted {_scalar(ds, n):.4g} ± "
-            f"{_scalar(ds, f'{n}_stderr'):.3g})" for n in bad)
+            f"{bound_text(ds, n) or n} (fitted {scalar_value(ds, n):.4g} ± "
+            f"{scalar_value(ds, f'{n}_stderr'):.3g})" for n in bad)
         warnings.warn(
             f"the data do not determine {', '.join(bad)}: {shown}; report the bound, fix the "
             "parameter, fit fewer parameters, or measure where the spectrum depends on it",
@@ -75,12 +75,12 @@ def warn_unidentified(ds: xr.Dataset, *, stacklevel: int = 3) -> list[str]:
 
 def warn_goodness(ds: xr.Dataset, *, stacklevel: int = 3) -> bool:
     """Warn (GoodnessOfFitWarning) when the χ² p-value is below :data:`PVALUE_WARN`."""
-    p = _scalar(ds, "chi2_pvalue") if "chi2_pvalue" in ds.variables else math.nan
+    p = scalar_value(ds, "chi2_pvalue") if "chi2_pvalue" in ds.variables else math.nan
     if math.isfinite(p) and p < PVALUE_WARN:
         warnings.warn(
             f"the model does not describe these data: chi-square {ds.attrs.get('chisqr', math.nan):.4g}"
             f"{_calibrated_text(ds)} for {ds.attrs.get('dof', '?')} degrees of freedom (redchi "
-            f"{_scalar(ds, 'redchi'):.3g}), p = {p:.2g} < {PVALUE_WARN:g}; its stderr assume it "
+            f"{scalar_value(ds, 'redchi'):.3g}), p = {p:.2g} < {PVALUE_WARN:g}; its stderr assume it "
             "does. Try another model or material (--model auto), or check the data's stderr",
             GoodnessOfFitWarning, stacklevel=stacklevel)
         return True

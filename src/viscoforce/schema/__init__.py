@@ -41,7 +41,14 @@ Pure: imports only numpy, xarray and :mod:`viscoforce.exceptions`.
 from __future__ import annotations
 
 from viscoforce.exceptions import SchemaError
-from viscoforce.schema._core import EXTRA, VariableSpec, clean_attrs, plain_variable
+from viscoforce.schema._core import (
+    EXTRA,
+    VariableSpec,
+    clean_attrs,
+    flag_attrs,
+    flag_meanings,
+    plain_variable,
+)
 from viscoforce.schema.curves import (
     CURVES_VARIABLES,
     SEGMENT_NAMES,
@@ -81,7 +88,8 @@ from viscoforce.schema.trajectory import (
 )
 
 __all__ = [
-    "SchemaError", "VariableSpec", "EXTRA", "clean_attrs", "plain_variable",
+    "SchemaError", "VariableSpec", "EXTRA", "clean_attrs", "plain_variable", "flag_attrs",
+    "flag_meanings",
     "EQUILIBRIUM_VARIABLES", "SIGN_CONVENTION", "make_equilibrium", "validate_equilibrium",
     "TRAJECTORY_VARIABLES", "PROFILE_VARIABLES", "make_trajectory", "validate_trajectory",
     "SPECTRUM_VARIABLES", "PHASE_CONVENTION", "QUALITY_FLAGS", "QUALITY_COMMENT", "make_spectrum",

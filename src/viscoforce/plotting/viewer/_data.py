@@ -19,7 +19,7 @@ import xarray as xr
 from viscoforce._validation import describe_value
 from viscoforce.exceptions import ParameterError, SchemaError
 from viscoforce.plotting.maps import _DIMENSIONS, _bad_pixels, _rows
-from viscoforce.schema._core import flag_meanings
+from viscoforce.schema import flag_meanings
 from viscoforce.units import format_quantity, unit_factor
 
 __all__ = ["MapView", "best_fit_curves", "map_view", "pixel_table"]

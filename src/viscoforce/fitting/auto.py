@@ -31,13 +31,13 @@ from viscoforce.fitting.fit import fit_data
 from viscoforce.fitting.model_error import svda_bias, validity_note
 from viscoforce.fitting.models import check_fixed
 from viscoforce.fitting.spectrum_models import svda_position
-from viscoforce.fitting.verdict import _scalar, warn_fit
+from viscoforce.fitting.verdict import scalar_value, warn_fit
 from viscoforce.problem import ContactProblem
 
 
 def _sls_of(ds: xr.Dataset):
     """The standard linear solid of a one-mode fit result."""
-    return material_from({n: _scalar(ds, n) for n in ("E0", "E_inf", "tau")}, 1)
+    return material_from({n: scalar_value(ds, n) for n in ("E0", "E_inf", "tau")}, 1)
 
 
 #: The models ``model="auto"`` chooses from, in order of cost.
