@@ -25,7 +25,7 @@ from viscoforce.fitting.fit import local_identifiability, select, summary
 from viscoforce.fitting.identify import IDENTIFIABILITY
 from viscoforce.fitting.report import fit_report
 from viscoforce.fitting.verdict import PVALUE_WARN
-from viscoforce.schema import validate_fit_result, validate_spectrum
+from viscoforce.schema import flag_attrs, validate_fit_result, validate_spectrum
 from viscoforce.schema.fit import SUCCESS_FLAGS, parameter_units
 
 #: Per-pixel ``quality`` codes of a map (CF ``flag_values`` → ``flag_meanings``).
@@ -266,16 +266,12 @@ def assemble_map(results: list[dict[str, Any]], dims: tuple[str, ...], layout: d
     data["correlation"] = ((*dims, "param_i", "param_j"), corr.reshape((*shape, m, m)),
                            {"units": "1", "long_name": "correlation of the fitted parameters"})
     data["success"] = (dims, success.reshape(shape), {
-        "long_name": "fit converged", "flag_values": np.array(list(SUCCESS_FLAGS), dtype=np.int8),
-        "flag_meanings": " ".join(SUCCESS_FLAGS.values())})
+        "long_name": "fit converged", **flag_attrs(SUCCESS_FLAGS)})
     data["quality"] = (dims, quality.reshape(shape), {
         "long_name": "quality of the pixel's fit", "comment": QUALITY_RULE,
-        "flag_values": np.array(list(MAP_QUALITY), dtype=np.int8),
-        "flag_meanings": " ".join(MAP_QUALITY.values())})
+        **flag_attrs(MAP_QUALITY)})
     data["identifiability"] = ((*dims, "param_i"), ident.reshape((*shape, m)), {
-        "long_name": "identifiability of the fitted parameter",
-        "flag_values": np.array(list(IDENTIFIABILITY), dtype=np.int8),
-        "flag_meanings": " ".join(IDENTIFIABILITY.values())})
+        "long_name": "identifiability of the fitted parameter", **flag_attrs(IDENTIFIABILITY)})
     if any("report" in r for r in results):
         data["fit_report"] = (dims, np.array([r.get("report", "no fit") for r in results],
                                              dtype=object).reshape(shape),
