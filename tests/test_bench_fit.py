@@ -77,7 +77,8 @@ def test_quick_run_writes_documented_files(quick):
     assert {p["case"] for p in report["profiles"]} == {"svda", "exact1_2nm", "exact2_2nm"}
     for p in report["profiles"]:
         assert PROFILE_KEYS <= set(p)
-        assert p["evaluations"] > p["guess_evaluations"] > 0
+        # the svda guess inverts its closed form (no evaluation); the exact one solves for them
+        assert p["evaluations"] > p["guess_evaluations"] >= (p["case"] != "svda")
         # the exact model decomposes one static state per E_inf tried; svda never
         assert (p["state_builds"] > 0) == p["case"].startswith("exact")
         assert (out / f"fit_profile_{p['case']}.txt").stat().st_size > 0

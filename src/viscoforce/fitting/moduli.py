@@ -70,6 +70,7 @@ def derived_variables(params: Mapping[str, tuple[Any, Any]], nu: float
     from viscoforce.schema.fit import parameter_units
 
     young_from_paper(1.0, nu)  # validates ν (the message names the range)
+    nu = float(nu)
     out = {}
     for name, pair in params.items():
         if not PAPER_CONVENTION.fullmatch(name):
@@ -80,9 +81,16 @@ def derived_variables(params: Mapping[str, tuple[Any, Any]], nu: float
         kind = "viscosity" if name == "mu" else "modulus"
         converted = {}
         for tail, source in zip(("", "_stderr"), pair, strict=True):
+            if source is None or isinstance(source, float):  # one fit: arithmetic
+                value = math.nan if source is None else source
+                if math.isinf(value) or value < 0:
+                    young_from_paper(value, nu)  # raises (the message says how)
+                young = value * (1.0 - nu * nu) / 2.0  # the same operations, in that order
+                converted[tail] = (), {"young": young, "shear": young / (2.0 * (1.0 + nu))}
+                continue
             dims = source.dims if isinstance(source, xr.Variable) else ()
-            values = np.asarray(source.values if isinstance(source, xr.Variable) else (
-                math.nan if source is None else source), dtype=float)
+            values = np.asarray(source.values if isinstance(source, xr.Variable) else source,
+                                dtype=float)
             young = young_from_paper(values, nu)  # checks the values (the message says how)
             converted[tail] = dims, {"young": young, "shear": shear_from_young(young, nu)}
         for suffix, what in (("young", "Young's"), ("shear", "shear")):

@@ -67,6 +67,45 @@ def svda_position(mean_force: float, E_inf: float, radius: float, P: float,  # n
     return gap + u0
 
 
+def svda_moduli_from_levels(k_relaxed: float, k_glassy: float, radius: float, P: float,  # noqa: N803
+                            debye_length: float, *, position: float | None = None,
+                            mean_force: float | None = None) -> tuple[float, float]:
+    """E_inf and E0 [Pa] whose SVDA stiffness is ``k_relaxed`` at ω = 0 and ``k_glassy`` as ω → ∞.
+
+    The closed forms of :func:`viscoforce.svda.svda_complex_stiffness` inverted: k*(0) =
+    F̄κ/(1 + s) and k*(∞) = F̄κ/(1 + c), with s = −κu0 = W0(z) the relaxed deformation in decay
+    lengths, c = s E_inf/E0 and the centre gap g = h̄0 + s/κ. At a fixed ``position`` F̄κ =
+    B e^{−s}, B = 2πRP e^{−κh̄0} (the rigid stiffness), so (1 + s) e^{1 + s} = e B/k*(0); at a
+    fixed ``mean_force`` 1 + s = F̄κ/k*(0). Then E_inf = √(8πRκ) P e^{−κg}/s (Eq. 18) and
+    E0 = s E_inf/c, c = F̄κ/k*(∞) − 1.
+
+    A level at or above the rigid stiffness has no soft solution: that modulus is the top of the
+    guess window, as are moduli beyond it; E0 is at least 1.05 E_inf. Both lie in
+    [10 Pa, 1e12 Pa] (a decade inside :data:`~viscoforce.fitting.base.MODULUS_BOUNDS`). Used for
+    the svda model's starting values (one evaluation in place of a secant search).
+    """
+    from viscoforce.svda import _omega_log_w
+
+    lo, hi = MODULUS_BOUNDS[0] * 10, MODULUS_BOUNDS[1] / 10
+    kappa = 1.0 / debye_length
+    scale = 2.0 * math.pi * radius * P  # F̄κ = scale e^{−κg}
+    if position is not None:
+        log_arg = 1.0 + math.log(scale) - kappa * position - math.log(k_relaxed)
+        s = float(_omega_log_w(np.array([max(log_arg, 1.0)]))[0]) - 1.0
+        force_kappa = scale * math.exp(-kappa * position - s)
+    else:
+        force_kappa = mean_force * kappa
+        s = max(force_kappa / k_relaxed - 1.0, 0.0)
+    if not s > 0.0:
+        return hi, hi
+    # E_inf s = √(8πRκ) P e^{−κg} = √(8πRκ) F̄κ/(2πR) (the gap's exponential from F̄κ)
+    e_inf = math.sqrt(8.0 * math.pi * radius * kappa) * force_kappa / (2.0 * math.pi * radius) / s
+    e_inf = min(max(e_inf, lo), hi)
+    c = force_kappa / k_glassy - 1.0
+    e0 = s * e_inf / c if c > 0.0 else hi
+    return e_inf, max(min(max(e0, lo), hi), 1.05 * e_inf)
+
+
 def _svda_model(spec: ModelSpec) -> FitModel:
     radius, p_amp, debye = need(spec, "radius", "P", "debye_length")
     position, mean_force = _position_choice(spec)
@@ -87,7 +126,9 @@ def _svda_model(spec: ModelSpec) -> FitModel:
 
     def guesser(k: np.ndarray, omega: np.ndarray) -> dict[str, float]:
         feats = SpectrumFeatures.of(k, omega)
-        e_inf, e0 = moduli_from_levels(function, feats, 1e9)
+        e_inf, e0 = svda_moduli_from_levels(feats.k_low, max(feats.k_high, 1.01 * feats.k_low),
+                                            radius, p_amp, debye, position=position,
+                                            mean_force=mean_force)
         check_svda_precontact(mean_position({"E_inf": e_inf}), e_inf, radius, p_amp, debye)
         return {"E_inf": e_inf, "E0": e0, "tau": feats.sls_tau()}
 

@@ -424,9 +424,12 @@ def assemble(data_vars: Mapping[str, Any], coords: Mapping[str, Any] | None = No
     for name in coord_names:
         var = variables[name]
         if var.dims == (name,):
-            index = (_text_index(name, tuple(var.values.tolist()), var.dtype.str)
-                     if var.dtype.kind == "U" and var.size <= TEXT_INDEX_CACHE_LABELS else
-                     PandasIndex.from_variables({name: var}, options={}))
+            if var.dtype.kind == "U" and var.size <= TEXT_INDEX_CACHE_LABELS:
+                index = _text_index(name, tuple(var.values.tolist()), var.dtype.str)
+            elif var.dtype == np.float64 and type(var.data) is np.ndarray:
+                index = _float_index(name, var.data)
+            else:
+                index = PandasIndex.from_variables({name: var}, options={})
             variables.update(index.create_variables({name: var}))
             indexes[name] = index
     try:
@@ -442,6 +445,24 @@ def _public_dataset(data_vars: Mapping[str, Any], coords: Mapping[str, Any],
         return xr.Dataset(dict(data_vars), coords=coords, attrs=dict(attrs or {}))
     except (TypeError, ValueError) as exc:
         raise SchemaError(f"dataset variables disagree: {exc}") from None
+
+
+def _float_index(dim: str, values: np.ndarray) -> PandasIndex:
+    """The pandas index of a float64 coordinate (a best-fit curve's ω), as ``from_variables``.
+
+    The same index (a float64 ``pd.Index`` named ``dim``, the coordinate's dtype) without the
+    public constructor's casts, which concern datetimes, text and extension arrays only: a
+    4th of a small fit's dataset (issue 22). ``tests/test_schema_assemble.py`` compares both.
+    """
+    return PandasIndex(_pandas_index_type()(values, copy=True, name=dim), dim, values.dtype,
+                       fastpath=True)
+
+
+@functools.cache
+def _pandas_index_type() -> type:
+    """pandas' ``Index``, as xarray's own indexes hold it (the schema imports xarray only)."""
+    probe = xr.Variable(("x",), np.zeros(1))
+    return type(PandasIndex.from_variables({"x": probe}, options={}).index)
 
 
 #: Longest text coordinate whose pandas index :func:`assemble` keeps for reuse (the parameter
