@@ -65,3 +65,17 @@ def test_the_model_starts_at_the_noise_free_truth():
     guess = model.guess(model.raw(omega, truth), omega)
     for name in ("E0", "E_inf"):
         assert guess[name].value == pytest.approx(truth[name], rel=1e-4)
+
+
+@pytest.mark.parametrize("position", [-50e-9, -2e-9, 0.0, 2e-9, 20e-9, -1e-6])
+@pytest.mark.parametrize("modulus", [1e3, 1e9, 1e12])
+def test_the_unchecked_deformation_is_the_checked_one(position, modulus):
+    """The fit's checks (pre-contact, model error) use the kernel; its oracle is the public form.
+
+    −1 µm at 1 kPa puts log z beyond exp's range: the asymptotic branch.
+    """
+    from viscoforce.svda import svda_deformation_kernel, svda_static_deformation
+
+    want = float(svda_static_deformation(position, modulus, R, P, DEBYE))
+    got = svda_deformation_kernel(position, modulus, R, P, 1.0 / DEBYE)
+    assert got == pytest.approx(want, rel=1e-13)

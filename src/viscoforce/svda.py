@@ -466,6 +466,22 @@ def svda_harmonic_response(omega: ArrayLike, position: float, eta: float, E0: fl
     return response
 
 
+def svda_deformation_kernel(position: float, E: float, radius: float, P: float,  # noqa: N803
+                            kappa: float) -> float:
+    """:func:`svda_static_deformation` u0 [m] of one position, without input checks (inner loops).
+
+    u0 = −W0(z)/κ, log z = ½ log(8πRκ) + log(P/E) − κh0, for a repulsion; the caller guarantees
+    R, P, κ, E > 0 and a finite position.
+    """
+    log_z = (0.5 * (math.log(8.0 * math.pi) + math.log(radius) + math.log(kappa))
+             + math.log(P) - math.log(E) - kappa * position)
+    # _omega_log_w on one value: its scalar branch without the array's masks (to 1 ulp: libm's
+    # exp in place of NumPy's), its asymptotic branch beyond exp's range
+    w = (float(lambertw(math.exp(log_z), k=0).real) if log_z < MAX_EXPONENT
+         else float(_omega_log_w(np.array([log_z]))[0]))
+    return -w / kappa
+
+
 def svda_stiffness_kernel(omega: FloatArray, position: float, E0: float, E_inf: float,  # noqa: N803
                           tau: float, radius: float, P: float, kappa: float) -> np.ndarray:
     """SVDA k*(ω) [N/m] without input checks, for inner loops (fits) over validated inputs.
@@ -474,13 +490,7 @@ def svda_stiffness_kernel(omega: FloatArray, position: float, E0: float, E_inf: 
     with log z = ½ log(8πRκ) + log(P/E_inf) − κh̄0, c = −κu0 E_inf/E0, F̄ = (2πRP/κ) e^{−κ(h̄0−u0)}.
     The caller guarantees ω ≥ 0, R, P, κ > 0 and E0 > E_inf > 0, τ > 0 (all finite).
     """
-    log_z = (0.5 * (math.log(8.0 * math.pi) + math.log(radius) + math.log(kappa))
-             + math.log(P) - math.log(E_inf) - kappa * position)
-    # _omega_log_w on one value: its scalar branch without the array's masks (to 1 ulp: libm's
-    # exp in place of NumPy's), its asymptotic branch beyond exp's range
-    w = (float(lambertw(math.exp(log_z), k=0).real) if log_z < MAX_EXPONENT
-         else float(_omega_log_w(np.array([log_z]))[0]))
-    u0 = -w / kappa
+    u0 = svda_deformation_kernel(position, E_inf, radius, P, kappa)
     c = -kappa * u0 * E_inf / E0
     mean_force = 2.0 * math.pi * radius * P / kappa * math.exp(-kappa * (position - u0))
     x = omega * tau

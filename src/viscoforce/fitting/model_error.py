@@ -20,7 +20,11 @@ from viscoforce.choice import WARN_ERROR, hertz_error
 from viscoforce.exceptions import ApproximationWarning
 from viscoforce.fitting.base import material_from
 from viscoforce.fitting.verdict import scalar_value
-from viscoforce.svda import svda_error_estimate, svda_stiffness_kernel
+from viscoforce.svda import (
+    SVDA_ERROR_COEFFICIENT,
+    svda_deformation_kernel,
+    svda_stiffness_kernel,
+)
 
 #: What the validity of each model rests on when no estimate is made (``attrs["validity"]``).
 VALIDITY = {
@@ -63,7 +67,9 @@ def svda_bias(ds: xr.Dataset, spectrum: xr.Dataset, position: float, radius: flo
     before contact: the SVDA error is O(κ|u0|) and so is s.
     """
     values = {n: scalar_value(ds, n) for n in ("E0", "E_inf", "tau")}
-    error = float(svda_error_estimate(position, values["E_inf"], radius, P, debye_length))
+    # svda_error_estimate's 0.6 κ|u0| on the fit's checked inputs (its kernel checks none)
+    u0 = svda_deformation_kernel(position, values["E_inf"], radius, P, 1.0 / debye_length)
+    error = SVDA_ERROR_COEFFICIENT * abs(u0) / debye_length
     omega = np.asarray(spectrum.variables["omega"].values, dtype=float)
     kernel = (position, values["E0"], values["E_inf"], values["tau"], radius, P)
     k = svda_stiffness_kernel(omega, *kernel, 1.0 / debye_length)

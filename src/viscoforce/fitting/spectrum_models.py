@@ -139,10 +139,13 @@ def _svda_model(spec: ModelSpec) -> FitModel:
 
 def check_svda_precontact(position: float, E_inf: float, radius: float, P: float,  # noqa: N803
                           debye_length: float) -> None:
-    """Raise ModelValidityError if the SVDA mean state is in contact (centre gap < 1/κ)."""
-    from viscoforce.svda import svda_static_deformation
+    """Raise ModelValidityError if the SVDA mean state is in contact (centre gap < 1/κ).
 
-    u0 = float(svda_static_deformation(position, E_inf, radius, P, debye_length))
+    The inputs are the model's, checked when it was built (the kernel checks none).
+    """
+    from viscoforce.svda import svda_deformation_kernel
+
+    u0 = svda_deformation_kernel(position, E_inf, radius, P, 1.0 / debye_length)
     gap = position - u0
     if gap < debye_length:
         raise ModelValidityError(

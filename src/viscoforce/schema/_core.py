@@ -460,7 +460,7 @@ def _float_index(dim: str, values: np.ndarray) -> PandasIndex:
 
 @functools.cache
 def _pandas_index_type() -> type:
-    """pandas' ``Index``, as xarray's own indexes hold it (the schema imports xarray only)."""
+    """The pandas ``Index`` type, as xarray's own indexes hold it (the schema imports xarray only)."""
     probe = xr.Variable(("x",), np.zeros(1))
     return type(PandasIndex.from_variables({"x": probe}, options={}).index)
 
