@@ -361,7 +361,7 @@ def test_svda_kernel_equals_the_checked_closed_form():
 
 @pytest.mark.parametrize("log_z", [-40.0, 0.3, 25.0, 690.0, 705.0, 720.0])
 def test_svda_kernel_lambert_w_on_both_sides_of_exps_range(log_z):
-    """The kernel's scalar W (libm exp) and its asymptotic branch give _omega_log_w's u0: the
+    """The kernel's scalar W (libm exp) and its asymptotic branch give lambert_w_of_exp's u0: the
     static force F̄κ = 2πRP e^{-κ(h0 - u0)} over 1 − κu0 = k*(0), on either side of
     closed_form.MAX_EXPONENT = 700 (and of exp's overflow at 709.8)."""
     import scipy.optimize

@@ -76,7 +76,7 @@ __all__ = [
 
 # ── SVDA statics ────────────────────────────────────────────────────────────────────────────────
 
-def _omega_log_w(log_x: FloatArray) -> FloatArray:
+def lambert_w_of_exp(log_x: FloatArray) -> FloatArray:
     """Principal Lambert W of x = e^{log_x} > 0, for any log_x (no overflow of e^{log_x})."""
     out = np.full_like(log_x, np.nan)  # NaN stays NaN (neither branch below takes it)
     small = log_x < MAX_EXPONENT
@@ -144,7 +144,7 @@ def svda_static_deformation(position: ArrayLike, E: float, radius: float, P: flo
         log_abs_z = log_abs_prefactor - kappa * h0
     if p > 0.0:
         with np.errstate(over="ignore", invalid="ignore"):
-            u = -_omega_log_w(log_abs_z) / kappa
+            u = -lambert_w_of_exp(log_abs_z) / kappa
         return require_representable(u, "the SVDA static deformation u",
                                      "position, E, radius, P, debye_length")
     if np.any(log_abs_z > -1.0):   # z < −1/e
@@ -475,10 +475,10 @@ def svda_deformation_kernel(position: float, E: float, radius: float, P: float, 
     """
     log_z = (0.5 * (math.log(8.0 * math.pi) + math.log(radius) + math.log(kappa))
              + math.log(P) - math.log(E) - kappa * position)
-    # _omega_log_w on one value: its scalar branch without the array's masks (to 1 ulp: libm's
+    # lambert_w_of_exp on one value: its scalar branch without the array's masks (to 1 ulp: libm's
     # exp in place of NumPy's), its asymptotic branch beyond exp's range
     w = (float(lambertw(math.exp(log_z), k=0).real) if log_z < MAX_EXPONENT
-         else float(_omega_log_w(np.array([log_z]))[0]))
+         else float(lambert_w_of_exp(np.array([log_z]))[0]))
     return -w / kappa
 
 

@@ -82,16 +82,16 @@ def svda_moduli_from_levels(k_relaxed: float, k_glassy: float, radius: float, P:
     A level at or above the rigid stiffness has no soft solution: that modulus is the top of the
     guess window, as are moduli beyond it; E0 is at least 1.05 E_inf. Both lie in
     [10 Pa, 1e12 Pa] (a decade inside :data:`~viscoforce.fitting.base.MODULUS_BOUNDS`). Used for
-    the svda model's starting values (one evaluation in place of a secant search).
+    the svda model's starting values (no model evaluation, where a secant search took ~16).
     """
-    from viscoforce.svda import _omega_log_w
+    from viscoforce.svda import lambert_w_of_exp
 
     lo, hi = MODULUS_BOUNDS[0] * 10, MODULUS_BOUNDS[1] / 10
     kappa = 1.0 / debye_length
     scale = 2.0 * math.pi * radius * P  # F̄κ = scale e^{−κg}
     if position is not None:
         log_arg = 1.0 + math.log(scale) - kappa * position - math.log(k_relaxed)
-        s = float(_omega_log_w(np.array([max(log_arg, 1.0)]))[0]) - 1.0
+        s = float(lambert_w_of_exp(np.array([max(log_arg, 1.0)]))[0]) - 1.0
         force_kappa = scale * math.exp(-kappa * position - s)
     else:
         force_kappa = mean_force * kappa

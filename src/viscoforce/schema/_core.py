@@ -451,8 +451,9 @@ def _float_index(dim: str, values: np.ndarray) -> PandasIndex:
     """The pandas index of a float64 coordinate (a best-fit curve's ω), as ``from_variables``.
 
     The same index (a float64 ``pd.Index`` named ``dim``, the coordinate's dtype) without the
-    public constructor's casts, which concern datetimes, text and extension arrays only: a
-    4th of a small fit's dataset (issue 22). ``tests/test_schema_assemble.py`` compares both.
+    public constructor's casts, which concern datetimes, text and extension arrays only
+    (they were a quarter of assembling a small fit's dataset, issue 22).
+    ``tests/test_schema_assemble.py`` compares both.
     """
     return PandasIndex(_pandas_index_type()(values, copy=True, name=dim), dim, values.dtype,
                        fastpath=True)
