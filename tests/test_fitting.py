@@ -378,3 +378,16 @@ def test_svda_kernel_lambert_w_on_both_sides_of_exps_range(log_z):
                               xtol=1e-300, rtol=4 * np.finfo(float).eps, maxiter=500)
     expected = 2 * math.pi * radius * p_amp * math.exp(-kappa * position - w) / (1 + w)
     assert k0.real == pytest.approx(expected, rel=1e-13) and k0.imag == 0.0
+
+
+def test_the_best_fit_curve_grid_is_geomspace_with_the_data():
+    """curve_omega: the log grid of np.geomspace (to 1e-14) joined with the data's own ω."""
+    from viscoforce.fitting.fit import FIT_CURVE_POINTS, curve_omega
+
+    rng = np.random.default_rng(5)
+    for x in (np.geomspace(10.0, 1e6, 20), rng.uniform(1.0, 1e3, 7), np.array([3.0])):
+        got = curve_omega(x)
+        expected = np.union1d(np.geomspace(x.min() / 2, x.max() * 2, FIT_CURVE_POINTS), x)
+        np.testing.assert_allclose(got, expected, rtol=1e-14)
+        assert got.size == expected.size and np.all(np.diff(got) > 0)
+        assert got[0] == x.min() / 2 and got[-1] == x.max() * 2 and np.isin(x, got).all()

@@ -246,3 +246,50 @@ def test_fresh_extra_variables_are_taken_over_and_others_copied():
         return "note" in extra["chi2_pvalue"].attrs
 
     assert build(True) and not build(False)
+
+
+def test_a_shared_parameter_coordinate_keeps_its_attributes_apart():
+    """The cached param_i variable is copied per dataset: attributes set on one stay there."""
+    from viscoforce.schema import make_fit_result
+
+    one, two = (make_fit_result({"E0": (1e9, 1.0), "tau": (1e-3, 1e-5)}, success=True,
+                                redchi=1.0, aic=0.0, bic=0.0, modes=1, model="svda")
+                for _ in range(2))
+    one["param_i"].attrs["long_name"] = "changed in one"
+    assert "long_name" not in two["param_i"].attrs
+    # a text coordinate with attributes keeps them (no cached variable for it)
+    ds = assemble({"a": xr.Variable(("param_i",), [1.0, 2.0])},
+                  {"param_i": xr.Variable(("param_i",), ["E0", "tau"], {"long_name": "p"})})
+    expected = xr.Dataset({"a": ("param_i", [1.0, 2.0])},
+                          coords={"param_i": ("param_i", ["E0", "tau"], {"long_name": "p"})})
+    xr.testing.assert_identical(ds, expected)
+
+
+@pytest.mark.parametrize("coords", [
+    {"omega": np.geomspace(1.0, 1e3, 5)},                                  # float index
+    {"omega": np.geomspace(1.0, 1e3, 5).astype(np.float32)},               # float32 index
+    {"omega": np.arange(5)},                                               # integer index
+    {"omega": ["a", "b", "c", "d", "e"]},                                  # text index
+    {"omega": np.geomspace(1.0, 1e3, 5), "x": ("omega", np.arange(5.0))},  # not an index
+])
+def test_index_values_equal_the_variables_values(coords):
+    from viscoforce.schema import index_values
+
+    ds = xr.Dataset({"k": ("omega", np.ones(5))}, coords=coords)
+    for name in ds.coords:
+        got, expected = index_values(ds, str(name)), ds.variables[name].values
+        assert got.dtype == expected.dtype
+        np.testing.assert_array_equal(got, expected)
+
+
+def test_parameter_names_read_from_the_index_from_a_file_and_without_one(tmp_path):
+    from viscoforce.schema import make_fit_result, parameter_names
+
+    fit = make_fit_result({"E0": (1e9, 1.0), "E_inf": (1e8, 1.0), "tau": (1e-3, 1e-5)},
+                          success=True, redchi=1.0, aic=0.0, bic=0.0, modes=1, model="svda")
+    expected = ["E0", "E_inf", "tau"]
+    assert parameter_names(fit) == expected
+    fit.to_netcdf(tmp_path / "fit.nc", engine="scipy")
+    with xr.open_dataset(tmp_path / "fit.nc", engine="scipy") as read:
+        assert parameter_names(read) == expected
+    assert parameter_names(fit.drop_indexes("param_i")) == expected

@@ -8,6 +8,7 @@ The models themselves are built by :func:`viscoforce.fitting.models.make_model`.
 
 from __future__ import annotations
 
+import functools
 import inspect
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
@@ -166,13 +167,18 @@ def _signed(function: Callable[..., np.ndarray], independent: str,
         values = dict(bound.arguments)
         return function(values.pop(independent), values)
 
-    par = inspect.Parameter
-    signature = inspect.Signature(
-        [par(independent, par.POSITIONAL_OR_KEYWORD)]
-        + [par(n, par.POSITIONAL_OR_KEYWORD, default=1.0) for n in names])
+    signature = _model_signature(independent, tuple(names))
     model.__signature__ = signature  # type: ignore[attr-defined]
     model.__name__ = "viscoforce_model"
     return model
+
+
+@functools.lru_cache(maxsize=256)
+def _model_signature(independent: str, names: tuple[str, ...]) -> inspect.Signature:
+    """``(independent, name_1=1.0, …)``: built once per layout (signatures are immutable)."""
+    par = inspect.Parameter
+    return inspect.Signature([par(independent, par.POSITIONAL_OR_KEYWORD)]
+                             + [par(n, par.POSITIONAL_OR_KEYWORD, default=1.0) for n in names])
 
 
 def moduli_names(modes: int) -> list[str]:

@@ -18,7 +18,7 @@ import numpy as np
 import xarray as xr
 
 from viscoforce.exceptions import DataWarning, ModelValidityError, ParameterError
-from viscoforce.schema import validate_spectrum
+from viscoforce.schema import index_values, validate_spectrum
 
 #: Spectrum weightings (``weights=``): the data's stderr or relative 1/|k*| (None: stderr when
 #: the data have them, else relative with a DataWarning).
@@ -87,7 +87,7 @@ def spectrum_data(ds: xr.Dataset, *, weights: str | None = None) -> FitData:
     source = {"data_kind": "spectrum"}
     if "source" in ds.attrs:
         source["data_source"] = str(ds.attrs["source"])
-    data = pixel_fit_data(np.asarray(ds.variables["omega"].values, dtype=float),
+    data = pixel_fit_data(np.asarray(index_values(ds, "omega"), dtype=float),
                           {k: v[0] for k, v in arrays.items()}, source, weights=weights)
     for note in data.notes:
         warnings.warn(note, DataWarning, stacklevel=3)

@@ -68,6 +68,19 @@ CRITERIA = ("bic", "aic")
 
 #: Points of the best-fit curve written with a spectrum fit.
 FIT_CURVE_POINTS = 200
+_CURVE_STEPS = np.linspace(0.0, 1.0, FIT_CURVE_POINTS)
+
+
+def curve_omega(omega: np.ndarray) -> np.ndarray:
+    """ω of a spectrum fit's best-fit curve [rad/s], sorted and unique.
+
+    The data's ω and :data:`FIT_CURVE_POINTS` log-spaced from half the lowest to twice the
+    highest. ``np.geomspace`` gives the same grid (to 1 ulp) at 3× the cost of a small fit's curve.
+    """
+    lo, hi = float(omega.min()) / 2, float(omega.max()) * 2
+    grid = lo * (hi / lo) ** _CURVE_STEPS
+    grid[-1] = hi
+    return np.unique(np.concatenate((grid, omega)))
 
 
 # ── results ─────────────────────────────────────────────────────────────────────────────────────
@@ -172,8 +185,7 @@ def result_dataset(outcome: Outcome, data: FitData, *,
     attrs.update(_fixed_attrs(model.spec.fixed))
     curves: dict[str, Any]
     if model.independent == "omega":
-        lo, hi = float(np.min(data.x)), float(np.max(data.x))
-        omega = np.union1d(np.geomspace(lo / 2, hi * 2, FIT_CURVE_POINTS), data.x)
+        omega = curve_omega(data.x)
         k = outcome.evaluate(omega)
         curves = {"omega": omega, "fit_stiffness": np.abs(k), "fit_phase": np.degrees(np.angle(k))}
     elif model.independent == "z":
@@ -478,4 +490,5 @@ def fit_spectrum(spectrum: xr.Dataset, model: str, *, modes: int | str | None = 
         _warn_model_bias(ds, model, *contact_bias(ds, fixed, data.x, decay))
     ds.attrs["validity"] = validity_note(model, ds)
     warn_fit(ds)
-    return add_derived_moduli(ds, poisson)
+    # result_dataset derived the moduli at the default ν already
+    return ds if poisson is None else add_derived_moduli(ds, poisson)

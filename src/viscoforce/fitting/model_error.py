@@ -20,6 +20,7 @@ from viscoforce.choice import WARN_ERROR, hertz_error
 from viscoforce.exceptions import ApproximationWarning
 from viscoforce.fitting.base import material_from
 from viscoforce.fitting.verdict import scalar_value
+from viscoforce.schema import index_values, parameter_names
 from viscoforce.svda import (
     SVDA_ERROR_COEFFICIENT,
     svda_deformation_kernel,
@@ -70,7 +71,7 @@ def svda_bias(ds: xr.Dataset, spectrum: xr.Dataset, position: float, radius: flo
     # svda_error_estimate's 0.6 κ|u0| on the fit's checked inputs (its kernel checks none)
     u0 = svda_deformation_kernel(position, values["E_inf"], radius, P, 1.0 / debye_length)
     error = SVDA_ERROR_COEFFICIENT * abs(u0) / debye_length
-    omega = np.asarray(spectrum.variables["omega"].values, dtype=float)
+    omega = np.asarray(index_values(spectrum, "omega"), dtype=float)
     kernel = (position, values["E0"], values["E_inf"], values["tau"], radius, P)
     k = svda_stiffness_kernel(omega, *kernel, 1.0 / debye_length)
     scaled = (position, *(v * (1 + SENSITIVITY_STEP) for v in kernel[1:3]), *kernel[3:])
@@ -95,7 +96,7 @@ def contact_bias(ds: xr.Dataset, fixed: Mapping[str, Any], omega: np.ndarray,
     if kind not in ("sls", "prony"):
         return math.nan, (f"not estimated: the Hertz-contact estimate needs a relaxed modulus, "
                           f"which material {kind} does not have")
-    values = {str(n): scalar_value(ds, n) for n in ds.variables["param_i"].values}
+    values = {n: scalar_value(ds, n) for n in parameter_names(ds)}
     return hertz_error(material_from(values, modes), float(fixed["indentation"]), decay_length,
                        float(np.max(omega)))
 

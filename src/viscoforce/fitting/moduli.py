@@ -17,7 +17,7 @@ import numpy as np
 import xarray as xr
 
 from viscoforce.fitting.report import carry
-from viscoforce.schema import plain_variable
+from viscoforce.schema import parameter_names, plain_variable
 
 #: Fitted quantities in the paper's modulus convention (2/E = Σ(1 − ν²)/E_i), by name pattern:
 #: moduli [Pa] and the structural viscosity μ [Pa s] (an E-like coefficient of iω).
@@ -47,7 +47,7 @@ def add_derived_moduli(ds: xr.Dataset, poisson: float | None = None) -> xr.Datas
     from viscoforce.physics.tips import DEFAULT_POISSON
 
     nu = DEFAULT_POISSON if poisson is None else poisson
-    names = [str(n) for n in ds.variables["param_i"].values]
+    names = parameter_names(ds)
     if ds.attrs.get("poisson") == nu and all(
             f"{n}_young" in ds.variables for n in names if PAPER_CONVENTION.fullmatch(n)):
         return ds  # already derived at this ν (result_dataset derives at the default)

@@ -14,6 +14,7 @@ import numpy as np
 import xarray as xr
 
 from viscoforce.exceptions import AccuracyWarning, DataWarning, GoodnessOfFitWarning
+from viscoforce.schema import parameter_names
 
 #: χ² p-value below which a fit with known stderr warns that the model does not fit the data.
 PVALUE_WARN = 1e-3
@@ -33,7 +34,7 @@ def bound_text(ds: xr.Dataset, name: str) -> str | None:
     """
     if "identifiability" not in ds.variables:
         return None
-    codes = dict(zip((str(n) for n in ds["param_i"].values),
+    codes = dict(zip(parameter_names(ds),
                      np.asarray(ds["identifiability"].values).reshape(-1).tolist(), strict=True))
     code = int(codes.get(name, 0))
     unit = str(ds[name].attrs.get("units", ""))
@@ -54,7 +55,7 @@ def warn_unidentified(ds: xr.Dataset, *, stacklevel: int = 3) -> list[str]:
     one flat on both sides as not determined. Without it, the local test: stderr above the
     value, or none (the covariance is singular).
     """
-    names = [str(n) for n in ds.variables["param_i"].values]
+    names = parameter_names(ds)
     if "identifiability" in ds.variables:
         codes = np.asarray(ds.variables["identifiability"].values).reshape(-1)
         bad = [n for n, c in zip(names, codes, strict=True) if int(c) != 0]

@@ -174,17 +174,20 @@ def variable(values: Any, dims: tuple[str, ...], spec: VariableSpec, *, name: st
     A bare :class:`xarray.Variable`, not a DataArray: the dataset built from it needs no
     alignment of per-variable coordinates (a DataArray costs ≈ 2× to build and to merge).
     """
-    dtype = {"f": np.float64, "i": np.int32, "U": np.str_}[spec.dtype]
     if spec.dtype == "i":
         raw = np.asarray(values)
         if raw.dtype.kind not in "biu":
             raise SchemaError(f"{name or spec.long_name} must be integers, got {raw!r}")
-    data = np.asarray(values, dtype=dtype)
+    data = np.asarray(values, dtype=_SPEC_DTYPES[spec.dtype])
     meta = {"long_name": long_name or spec.long_name}
     if spec.units:
         meta = {"units": spec.units, **meta}
     meta.update(attrs or {})
-    return plain_variable(dims, data, meta)
+    # a plain array of a float, integer or text dtype: what plain_variable hands xarray as is
+    return xr.Variable(tuple(dims), data, meta, fastpath=True)
+
+
+_SPEC_DTYPES = {"f": np.float64, "i": np.int32, "U": np.str_}
 
 
 def plain_variable(dims: str | tuple[str, ...], values: Any,
@@ -218,6 +221,29 @@ def plain_variable(dims: str | tuple[str, ...], values: Any,
         return xr.Variable(dims, values, attrs)
     return xr.Variable((dims,) if isinstance(dims, str) else tuple(dims), data, attrs,
                        fastpath=True)
+
+
+def index_values(ds: xr.Dataset, name: str) -> np.ndarray:
+    """The values of coordinate ``name`` (read-only), read through its pandas index if it has one.
+
+    The values of ``ds.variables[name].values``: an index coordinate's variable hands them out
+    through an adapter that re-parses NumPy's version on every read (≈ 2 µs, a float ω; text
+    labels take ≈ 7 µs), which a small fit does several times (issue 22). Other coordinates and
+    indexes of another dtype are read from the variable.
+    """
+    index = ds.xindexes.get(name)
+    if isinstance(index, PandasIndex) and index.dim == name:
+        values = index.index.to_numpy()
+        if values.dtype == index.coord_dtype:
+            return values
+    return np.asarray(ds.variables[name].values)
+
+
+def parameter_names(ds: xr.Dataset) -> list[str]:
+    """A fit result's parameter names (its ``param_i`` labels), as text."""
+    index = ds.xindexes.get("param_i")
+    labels = index.index if isinstance(index, PandasIndex) else ds.variables["param_i"].values
+    return [str(n) for n in labels]
 
 
 def as_float(name: str, values: Any) -> np.ndarray:
@@ -425,7 +451,11 @@ def assemble(data_vars: Mapping[str, Any], coords: Mapping[str, Any] | None = No
         var = variables[name]
         if var.dims == (name,):
             if var.dtype.kind == "U" and var.size <= TEXT_INDEX_CACHE_LABELS:
-                index = _text_index(name, tuple(var.values.tolist()), var.dtype.str)
+                index, made = _text_index(name, tuple(var.values.tolist()), var.dtype.str)
+                if not var.attrs and not var.encoding:  # what create_variables would make
+                    variables[name] = made.copy(deep=False)
+                    indexes[name] = index
+                    continue
             elif var.dtype == np.float64 and type(var.data) is np.ndarray:
                 index = _float_index(name, var.data)
             else:
@@ -472,13 +502,18 @@ TEXT_INDEX_CACHE_LABELS = 32
 
 
 @functools.lru_cache(maxsize=64)
-def _text_index(dim: str, labels: tuple[str, ...], dtype: str) -> PandasIndex:
-    """The pandas index of a short text coordinate (the parameter names), built once per labels.
+def _text_index(dim: str, labels: tuple[str, ...], dtype: str
+                ) -> tuple[PandasIndex, xr.IndexVariable]:
+    """The pandas index of a short text coordinate (the parameter names) and its variable.
 
-    Indexes are immutable and xarray shares them between datasets (``copy``, ``isel``).
+    Built once per labels; the variable has no attributes.
+    Indexes are immutable and xarray shares them between datasets (``copy``, ``isel``); the
+    variable's data (the index's adapter) is immutable too, and each dataset takes a shallow
+    copy of it (its own attributes).
     """
     var = xr.Variable((dim,), np.array(labels, dtype=dtype))
-    return PandasIndex.from_variables({dim: var}, options={})
+    index = PandasIndex.from_variables({dim: var}, options={})
+    return index, index.create_variables({dim: var})[dim]
 
 
 def _direct_variables(data_vars: Mapping[str, Any], coords: Mapping[str, Any],

@@ -29,6 +29,7 @@ from viscoforce.schema._core import (
     clean_attrs,
     coordinate,
     flag_attrs,
+    index_values,
     per_point,
     require_dataset,
     require_values,
@@ -276,7 +277,7 @@ def validate_spectrum(ds: xr.Dataset, *, require: Iterable[str] | None = None) -
             extra = tuple(str(d) for d in dims[:-1])
             break
     check_variables(ds, "spectrum", SPECTRUM_VARIABLES, extra)
-    w = np.asarray(ds.variables["omega"].values)
+    w = index_values(ds, "omega")
     if not np.all(np.isfinite(w) & (w > 0)):
         raise SchemaError(f"spectrum: 'omega' must be finite and > 0 rad/s, got min {w.min()!r}")
     if "quality" in ds.variables:
