@@ -12,6 +12,7 @@ import warnings
 
 import numpy as np
 import pytest
+import xarray as xr
 
 from viscoforce import PAPER
 from viscoforce.exceptions import AccuracyWarning, ModelValidityError, ParameterError
@@ -391,3 +392,20 @@ def test_the_best_fit_curve_grid_is_geomspace_with_the_data():
         np.testing.assert_allclose(got, expected, rtol=1e-14)
         assert got.size == expected.size and np.all(np.diff(got) > 0)
         assert got[0] == x.min() / 2 and got[-1] == x.max() * 2 and np.isin(x, got).all()
+
+
+def test_spectrum_arrays_are_read_only_views_that_leave_the_dataset_alone():
+    """The per-pixel arrays a fit reads may be views of the dataset: none of them is writable."""
+    from viscoforce.fitting.data import spectrum_arrays
+    from viscoforce.schema import make_spectrum
+
+    omega = np.geomspace(1.0, 1e3, 6)
+    ds = make_spectrum(omega, (2.0 + 0.5j) * np.ones((2, 6)), 1e-9, 1e-9, dims=("curve", "omega"),
+                       stderr={"stiffness": 0.02 * np.ones((2, 6)), "phase": 0.5})
+    before = ds.copy(deep=True)
+    arrays = spectrum_arrays(ds, ("curve",))
+    assert all(v.shape == (2, 6) for v in arrays.values())
+    assert not arrays["stiffness"].flags.writeable
+    with pytest.raises(ValueError):
+        arrays["stiffness"][0, 0] = 0.0
+    xr.testing.assert_identical(ds, before)

@@ -103,13 +103,17 @@ def spectrum_arrays(ds: xr.Dataset, dims: tuple[str, ...]) -> dict[str, np.ndarr
     """
     order = (*dims, "omega")
     n_omega = ds.sizes["omega"]
-    n_pixels = int(np.prod([ds.sizes[d] for d in dims]))
+    n_pixels = math.prod(ds.sizes[d] for d in dims)
     shape = tuple(ds.sizes[d] for d in order)
 
     def grab(name: str, fill: float) -> np.ndarray:
         if name not in ds.variables:
             return np.full((n_pixels, n_omega), fill)
         da = ds.variables[name]  # scalar, per pixel, per frequency or per point: broadcast
+        if da.dims == order:
+            values = np.asarray(da.values, dtype=float).reshape(n_pixels, n_omega)
+            values.flags.writeable = False  # a view of the dataset's data, like broadcast_to's
+            return values
         wanted = tuple(d for d in order if d in da.dims)
         values = np.asarray((da if da.dims == wanted else da.transpose(*wanted)).values,
                             dtype=float)
@@ -165,9 +169,11 @@ def pixel_fit_data(omega: np.ndarray, a: Mapping[str, np.ndarray],
     if np.isfinite(depth[keep]).any():
         info["mean_indentation"] = float(np.nanmedian(depth[keep]))
     sigma_dof = None
-    bins = np.asarray(a.get("stderr_bins", np.zeros_like(stiffness)), dtype=float)[keep]
-    if weighting == "stderr" and np.any(bins > 0):
-        sigma_dof = np.where(bins > 0, 2.0 * bins, np.inf)
+    bins = a.get("stderr_bins")
+    if weighting == "stderr" and bins is not None:
+        bins = np.asarray(bins, dtype=float)[keep]
+        if np.any(bins > 0):
+            sigma_dof = np.where(bins > 0, 2.0 * bins, np.inf)
     return FitData(omega[keep], k[keep], w[keep], info, weighting, tuple(notes), sigma_dof)
 
 

@@ -121,13 +121,14 @@ def summary(outcome: Outcome, *, profile: bool | str = False) -> dict[str, Any]:
     """
     res, names = outcome.result, outcome.model.names
     values = dict(outcome.values)
-    corr = np.where(np.eye(len(names), dtype=bool), 1.0, np.nan)
     stderr = summary_stderr(outcome)
     if outcome.covariance is not None and all(e is not None for e in stderr.values()):
         sd = np.array([stderr[n] for n in names])
         with np.errstate(invalid="ignore", divide="ignore"):
             corr = outcome.covariance / np.outer(sd, sd)
         np.fill_diagonal(corr, 1.0)
+    else:
+        corr = np.where(np.eye(len(names), dtype=bool), 1.0, np.nan)
     success = bool(res.success) and all(math.isfinite(v) for v in values.values())
     bound = _params.at_bound(res.params)
     at_bound = [n for n in names if n in bound]

@@ -103,7 +103,8 @@ def needs_profile(layout: Sequence[_params.Item], values: Mapping[str, float],
     """
     positive = positive_names(layout)
     names = list(values)
-    corr = np.nan_to_num(np.abs(np.asarray(correlation, dtype=float)), nan=1.0)
+    corr = np.abs(np.asarray(correlation, dtype=float))  # a new array
+    corr[np.isnan(corr)] = 1.0  # unknown: as if correlated
     np.fill_diagonal(corr, 0.0)
     out = []
     for i, name in enumerate(names):
