@@ -15,7 +15,8 @@ TOP_KEYS = {"schema", "created", "quick", "machine", "target", "settings", "case
 CASE_KEYS = {"case", "model", "modes", "points", "floor_nfev", "library_nfev", "profiled",
              "samples", "target_ratio", "passed"} | {
     f"{path}_{what}" for path in ("library", "floor", "local", "profile", "pixel")
-    for what in ("cpu_s", "cpu_min_s", "ratio")}
+    for what in ("cpu_s", "cpu_min_s", "ratio")} | {
+    "library_all_cpu_s", "floor_all_cpu_s", "library_all_ratio", "paired_samples"}
 SUMMARY_KEYS = {"worst_closed_form_ratio", "exact_ratio", "closed_form_passed", "exact_passed",
                 "passed", "verdict", "wall_time_s", "loadavg_end"}
 
@@ -31,7 +32,7 @@ def quick(tmp_path_factory):
 def test_quick_run_writes_documented_files(quick):
     out, stdout, report = quick
     assert set(report) == TOP_KEYS
-    assert report["schema"] == "viscoforce.bench_overhead/1"
+    assert report["schema"] == "viscoforce.bench_overhead/2"
     assert report["quick"] is True
     assert report["machine"]["blas_threads"] == [1]
     assert [c["case"] for c in report["cases"]] == ["svda", "contact", "prony", "relaxation",
