@@ -24,10 +24,14 @@ Cases: ``svda`` (h0 = 2 nm, the paper's system), ``contact`` (SLS, Hertz sphere 
 Times are process CPU medians over interleaved rounds, the garbage collector paused, BLAS
 pinned to one thread (environment before NumPy loads, plus threadpoolctl) and reported. The
 target ratio is an A/B pair: library and floor alone, ``PAIR_FACTOR`` × repeats rounds, the
-order reversed every other round. The other paths are timed in rounds of every path (library,
-floor, local, profile, pixel; their ratios against that loop's floor, and the library's there as
-``library_all_ratio``): between them the 30× longer profile path leaves the caches cold, which
-slowed library and floor alike by 10–20 % and the ratio by 0.05–0.2 (2026-12-04).
+order reversed every other round, so that each meets the caches the other left. The other paths
+are timed in rounds of every path (library, floor, local, profile, pixel; their ratios against
+that loop's floor). There the floor always runs right after the library, with the model's code
+and data warm, while the library follows the profile path (30× longer, which leaves the caches
+cold): both ran 10–20 % slower than in the pair, the library more, and its ratio there
+(``library_all_ratio``, printed and summarised beside the target as information) differed from
+the pair's by −0.03 to +0.21 in the runs of 2026-12-04. A single fit in a user's script may meet
+either condition.
 Targets (issue 22 item 2): closed-form fits (svda, contact, prony, relaxation) ≤ 1.5× the
 floor; the exact fit ≤ 8× the floor. The summary lines end in PASS/FAIL.
 
@@ -244,16 +248,16 @@ def bench_case(case: dict, repeats: int) -> dict:
 
 def plot(rows: list[dict], path: Path) -> None:
     fig, ax = plt.subplots(figsize=(7.5, 4.0))
-    keys = ("floor", "pixel", "library", "local", "profile")
+    keys = ("floor_all", "pixel", "library_all", "local", "profile")  # one loop's times
     width = 0.16
     xs = np.arange(len(rows))
     for i, key in enumerate(keys):
         ax.bar(xs + (i - 2) * width, [r[f"{key}_cpu_s"] * 1e3 for r in rows], width,
-               label=key)
+               label=key.removesuffix("_all"))
     ax.set_xticks(xs, [r["case"] for r in rows])
     ax.set_yscale("log")
     ax.set_ylabel("CPU time per fit [ms]")
-    ax.set_title(f"Fit overhead on {N_POINTS} points (1 BLAS thread)")
+    ax.set_title(f"Fit overhead on {N_POINTS} points (1 BLAS thread; rounds of every path)")
     ax.legend(fontsize=8)
     fig.tight_layout()
     fig.savefig(path, dpi=120)
@@ -284,6 +288,7 @@ def main(argv: list[str] | None = None) -> int:
     closed = [r for r in rows if r["model"] in CLOSED_FORM]
     exact = [r for r in rows if r["model"] == "exact"]
     summary = {"worst_closed_form_ratio": max(r["library_ratio"] for r in closed),
+               "worst_closed_form_all_ratio": max(r["library_all_ratio"] for r in closed),
                "exact_ratio": exact[0]["library_ratio"],
                "closed_form_passed": all(r["passed"] for r in closed),
                "exact_passed": exact[0]["passed"]}
@@ -292,6 +297,8 @@ def main(argv: list[str] | None = None) -> int:
     summary.update(run_end(t_start))
     print(f"closed-form fits: worst {summary['worst_closed_form_ratio']:.2f}x the floor "
           f"(target <= {TARGETS['closed_form_ratio']}x) {pf(summary['closed_form_passed'])}")
+    print(f"closed-form fits among all paths (information, not the target): worst "
+          f"{summary['worst_closed_form_all_ratio']:.2f}x")
     print(f"exact fit: {summary['exact_ratio']:.2f}x the floor (target <= "
           f"{TARGETS['exact_ratio']}x) {pf(summary['exact_passed'])}")
     print(f"overall {summary['verdict']}")

@@ -17,8 +17,9 @@ CASE_KEYS = {"case", "model", "modes", "points", "floor_nfev", "library_nfev", "
     f"{path}_{what}" for path in ("library", "floor", "local", "profile", "pixel")
     for what in ("cpu_s", "cpu_min_s", "ratio")} | {
     "library_all_cpu_s", "floor_all_cpu_s", "library_all_ratio", "paired_samples"}
-SUMMARY_KEYS = {"worst_closed_form_ratio", "exact_ratio", "closed_form_passed", "exact_passed",
-                "passed", "verdict", "wall_time_s", "loadavg_end"}
+SUMMARY_KEYS = {"worst_closed_form_ratio", "worst_closed_form_all_ratio", "exact_ratio",
+                "closed_form_passed", "exact_passed", "passed", "verdict", "wall_time_s",
+                "loadavg_end"}
 
 
 @pytest.fixture(scope="module")

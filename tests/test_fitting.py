@@ -381,11 +381,10 @@ def test_svda_kernel_lambert_w_on_both_sides_of_exps_range(log_z):
     assert k0.real == pytest.approx(expected, rel=1e-13) and k0.imag == 0.0
 
 
-def test_the_best_fit_curve_grid_is_geomspace_with_the_data():
+def test_the_best_fit_curve_grid_is_geomspace_with_the_data(rng):
     """curve_omega: the log grid of np.geomspace (to 1e-14) joined with the data's own ω."""
     from viscoforce.fitting.fit import FIT_CURVE_POINTS, curve_omega
 
-    rng = np.random.default_rng(5)
     for x in (np.geomspace(10.0, 1e6, 20), rng.uniform(1.0, 1e3, 7), np.array([3.0])):
         got = curve_omega(x)
         expected = np.union1d(np.geomspace(x.min() / 2, x.max() * 2, FIT_CURVE_POINTS), x)
@@ -395,7 +394,7 @@ def test_the_best_fit_curve_grid_is_geomspace_with_the_data():
 
 
 def test_spectrum_arrays_are_read_only_views_that_leave_the_dataset_alone():
-    """The per-pixel arrays a fit reads may be views of the dataset: none of them is writable."""
+    """The per-pixel arrays that are views of the dataset's own data are read-only."""
     from viscoforce.fitting.data import spectrum_arrays
     from viscoforce.schema import make_spectrum
 
@@ -406,6 +405,7 @@ def test_spectrum_arrays_are_read_only_views_that_leave_the_dataset_alone():
     arrays = spectrum_arrays(ds, ("curve",))
     assert all(v.shape == (2, 6) for v in arrays.values())
     assert not arrays["stiffness"].flags.writeable
+    assert not arrays["stiffness_stderr"].flags.writeable
     with pytest.raises(ValueError):
         arrays["stiffness"][0, 0] = 0.0
     xr.testing.assert_identical(ds, before)

@@ -263,6 +263,13 @@ def test_a_shared_parameter_coordinate_keeps_its_attributes_apart():
     expected = xr.Dataset({"a": ("param_i", [1.0, 2.0])},
                           coords={"param_i": ("param_i", ["E0", "tau"], {"long_name": "p"})})
     xr.testing.assert_identical(ds, expected)
+    # and one with an encoding keeps it
+    labels = xr.Variable(("param_i",), ["E0", "tau"], encoding={"dtype": "S1"})
+    ds = assemble({"a": xr.Variable(("param_i",), [1.0, 2.0])}, {"param_i": labels})
+    assert ds["param_i"].encoding == {"dtype": "S1"}
+    assert "dtype" not in make_fit_result(
+        {"E0": (1e9, 1.0), "tau": (1e-3, 1e-5)}, success=True, redchi=1.0, aic=0.0, bic=0.0,
+        modes=1, model="svda")["param_i"].encoding
 
 
 @pytest.mark.parametrize("coords", [
@@ -280,6 +287,11 @@ def test_index_values_equal_the_variables_values(coords):
         got, expected = index_values(ds, str(name)), ds.variables[name].values
         assert got.dtype == expected.dtype
         np.testing.assert_array_equal(got, expected)
+        assert not got.flags.writeable  # a view of the dataset's memory
+    if "x" in ds.coords:  # the dataset's own array stays writable, and the view follows it
+        view = index_values(ds, "x")
+        ds.variables["x"].values[0] = 7.0
+        assert view[0] == 7.0
 
 
 def test_parameter_names_read_from_the_index_from_a_file_and_without_one(tmp_path):

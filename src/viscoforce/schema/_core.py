@@ -167,6 +167,10 @@ def _attr_value(key: str, value: Any) -> Any:
                       "serialisable (use a string, a number or a 1-D numeric array)")
 
 
+#: NumPy dtype of each :class:`VariableSpec` dtype code.
+_SPEC_DTYPES = {"f": np.float64, "i": np.int32, "U": np.str_}
+
+
 def variable(values: Any, dims: tuple[str, ...], spec: VariableSpec, *, name: str = "",
              long_name: str | None = None, attrs: Mapping[str, Any] | None = None) -> xr.Variable:
     """A Variable with the spec's units, long_name (or ``long_name``) and dtype.
@@ -185,9 +189,6 @@ def variable(values: Any, dims: tuple[str, ...], spec: VariableSpec, *, name: st
     meta.update(attrs or {})
     # a plain array of a float, integer or text dtype: what plain_variable hands xarray as is
     return xr.Variable(tuple(dims), data, meta, fastpath=True)
-
-
-_SPEC_DTYPES = {"f": np.float64, "i": np.int32, "U": np.str_}
 
 
 def plain_variable(dims: str | tuple[str, ...], values: Any,
@@ -224,23 +225,55 @@ def plain_variable(dims: str | tuple[str, ...], values: Any,
 
 
 def index_values(ds: xr.Dataset, name: str) -> np.ndarray:
-    """The values of coordinate ``name`` (read-only), read through its pandas index if it has one.
+    """The values of coordinate ``name``, read through its pandas index if it has one.
 
     The values of ``ds.variables[name].values``: an index coordinate's variable hands them out
     through an adapter that re-parses NumPy's version on every read (≈ 2 µs, a float ω; text
     labels take ≈ 7 µs), which a small fit does several times (issue 22). Other coordinates and
     indexes of another dtype are read from the variable.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        The dataset.
+    name : str
+        One of its coordinates (or variables).
+
+    Returns
+    -------
+    numpy.ndarray
+        A read-only view of the values (the index's or the variable's own memory: writing into
+        it would change the dataset, whatever pandas' copy-on-write setting).
     """
+    values = None
     index = ds.xindexes.get(name)
     if isinstance(index, PandasIndex) and index.dim == name:
         values = index.index.to_numpy()
-        if values.dtype == index.coord_dtype:
-            return values
-    return np.asarray(ds.variables[name].values)
+        if values.dtype != index.coord_dtype:
+            values = None
+    if values is None:
+        values = np.asarray(ds.variables[name].values)
+    view = values.view()
+    view.flags.writeable = False
+    return view
 
 
 def parameter_names(ds: xr.Dataset) -> list[str]:
-    """A fit result's parameter names (its ``param_i`` labels), as text."""
+    """A fit result's parameter names (its ``param_i`` labels), as text.
+
+    Read through the ``param_i`` index where it has one (:func:`index_values`' reason), else
+    from the variable (a result without indexes).
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        A fit result (:mod:`viscoforce.schema.fit`).
+
+    Returns
+    -------
+    list of str
+        The parameter names in ``param_i`` order.
+    """
     index = ds.xindexes.get("param_i")
     labels = index.index if isinstance(index, PandasIndex) else ds.variables["param_i"].values
     return [str(n) for n in labels]
