@@ -409,3 +409,58 @@ def test_spectrum_arrays_are_read_only_views_that_leave_the_dataset_alone():
     with pytest.raises(ValueError):
         arrays["stiffness"][0, 0] = 0.0
     xr.testing.assert_identical(ds, before)
+
+
+def test_clean_pixels_fit_data_equals_pixel_fit_data_bit_for_bit(rng):
+    """The map's vectorised preparation: every clean pixel as pixel_fit_data makes it (the same
+    floats), every other pixel left to it (None): flags, NaN, stiffness ≤ 0, missing stderr,
+    no stderr at all, every point flagged; with and without depths and lock-in bins."""
+    from viscoforce.exceptions import ViscoforceError
+    from viscoforce.fitting.data import FitData, clean_pixels_fit_data, pixel_fit_data
+
+    n_pixels, n_omega = 60, 12
+    omega = np.geomspace(1.0, 1e4, n_omega)
+    stiffness = rng.uniform(0.5, 5.0, (n_pixels, n_omega))
+    arrays = {"stiffness": stiffness, "phase": rng.uniform(-0.3, 1.2, stiffness.shape),
+              "stiffness_stderr": 0.01 * stiffness * rng.uniform(0.5, 2.0, stiffness.shape),
+              "phase_stderr": rng.uniform(1e-3, 2e-2, stiffness.shape),
+              "quality": (rng.random(stiffness.shape) < 0.1).astype(float),
+              "mean_indentation": np.where(rng.random(stiffness.shape) < 0.5,
+                                           rng.uniform(1e-8, 1e-7, stiffness.shape), np.nan),
+              "stderr_bins": np.where(rng.random(stiffness.shape) < 0.5, 5.0, 0.0)}
+    arrays["stiffness"][1, 3] = np.nan                 # a NaN point (a note)
+    arrays["phase"][2, 0] = np.inf
+    arrays["stiffness"][3, 5] = -1.0                   # refused
+    arrays["stiffness_stderr"][4, 2] = arrays["phase_stderr"][4, 2] = np.nan  # missing stderr
+    arrays["stiffness_stderr"][5] = arrays["phase_stderr"][5] = np.nan        # none at all
+    arrays["quality"][6] = 1.0                         # every point flagged
+    arrays["mean_indentation"][7] = np.nan             # no depth
+    arrays["stderr_bins"][8] = 0.0                     # exact stderr
+    arrays["stiffness_stderr"][9, 4] = np.nan          # one of the two stderr: still usable
+    arrays["quality"][10, 1] = 1.0
+    arrays["stiffness"][10, 1] = np.nan                # NaN on a flagged point: clean
+    for i, j in ((1, 3), (2, 0), (3, 5), (4, 2)):
+        arrays["quality"][i, j] = 0.0                  # the faults above on unflagged points
+    source = {"data_kind": "spectrum"}
+    fast = clean_pixels_fit_data(omega, arrays, source)
+    assert len(fast) == n_pixels
+    for i in range(n_pixels):
+        row = {k: v[i] for k, v in arrays.items()}
+        try:
+            slow = pixel_fit_data(omega, row, source)
+        except ViscoforceError:
+            slow = None
+        if i in (1, 2, 3, 4, 5, 6):
+            assert fast[i] is None
+        if fast[i] is None:
+            assert slow is None or slow.notes  # left to pixel_fit_data: a note or a refusal
+            continue
+        assert isinstance(slow, FitData) and not slow.notes
+        for name in ("x", "y", "weights"):
+            np.testing.assert_array_equal(getattr(fast[i], name), getattr(slow, name))
+        assert fast[i].source == slow.source and fast[i].weighting == slow.weighting
+        assert (fast[i].sigma_dof is None) == (slow.sigma_dof is None)
+        if slow.sigma_dof is not None:
+            np.testing.assert_array_equal(fast[i].sigma_dof, slow.sigma_dof)
+    clean = [i for i in range(n_pixels) if fast[i] is not None]
+    assert {0, 7, 8, 9, 10} <= set(clean) and len(clean) >= 40

@@ -160,8 +160,8 @@ def pixel_fit_data(omega: np.ndarray, a: Mapping[str, np.ndarray],
         i = int(np.flatnonzero(negative)[0])
         raise ParameterError(f"stiffness must be > 0 N/m, got {stiffness[i]!r} at omega = "
                              f"{omega[i]:.4g} rad/s (point {i})")
-    k = stiffness * np.exp(1j * phase)
-    with np.errstate(invalid="ignore", divide="ignore"):  # left-out points may be NaN
+    with np.errstate(invalid="ignore", divide="ignore"):  # left-out points may be NaN or inf
+        k = stiffness * np.exp(1j * phase)
         w, weighting, note = _spectrum_weights(omega, k, stiffness, phase, a, keep, weights)
     notes.extend(note)
     info = {**source, "data_points": int(keep.sum()), "data_flagged": int((~keep).sum())}
@@ -175,6 +175,69 @@ def pixel_fit_data(omega: np.ndarray, a: Mapping[str, np.ndarray],
         if np.any(bins > 0):
             sigma_dof = np.where(bins > 0, 2.0 * bins, np.inf)
     return FitData(omega[keep], k[keep], w[keep], info, weighting, tuple(notes), sigma_dof)
+
+
+def clean_pixels_fit_data(omega: np.ndarray, arrays: Mapping[str, np.ndarray],
+                          source: Mapping[str, Any]) -> list[FitData | None]:
+    """FitData of every pixel of a map that needs no note, computed over all pixels at once.
+
+    The pixels of :func:`pixel_fit_data` (``weights=None``) whose spectrum is as expected: some
+    point unflagged, no NaN/inf stiffness or phase and no stiffness ≤ 0 among the unflagged, a
+    usable stderr at each of them. Their FitData hold the same values, from the same elementwise
+    operations on the (pixel, ω) arrays (``tests/test_fitting.py`` compares them bit for bit);
+    every other pixel is None, for :func:`pixel_fit_data` to describe or refuse. One NumPy call
+    per operation for the map instead of one per pixel: a 4096-pixel map's preparation took
+    0.17 s, serial beside the fits (issue 22 item 3).
+
+    Parameters
+    ----------
+    omega : numpy.ndarray
+        The map's ω [rad/s].
+    arrays : mapping
+        The map's (pixel, ω) arrays (:func:`spectrum_arrays`).
+    source : mapping
+        Provenance each FitData carries.
+
+    Returns
+    -------
+    list
+        Per pixel its FitData, or None.
+    """
+    stiffness, phase = arrays["stiffness"], arrays["phase"]
+    keep = arrays["quality"] == 0
+    with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
+        # as pixel_fit_data and _spectrum_weights, elementwise
+        k = stiffness * np.exp(1j * phase)
+        s_err, p_err = arrays["stiffness_stderr"], arrays["phase_stderr"]
+        p_err = np.where(np.isfinite(p_err), p_err, s_err / stiffness)
+        s_err = np.where(np.isfinite(s_err), s_err, p_err * stiffness)
+        c, s = np.cos(phase), np.sin(phase)
+        sig_re = np.sqrt((c * s_err) ** 2 + (stiffness * s * p_err) ** 2)
+        sig_im = np.sqrt((s * s_err) ** 2 + (stiffness * c * p_err) ** 2)
+        usable = np.isfinite(sig_re) & np.isfinite(sig_im) & (sig_re > 0) & (sig_im > 0)
+        w = 1.0 / sig_re + 1j / sig_im
+        fine = np.isfinite(stiffness) & np.isfinite(phase) & (stiffness > 0) & usable
+    clean = keep.any(axis=1) & ~(keep & ~fine).any(axis=1)
+    depth, bins = arrays["mean_indentation"], arrays["stderr_bins"]
+    has_depth = (keep & np.isfinite(depth)).any(axis=1)
+    has_bins = (keep & (bins > 0)).any(axis=1)
+    counts = keep.sum(axis=1)
+    out: list[FitData | None] = []
+    for i in range(keep.shape[0]):
+        if not clean[i]:
+            out.append(None)
+            continue
+        row = keep[i]
+        n = int(counts[i])
+        info = {**source, "data_points": n, "data_flagged": row.size - n}
+        if has_depth[i]:
+            info["mean_indentation"] = float(np.nanmedian(depth[i][row]))
+        sigma_dof = None
+        if has_bins[i]:
+            kept = bins[i][row]
+            sigma_dof = np.where(kept > 0, 2.0 * kept, np.inf)
+        out.append(FitData(omega[row], k[i][row], w[i][row], info, "stderr", (), sigma_dof))
+    return out
 
 
 def _spectrum_weights(omega: np.ndarray, k: np.ndarray, stiffness: np.ndarray,

@@ -20,7 +20,7 @@ import xarray as xr
 from viscoforce.exceptions import ParameterError, ViscoforceError
 from viscoforce.fitting.base import SPECTRUM_MODELS
 from viscoforce.fitting.curves import curve_data
-from viscoforce.fitting.data import FitData, pixel_fit_data, spectrum_arrays
+from viscoforce.fitting.data import FitData, clean_pixels_fit_data, pixel_fit_data, spectrum_arrays
 from viscoforce.fitting.fit import local_identifiability, select, summary
 from viscoforce.fitting.identify import IDENTIFIABILITY
 from viscoforce.fitting.report import fit_report
@@ -72,10 +72,11 @@ def pixel_data(ds: xr.Dataset, model: str, *, segment: int | None = None
         arrays = spectrum_arrays(ds, dims)
         omega = np.asarray(ds["omega"].values, dtype=float)
         source = {"data_kind": "spectrum"}
+        # the pixels that need a note or a refusal, one by one
         out: list[FitData | str] = [
-            _or_reason(lambda i=i: pixel_fit_data(omega, {k: v[i] for k, v in arrays.items()},
-                                                  source))
-            for i in range(arrays["stiffness"].shape[0])]
+            data if data is not None else _or_reason(lambda i=i: pixel_fit_data(
+                omega, {k: v[i] for k, v in arrays.items()}, source))
+            for i, data in enumerate(clean_pixels_fit_data(omega, arrays, source))]
     else:
         dims = ("curve",)
         n = int(ds.sizes["curve"])
