@@ -62,8 +62,10 @@ from viscoforce.fitting.pixels import assemble_map, fit_block, pixel_data
 
 #: Seconds to wait for a scheduler before giving up.
 CONNECT_TIMEOUT = 10.0
-#: Most pixels per cluster task.
-MAX_BLOCK = 64
+#: Most pixels per cluster task (at 0.5 ms per svda pixel, 0.1 s of fitting takes 200: a cap of
+#: 64 left tasks of 30 ms, and dask's handling of 64 tasks cost this process 0.6–0.8 s of CPU
+#: beside the two workers on a 64×64 map; 0.4–0.6 s with 256).
+MAX_BLOCK = 256
 #: Aimed duration of one cluster task [s] (with the measured per-pixel cost): long against
 #: dask's ~1 ms per task, short enough that the last tasks leave no worker idle for long.
 TASK_SECONDS = 0.1
