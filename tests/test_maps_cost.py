@@ -212,3 +212,34 @@ def test_the_cli_map_fit_uses_the_cost_model(rng, tmp_path, capsys):
         assert fits.attrs["execution"] == "in-process"  # 6 pixels: the probe fits them all
         assert fits.attrs["execution_reason"] == "cost model: the probe fitted every pixel"
         assert fits.attrs["pixels_in_process"] == 6
+
+
+def test_a_blocks_results_cross_the_cluster_packed_and_come_back_the_same(rng):
+    """maps._packed_results: every pixel's dict back with its keys in order, each array equal
+    (dtype, shape, values) and its own memory range; failed pixels and odd arrays included."""
+    from viscoforce.fitting.models import check_fixed
+    from viscoforce.fitting.pixels import fit_block, pixel_data
+
+    ds = _svda_map(2, 3, rng)
+    items, _, _ = pixel_data(ds, "svda")
+    results = fit_block(items, "svda", 1, "bic", check_fixed("svda", SVDA_FIXED),
+                        omega=ds["omega"].values)
+    results += [{"success": False, "message": "no point left"},
+                {"a": np.float64(1.5) * np.ones(()), "b": np.arange(4, dtype=np.int32),
+                 "c": np.array(["E0", "tau"]), "d": np.zeros((0, 3)),
+                 "e": np.ma.masked_array([1.0, 2.0], mask=[False, True]), "f": [1.0, 2.0]}]
+    back = maps._unpacked_results(maps._packed_results(results))
+    assert len(back) == len(results)
+    for got, want in zip(back, results, strict=True):
+        assert list(got) == list(want)
+        for key, value in want.items():
+            if isinstance(value, np.ndarray):
+                assert type(got[key]) is type(value) and got[key].dtype == value.dtype
+                assert got[key].shape == value.shape
+                np.testing.assert_array_equal(got[key], value)
+            else:
+                np.testing.assert_equal(got[key], value)  # NaN equal to NaN, nested dicts
+    first, second = back[0]["fit_k"], back[1]["fit_k"]
+    before = second.copy()
+    first[:] = 0.0  # a view of its own range: the next pixel's curve is untouched
+    np.testing.assert_array_equal(second, before)
