@@ -316,3 +316,38 @@ def test_the_map_result_with_its_flags_survives_netcdf(rng, tmp_path):
     assert back["quality"].dtype == np.int8 and back["identifiability"].dtype == np.int8
     np.testing.assert_array_equal(back["quality"].values, result["quality"].values)
     np.testing.assert_array_equal(back["x"].values, [0.0, 1e-6])
+
+
+def test_pixels_of_different_layouts_put_each_value_and_correlation_under_its_name():
+    """assemble_map over pixels fitted with 1 and 2 modes (modes="auto"): the union of the
+    names, in order of first appearance; each pixel's values, stderr and correlations under
+    its own names, NaN elsewhere; a pixel with the map's full layout takes its rows as they are."""
+    from viscoforce.fitting.pixels import assemble_map
+
+    one = ["E0", "E_inf", "tau"]
+    two = ["E0", "E_1", "E_inf", "tau_1", "tau_2"]
+
+    def pixel(names, seed):
+        corr = np.eye(len(names))
+        corr[0, -1] = corr[-1, 0] = 0.1 * seed
+        return {"names": names, "values": {n: float(seed + j) for j, n in enumerate(names)},
+                "stderr": {n: 0.01 * (seed + j) for j, n in enumerate(names)},
+                "identifiability": dict.fromkeys(names, 0), "correlation": corr,
+                "redchi": 1.0, "aic": 0.0, "bic": 0.0, "chi2_pvalue": 0.5, "success": True,
+                "modes": 1 if names == one else 2, "message": "ok"}
+
+    results = [pixel(one, 1), pixel(two, 2), pixel(one + ["E_1", "tau_1", "tau_2"], 3)]
+    ds = assemble_map(results, ("curve",), {"shape": {"curve": 3}, "coords": {}}, "prony", None,
+                      3)
+    names = [str(n) for n in ds["param_i"].values]
+    assert names == ["E0", "E_inf", "tau", "E_1", "tau_1", "tau_2"]
+    for i, r in enumerate(results):
+        for n in names:
+            want = r["values"].get(n, np.nan)
+            np.testing.assert_equal(float(ds[n][i]), want)
+            np.testing.assert_equal(float(ds[f"{n}_stderr"][i]), r["stderr"].get(n, np.nan))
+        corr = ds["correlation"].values[i]
+        own = [names.index(n) for n in r["names"]]
+        np.testing.assert_array_equal(corr[np.ix_(own, own)], r["correlation"])
+        others = [j for j in range(len(names)) if j not in own]
+        assert np.isnan(corr[others]).all() and np.isnan(corr[:, others]).all()

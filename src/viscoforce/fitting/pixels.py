@@ -240,15 +240,18 @@ def assemble_map(results: list[dict[str, Any]], dims: tuple[str, ...], layout: d
         quality[i] = pixel_quality(r)
         if "names" not in r:
             continue
-        idx = [names.index(x) for x in r["names"]]
-        values[i, idx] = [r["values"][x] for x in r["names"]]
-        errors[i, idx] = [np.nan if r["stderr"][x] is None else r["stderr"][x]
-                          for x in r["names"]]
+        own = r["names"]
+        idx: list[int] | slice = slice(None) if own == names else [names.index(x) for x in own]
+        values[i, idx] = [r["values"][x] for x in own]
+        errors[i, idx] = [np.nan if r["stderr"][x] is None else r["stderr"][x] for x in own]
         codes = _identifiability(r)
-        ident[i, idx] = [codes[x] for x in r["names"]]
+        ident[i, idx] = [codes[x] for x in own]
         for side, arr in limits.items():
-            arr[i, idx] = [r.get(side, {}).get(x, np.nan) for x in r["names"]]
-        corr[i][np.ix_(idx, idx)] = r["correlation"]
+            arr[i, idx] = [r.get(side, {}).get(x, np.nan) for x in own]
+        if isinstance(idx, slice):  # every parameter of the map (one model, one layout)
+            corr[i] = r["correlation"]
+        else:
+            corr[i][np.ix_(idx, idx)] = r["correlation"]
         for k in stats:
             stats[k][i] = r.get(k, np.nan)
         success[i] = int(r["success"])
