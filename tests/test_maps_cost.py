@@ -75,8 +75,9 @@ def test_the_break_even_follows_the_startup():
 
 
 def test_slow_pixels_justify_a_cluster_for_a_small_map():
-    assert plan_execution(16, 0.5, cores=2, startup=3.0).workers == 2
-    assert plan_execution(16, 0.5, cores=2, startup=3.0, method="spawn").workers == 2
+    # 16 pixels of 0.5 s: 8 s here, 2 s + 16 x 0.5 s / (2 e) on two workers
+    assert plan_execution(16, 0.5, cores=2, startup=2.0).workers == 2
+    assert plan_execution(16, 0.5, cores=2, startup=2.0, method="spawn").workers == 2
 
 
 def test_a_tie_or_a_single_core_stays_in_this_process():
@@ -90,16 +91,31 @@ def test_no_measured_cost_stays_in_this_process():
     assert plan.workers == 0 and plan.reason == "cost model: no pixel cost measured"
 
 
-def test_the_startup_comes_from_the_start_method_and_the_import():
+def test_the_startup_comes_from_the_start_method_and_the_first_cluster():
     assert cluster_startup(2, "fork") < 0.5 < 2.0 < cluster_startup(2, "spawn")
     assert cluster_startup(2, "unknown") == cluster_startup(2, "spawn")
-    assert cluster_startup(2, "fork", imported=False) == pytest.approx(
-        cluster_startup(2, "fork") + map_cost.DISTRIBUTED_IMPORT)
-    # 512 pixels of 3 ms: forked workers pay off once distributed is imported; fresh
-    # interpreters never
-    assert plan_execution(512, 3e-3, cores=2, method="fork", imported=True).workers == 2
-    assert plan_execution(512, 3e-3, cores=2, method="fork", imported=False).workers == 0
-    assert plan_execution(512, 3e-3, cores=2, method="spawn", imported=True).workers == 0
+    assert cluster_startup(2, "fork", warm=False) == pytest.approx(
+        cluster_startup(2, "fork") + map_cost.FIRST_CLUSTER)
+    # 512 pixels of 3 ms: forked workers pay off once a cluster has run in this process;
+    # fresh interpreters never
+    assert plan_execution(512, 3e-3, cores=2, method="fork", warm=True).workers == 2
+    assert plan_execution(512, 3e-3, cores=2, method="fork", warm=False).workers == 0
+    assert plan_execution(512, 3e-3, cores=2, method="fork").workers == 0  # cold by default
+    assert plan_execution(512, 3e-3, cores=2, method="spawn", warm=True).workers == 0
+
+
+def test_fit_map_tells_the_cost_model_whether_a_cluster_ran_here(monkeypatch, rng):
+    seen = []
+
+    def plan(*args, **kwargs):
+        seen.append(kwargs["warm"])
+        return map_cost.ExecutionPlan(0, math.nan, {}, "test")
+
+    monkeypatch.setattr(maps, "plan_execution", plan)
+    for count in (0, 1):
+        monkeypatch.setattr(maps, "_local_clusters", count)
+        fit_map(_svda_map(2, 2, rng), "svda", progress=False, **SVDA_FIXED)
+    assert seen == [False, True]
 
 
 def test_this_process_fits_while_fresh_interpreters_start():
@@ -134,8 +150,9 @@ def test_probe_indices_spread_over_the_map_in_every_prefix():
 # ── fit_map: the plan decides, the user's choice wins, the attrs say what happened ──────────────
 
 def _plan(workers):
-    def plan(pixels, pixel_cost, *, cores):
+    def plan(pixels, pixel_cost, *, cores, warm):
         assert math.isfinite(pixel_cost) and pixel_cost > 0 and cores == maps.max_workers()
+        assert warm == (maps._local_clusters > 0)
         return ExecutionPlan(workers, pixel_cost, {"in-process": 1.0, cluster_label(2): 0.5},
                              "injected")
     return plan

@@ -5,8 +5,8 @@ A map's pixels are independent fits, so the wall time of ``r`` pixels of cost ``
 - in this process: ``r·c``;
 - on a local cluster of ``w`` worker processes: ``S(w) + (r − m)·(c + o)/(w·e)``, where
   ``S(w)`` is the cluster's start-up and shut-down (:data:`CLUSTER_STARTUP`, by the start
-  method of its processes, plus :data:`DISTRIBUTED_IMPORT` while dask.distributed is not
-  imported), ``m`` the pixels this process fits itself while the cluster starts (``S(w)/(2c)``:
+  method of its processes, plus :data:`FIRST_CLUSTER` for the first local cluster of this
+  process), ``m`` the pixels this process fits itself while the cluster starts (``S(w)/(2c)``:
   it shares the cores with the starting workers; only where the workers start as fresh
   interpreters, :data:`OVERLAP_METHODS`), ``o`` the per-pixel transport
   (:data:`PIXEL_OVERHEAD`) and ``e`` the parallel efficiency (:data:`PARALLEL_EFFICIENCY`: the
@@ -18,9 +18,9 @@ the map itself, by fitting a few pixels spread over it in this process first
 (:func:`probe_indices`; their results are kept); ``S`` and ``o`` are constants measured with
 benchmarks/bench_maps.py (2-core Linux machine, Python 3.11, dask.distributed 2026.8).
 
-Everything here is plain arithmetic on given costs (no clock, no dask; the only fact looked up
-is whether dask.distributed is imported already, unless given): the decisions are
-deterministic for given inputs and tested so (tests/test_maps_cost.py).
+Everything here is plain arithmetic on given costs (no clock, no dask; whether a local cluster
+has run in this process already is the caller's to say): the decisions are deterministic for
+given inputs and tested so (tests/test_maps_cost.py).
 """
 
 from __future__ import annotations
@@ -31,8 +31,8 @@ import sys
 from dataclasses import dataclass
 
 #: Start-up plus shut-down of a local cluster [s] by the start method of its worker processes:
-#: ``(base, per worker)``, with distributed already imported (:data:`DISTRIBUTED_IMPORT` on top
-#: otherwise). "fork" copies this process (viscoforce already imported): 0.24–0.35 s start and
+#: ``(base, per worker)``, once a local cluster has run in this process (:data:`FIRST_CLUSTER`
+#: on top for the first). "fork" copies this process (viscoforce already imported): 0.24–0.35 s start and
 #: 0.08–0.12 s shut-down measured for 2 workers (0.12–0.16 s and 0.04–0.10 s for one);
 #: "spawn"/"forkserver" start fresh interpreters that import distributed, NumPy, SciPy, lmfit
 #: and viscoforce (1.8 s each, side by side on the cores): 2.3–3.7 s for 2 workers on 2
@@ -40,9 +40,13 @@ from dataclasses import dataclass
 CLUSTER_STARTUP: dict[str, tuple[float, float]] = {"fork": (0.2, 0.1),
                                                    "spawn": (2.0, 1.0),
                                                    "forkserver": (2.0, 1.0)}
-#: Importing dask.distributed into this process, the first time [s]: 0.48–0.63 s measured
-#: (1.0 s under a load of 4 on 2 cores).
-DISTRIBUTED_IMPORT = 0.5
+#: The first local cluster of a process costs this much more [s]: importing dask.distributed
+#: (0.03–0.4 s) and the first set-up of its scheduler and comms here. Measured 2026-12-04
+#: (64×64 svda map, 2 forked workers): start-up 0.64–0.73 s for the first cluster, whether
+#: distributed was imported before or not, against 0.13–0.17 s for later ones; the whole map
+#: 2.23–2.82 s against 1.67–2.18 s after one (0.42–0.65 s more, this process also spending
+#: ≈ 0.5 s more CPU beside the workers).
+FIRST_CLUSTER = 0.5
 #: Start methods whose cluster start-up this process spends fitting pixels. Not "fork": its
 #: 0.1 s start-up is the scheduler's and the nannies' event loop in this process, which a
 #: CPU-bound fit here slows (it waits for the GIL at every step): 0.1 s became > 0.5 s.
@@ -51,8 +55,13 @@ OVERLAP_METHODS = ("spawn", "forkserver")
 #: result back, and the result's bookkeeping here (~1.3 kB out, ~0.4 kB back per pixel).
 PIXEL_OVERHEAD = 5e-5
 #: Fraction of ``w`` cores the workers get when the cluster fits ``w`` at a time: the
-#: scheduler, the client and the result collection run in this process beside them.
-PARALLEL_EFFICIENCY = 0.92
+#: scheduler, the client and the result collection run in this process beside them, and the
+#: machine's cores may not be free. Measured 2026-12-04 on this project's 2-core machine: a
+#: worker's svda pixel 0.66–0.93 ms against 0.52–0.65 ms in this process (0.92 was measured
+#: on 2026-12-02, when the host gave two processes more of its cores); with 0.92 the model
+#: sent a fresh CLI process's 64×64 map to a cluster that took 2.5–3.0 s where this process
+#: took 2.0 s.
+PARALLEL_EFFICIENCY = 0.75
 #: The probe: pixels fitted in this process to measure the per-pixel cost, at most
 #: :data:`PROBE_PIXELS`, and no more once :data:`PROBE_SECONDS` have passed and at least
 #: :data:`PROBE_MIN_PIXELS` are fitted.
@@ -110,13 +119,14 @@ def start_method() -> str:
     return "spawn"
 
 
-def cluster_startup(workers: int, method: str, *, imported: bool = True) -> float:
+def cluster_startup(workers: int, method: str, *, warm: bool = True) -> float:
     """Start-up plus shut-down [s] of a local cluster of ``workers`` (:data:`CLUSTER_STARTUP`).
 
-    Without ``imported`` (distributed not yet imported here), :data:`DISTRIBUTED_IMPORT` more.
+    Without ``warm`` (no local cluster has run in this process yet), :data:`FIRST_CLUSTER`
+    more.
     """
     base, each = CLUSTER_STARTUP.get(method, CLUSTER_STARTUP["spawn"])
-    return base + each * workers + (0.0 if imported else DISTRIBUTED_IMPORT)
+    return base + each * workers + (0.0 if warm else FIRST_CLUSTER)
 
 
 def expected_in_process(pixels: int, pixel_cost: float) -> float:
@@ -139,8 +149,7 @@ def expected_cluster(pixels: int, pixel_cost: float, workers: int, startup: floa
 
 
 def plan_execution(pixels: int, pixel_cost: float, *, cores: int, method: str | None = None,
-                   startup: float | None = None, imported: bool | None = None
-                   ) -> ExecutionPlan:
+                   startup: float | None = None, warm: bool = False) -> ExecutionPlan:
     """The fastest way to fit ``pixels`` more of cost ``pixel_cost`` each: here or a cluster.
 
     Parameters
@@ -156,9 +165,9 @@ def plan_execution(pixels: int, pixel_cost: float, *, cores: int, method: str | 
     startup : float, optional
         Start-up plus shut-down of a cluster [s], instead of :func:`cluster_startup` (the same
         for every worker count).
-    imported : bool, optional
-        Whether dask.distributed is imported in this process already (default: whether it
-        is, in ``sys.modules``).
+    warm : bool
+        Whether a local cluster has run in this process already (default False: the first
+        costs :data:`FIRST_CLUSTER` more).
 
     Returns
     -------
@@ -167,14 +176,13 @@ def plan_execution(pixels: int, pixel_cost: float, *, cores: int, method: str | 
         faster; on a tie, this process.
     """
     method = start_method() if method is None else method
-    imported = "distributed" in sys.modules if imported is None else imported
     if pixels <= 0:
         return ExecutionPlan(0, pixel_cost, {"in-process": 0.0},
                              "cost model: the probe fitted every pixel")
     options = {"in-process": expected_in_process(pixels, pixel_cost)}
     best, best_time = 0, options["in-process"]
     for w in range(2, min(cores, pixels) + 1):
-        s = cluster_startup(w, method, imported=imported) if startup is None else startup
+        s = cluster_startup(w, method, warm=warm) if startup is None else startup
         t = expected_cluster(pixels, pixel_cost, w, s, overlap=method in OVERLAP_METHODS)
         options[cluster_label(w)] = t
         if t < best_time:

@@ -90,8 +90,13 @@ def check_workers(workers: Any) -> None:
                              f"only compete for them), got {workers!r}")
 
 
+#: Local clusters started by this process (the cost model's ``warm``: the first costs more).
+_local_clusters = 0
+
+
 def _start_local(workers: int) -> tuple[Any, Any]:
     """A local cluster of ``workers`` processes × 1 thread and its Client (both to be closed)."""
+    global _local_clusters
     import dask
     from distributed import Client, LocalCluster
 
@@ -105,6 +110,7 @@ def _start_local(workers: int) -> tuple[Any, Any]:
         # warns when another cluster holds it)
         local = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
                              dashboard_address=":0")
+    _local_clusters += 1
     try:
         return local, Client(local)
     except BaseException:
@@ -328,7 +334,8 @@ def _execute(run: _Run, scheduler: str | None, workers: int | None) -> dict[str,
     else:
         if workers is None:
             estimate = _probe(run)
-            plan = plan_execution(len(run.left()), estimate, cores=max_workers())
+            plan = plan_execution(len(run.left()), estimate, cores=max_workers(),
+                                  warm=_local_clusters > 0)
         else:  # a worker per pixel at most: the rest would idle
             plan = ExecutionPlan(min(workers, max(1, n)), math.nan, {}, f"workers={workers}")
         left = run.left()
