@@ -439,7 +439,16 @@ def test_clean_pixels_fit_data_equals_pixel_fit_data_bit_for_bit(rng):
     arrays["stiffness_stderr"][9, 4] = np.nan          # one of the two stderr: still usable
     arrays["quality"][10, 1] = 1.0
     arrays["stiffness"][10, 1] = np.nan                # NaN on a flagged point: clean
-    for i, j in ((1, 3), (2, 0), (3, 5), (4, 2)):
+    arrays["stiffness_stderr"][11, 0] = arrays["phase_stderr"][11, 0] = np.inf  # unusable
+    arrays["stiffness_stderr"][17, 2] = np.inf         # one infinite: the other's instead
+    arrays["phase_stderr"][12, 1] = 0.0
+    arrays["stiffness_stderr"][12, 1] = 0.0            # both zero: unusable
+    arrays["phase_stderr"][13] = np.nan                # the phase's from the stiffness's
+    arrays["stiffness_stderr"][14] = np.nan            # and the other way round
+    arrays["quality"][15] = np.where(np.arange(n_omega) < 6, 1.0, 0.0)
+    arrays["stiffness_stderr"][15, 6:] = arrays["phase_stderr"][15, 6:] = np.nan  # only flagged
+    arrays["mean_indentation"][16] = np.inf            # an infinite depth
+    for i, j in ((1, 3), (2, 0), (3, 5), (4, 2), (11, 0), (12, 1), (17, 2)):
         arrays["quality"][i, j] = 0.0                  # the faults above on unflagged points
     source = {"data_kind": "spectrum"}
     fast = clean_pixels_fit_data(omega, arrays, source)
@@ -450,17 +459,19 @@ def test_clean_pixels_fit_data_equals_pixel_fit_data_bit_for_bit(rng):
             slow = pixel_fit_data(omega, row, source)
         except ViscoforceError:
             slow = None
-        if i in (1, 2, 3, 4, 5, 6):
+        if i in (1, 2, 3, 4, 5, 6, 11, 12, 15):
             assert fast[i] is None
         if fast[i] is None:
             assert slow is None or slow.notes  # left to pixel_fit_data: a note or a refusal
             continue
         assert isinstance(slow, FitData) and not slow.notes
-        for name in ("x", "y", "weights"):
-            np.testing.assert_array_equal(getattr(fast[i], name), getattr(slow, name))
-        assert fast[i].source == slow.source and fast[i].weighting == slow.weighting
-        assert (fast[i].sigma_dof is None) == (slow.sigma_dof is None)
-        if slow.sigma_dof is not None:
-            np.testing.assert_array_equal(fast[i].sigma_dof, slow.sigma_dof)
+        for name in ("x", "y", "weights", "sigma_dof"):
+            got, want = getattr(fast[i], name), getattr(slow, name)
+            assert (got is None) == (want is None), name
+            if want is not None:  # the same dtype and the same bytes (−0.0 and NaN included)
+                assert got.dtype == want.dtype and got.tobytes() == want.tobytes(), name
+        np.testing.assert_equal(fast[i].source, slow.source)  # inf depth: inf == inf
+        assert fast[i].weighting == slow.weighting and fast[i].source is not source
     clean = [i for i in range(n_pixels) if fast[i] is not None]
-    assert {0, 7, 8, 9, 10} <= set(clean) and len(clean) >= 40
+    assert {0, 7, 8, 9, 10, 13, 14, 16, 17} <= set(clean) and len(clean) >= 40
+    assert len({id(fast[i].source) for i in clean}) == len(clean)  # a dict each

@@ -242,7 +242,7 @@ def test_a_blocks_results_cross_the_cluster_packed_and_come_back_the_same(rng):
     results = fit_block(items, "svda", 1, "bic", check_fixed("svda", SVDA_FIXED),
                         omega=ds["omega"].values)
     results += [{"success": False, "message": "no point left"},
-                {"a": np.float64(1.5) * np.ones(()), "b": np.arange(4, dtype=np.int32),
+                {"a": np.array(1.5), "b": np.arange(4, dtype=np.int32),
                  "c": np.array(["E0", "tau"]), "d": np.zeros((0, 3)),
                  "e": np.ma.masked_array([1.0, 2.0], mask=[False, True]), "f": [1.0, 2.0]}]
     back = maps._unpacked_results(maps._packed_results(results))

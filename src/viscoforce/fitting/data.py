@@ -160,7 +160,8 @@ def pixel_fit_data(omega: np.ndarray, a: Mapping[str, np.ndarray],
         i = int(np.flatnonzero(negative)[0])
         raise ParameterError(f"stiffness must be > 0 N/m, got {stiffness[i]!r} at omega = "
                              f"{omega[i]:.4g} rad/s (point {i})")
-    with np.errstate(invalid="ignore", divide="ignore"):  # left-out points may be NaN or inf
+    # left-out points may be NaN, inf or huge: their k* and weights are dropped
+    with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
         k = stiffness * np.exp(1j * phase)
         w, weighting, note = _spectrum_weights(omega, k, stiffness, phase, a, keep, weights)
     notes.extend(note)
@@ -208,19 +209,14 @@ def clean_pixels_fit_data(omega: np.ndarray, arrays: Mapping[str, np.ndarray],
     with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
         # as pixel_fit_data and _spectrum_weights, elementwise
         k = stiffness * np.exp(1j * phase)
-        s_err, p_err = arrays["stiffness_stderr"], arrays["phase_stderr"]
-        p_err = np.where(np.isfinite(p_err), p_err, s_err / stiffness)
-        s_err = np.where(np.isfinite(s_err), s_err, p_err * stiffness)
-        c, s = np.cos(phase), np.sin(phase)
-        sig_re = np.sqrt((c * s_err) ** 2 + (stiffness * s * p_err) ** 2)
-        sig_im = np.sqrt((s * s_err) ** 2 + (stiffness * c * p_err) ** 2)
-        usable = np.isfinite(sig_re) & np.isfinite(sig_im) & (sig_re > 0) & (sig_im > 0)
+        sig_re, sig_im, usable = _stderr_parts(stiffness, phase, arrays["stiffness_stderr"],
+                                               arrays["phase_stderr"])
         w = 1.0 / sig_re + 1j / sig_im
         fine = np.isfinite(stiffness) & np.isfinite(phase) & (stiffness > 0) & usable
     clean = keep.any(axis=1) & ~(keep & ~fine).any(axis=1)
-    depth, bins = arrays["mean_indentation"], arrays["stderr_bins"]
+    depth, bins = arrays["mean_indentation"], arrays.get("stderr_bins")
     has_depth = (keep & np.isfinite(depth)).any(axis=1)
-    has_bins = (keep & (bins > 0)).any(axis=1)
+    has_bins = (keep & (bins > 0)).any(axis=1) if bins is not None else np.zeros(len(keep), bool)
     counts = keep.sum(axis=1)
     out: list[FitData | None] = []
     for i in range(keep.shape[0]):
@@ -240,6 +236,22 @@ def clean_pixels_fit_data(omega: np.ndarray, arrays: Mapping[str, np.ndarray],
     return out
 
 
+def _stderr_parts(stiffness: np.ndarray, phase: np.ndarray, s_err: np.ndarray,
+                  p_err: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """σ of Re k* and Im k* from the stderr of |k*| and χ, and where both are usable (> 0, finite).
+
+    A missing stderr of one (NaN) is taken from the other's relative size. Elementwise: one
+    point, one pixel or a whole map alike.
+    """
+    p_err = np.where(np.isfinite(p_err), p_err, s_err / stiffness)
+    s_err = np.where(np.isfinite(s_err), s_err, p_err * stiffness)
+    c, s = np.cos(phase), np.sin(phase)
+    sig_re = np.sqrt((c * s_err) ** 2 + (stiffness * s * p_err) ** 2)
+    sig_im = np.sqrt((s * s_err) ** 2 + (stiffness * c * p_err) ** 2)
+    usable = np.isfinite(sig_re) & np.isfinite(sig_im) & (sig_re > 0) & (sig_im > 0)
+    return sig_re, sig_im, usable
+
+
 def _spectrum_weights(omega: np.ndarray, k: np.ndarray, stiffness: np.ndarray,
                       phase: np.ndarray, a: Mapping[str, np.ndarray], keep: np.ndarray,
                       weights: str | None) -> tuple[np.ndarray, str, list[str]]:
@@ -257,13 +269,8 @@ def _spectrum_weights(omega: np.ndarray, k: np.ndarray, stiffness: np.ndarray,
             "the spectrum has no stiffness_stderr/phase_stderr: the fit weights every point by "
             "1/|k*| (relative), scales the covariance by the reduced chi-square and gives no "
             "p-value (pass weights='relative', --weights relative, to choose this)"]
-    p_err = np.where(np.isfinite(p_err), p_err, s_err / stiffness)
-    s_err = np.where(np.isfinite(s_err), s_err, p_err * stiffness)
-    c, s = np.cos(phase), np.sin(phase)
     with np.errstate(invalid="ignore"):
-        sig_re = np.sqrt((c * s_err) ** 2 + (stiffness * s * p_err) ** 2)
-        sig_im = np.sqrt((s * s_err) ** 2 + (stiffness * c * p_err) ** 2)
-    usable = np.isfinite(sig_re) & np.isfinite(sig_im) & (sig_re > 0) & (sig_im > 0)
+        sig_re, sig_im, usable = _stderr_parts(stiffness, phase, s_err, p_err)
     notes = []
     missing = keep & ~usable
     if not (keep & usable).any():

@@ -32,20 +32,20 @@ from dataclasses import dataclass
 
 #: Start-up plus shut-down of a local cluster [s] by the start method of its worker processes:
 #: ``(base, per worker)``, once a local cluster has run in this process (:data:`FIRST_CLUSTER`
-#: on top for the first). "fork" copies this process (viscoforce already imported): 0.24–0.35 s start and
-#: 0.08–0.12 s shut-down measured for 2 workers (0.12–0.16 s and 0.04–0.10 s for one);
-#: "spawn"/"forkserver" start fresh interpreters that import distributed, NumPy, SciPy, lmfit
-#: and viscoforce (1.8 s each, side by side on the cores): 2.3–3.7 s for 2 workers on 2
-#: cores, plus 0.5–1.3 s to shut down.
-CLUSTER_STARTUP: dict[str, tuple[float, float]] = {"fork": (0.2, 0.1),
+#: on top for the first). "fork" copies this process (viscoforce already imported): 0.13–0.17 s
+#: start-up plus shut-down measured for 2 workers on 2026-12-04 (0.32–0.47 s on 2026-12-02, when
+#: the first cluster's extra was not told apart); "spawn"/"forkserver" start fresh interpreters
+#: that import distributed, NumPy, SciPy, lmfit and viscoforce (1.8 s each, side by side on
+#: the cores): 2.3–3.7 s for 2 workers on 2 cores, plus 0.5–1.3 s to shut down.
+CLUSTER_STARTUP: dict[str, tuple[float, float]] = {"fork": (0.05, 0.05),
                                                    "spawn": (2.0, 1.0),
                                                    "forkserver": (2.0, 1.0)}
 #: The first local cluster of a process costs this much more [s]: importing dask.distributed
-#: (0.03–0.4 s) and the first set-up of its scheduler and comms here. Measured 2026-12-04
-#: (64×64 svda map, 2 forked workers): start-up 0.64–0.73 s for the first cluster, whether
-#: distributed was imported before or not, against 0.13–0.17 s for later ones; the whole map
-#: 2.23–2.82 s against 1.67–2.18 s after one (0.42–0.65 s more, this process also spending
-#: ≈ 0.5 s more CPU beside the workers).
+#: (0.03–0.4 s measured in child processes, up to 1.2 s under load) and the first set-up of its
+#: scheduler and comms here. Measured 2026-12-04 (64×64 svda map, 2 forked workers): start-up
+#: 0.64–0.73 s for the first cluster, whether distributed was imported before or not, against
+#: 0.13–0.17 s for later ones; the whole map 2.23–2.82 s against 1.67–2.18 s after one
+#: (0.42–0.65 s more, this process also spending ≈ 0.5 s more CPU beside the workers).
 FIRST_CLUSTER = 0.5
 #: Start methods whose cluster start-up this process spends fitting pixels. Not "fork": its
 #: 0.1 s start-up is the scheduler's and the nannies' event loop in this process, which a

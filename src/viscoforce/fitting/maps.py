@@ -10,7 +10,9 @@ Where the pixels are fitted (``attrs["execution"]`` of the result says where, an
   decides. A few pixels spread over the map are fitted in this process first (their results
   are kept) to measure the per-pixel cost; the rest is fitted here, or on a local cluster of
   2 … cores workers when that is expected to finish sooner (per-pixel cost × pixels against
-  the cluster's start-up).
+  the cluster's start-up). The first local cluster of a process costs more than later ones
+  (:data:`~viscoforce.fitting.map_cost.FIRST_CLUSTER`), so the same map may be fitted here
+  in a fresh process and on a cluster once one has run (this module counts them).
 - ``workers=N``: a local cluster of N worker processes × 1 thread, as asked.
 - ``"synchronous"``: this process only.
 - an address (``tcp://host:8786``): a running scheduler; nothing is computed locally.
@@ -482,14 +484,14 @@ def _packed_results(results: list[dict[str, Any]]) -> bytes:
     order), each array a view of its own range of the shared buffer.
     """
     light: list[dict[str, Any]] = []
-    where: list[tuple[int, str, str, tuple[int, ...], int]] = []
-    parts: dict[str, list[np.ndarray]] = {}
-    sizes: dict[str, int] = {}
+    where: list[tuple[int, str, np.dtype, tuple[int, ...], int]] = []
+    parts: dict[np.dtype, list[np.ndarray]] = {}
+    sizes: dict[np.dtype, int] = {}
     for i, result in enumerate(results):
         plain = dict(result)
         for key, value in result.items():
             if type(value) is np.ndarray:
-                code = value.dtype.str
+                code = value.dtype  # the dtype itself: structured ones may share a .str
                 where.append((i, key, code, value.shape, sizes.get(code, 0)))
                 parts.setdefault(code, []).append(value.ravel())
                 sizes[code] = sizes.get(code, 0) + value.size
