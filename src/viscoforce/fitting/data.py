@@ -165,17 +165,27 @@ def pixel_fit_data(omega: np.ndarray, a: Mapping[str, np.ndarray],
         k = stiffness * np.exp(1j * phase)
         w, weighting, note = _spectrum_weights(omega, k, stiffness, phase, a, keep, weights)
     notes.extend(note)
-    info = {**source, "data_points": int(keep.sum()), "data_flagged": int((~keep).sum())}
-    depth = a["mean_indentation"]
-    if np.isfinite(depth[keep]).any():
-        info["mean_indentation"] = float(np.nanmedian(depth[keep]))
-    sigma_dof = None
+    info = _data_info(source, keep, a["mean_indentation"])
     bins = a.get("stderr_bins")
-    if weighting == "stderr" and bins is not None:
-        bins = np.asarray(bins, dtype=float)[keep]
-        if np.any(bins > 0):
-            sigma_dof = np.where(bins > 0, 2.0 * bins, np.inf)
+    sigma_dof = (_stderr_dof(np.asarray(bins, dtype=float)[keep])
+                 if weighting == "stderr" and bins is not None else None)
     return FitData(omega[keep], k[keep], w[keep], info, weighting, tuple(notes), sigma_dof)
+
+
+def _data_info(source: Mapping[str, Any], keep: np.ndarray, depth: np.ndarray
+               ) -> dict[str, Any]:
+    """A pixel's FitData.source: provenance, points kept and flagged, median depth if any."""
+    n = int(keep.sum())
+    info = {**source, "data_points": n, "data_flagged": keep.size - n}
+    kept = depth[keep]
+    if np.isfinite(kept).any():
+        info["mean_indentation"] = float(np.nanmedian(kept))
+    return info
+
+
+def _stderr_dof(bins: np.ndarray) -> np.ndarray | None:
+    """Degrees of freedom of the kept points' stderr: 2 × the lock-in's bins (None: exact)."""
+    return np.where(bins > 0, 2.0 * bins, np.inf) if np.any(bins > 0) else None
 
 
 def clean_pixels_fit_data(omega: np.ndarray, arrays: Mapping[str, np.ndarray],
@@ -215,24 +225,15 @@ def clean_pixels_fit_data(omega: np.ndarray, arrays: Mapping[str, np.ndarray],
         fine = np.isfinite(stiffness) & np.isfinite(phase) & (stiffness > 0) & usable
     clean = keep.any(axis=1) & ~(keep & ~fine).any(axis=1)
     depth, bins = arrays["mean_indentation"], arrays.get("stderr_bins")
-    has_depth = (keep & np.isfinite(depth)).any(axis=1)
-    has_bins = (keep & (bins > 0)).any(axis=1) if bins is not None else np.zeros(len(keep), bool)
-    counts = keep.sum(axis=1)
     out: list[FitData | None] = []
     for i in range(keep.shape[0]):
         if not clean[i]:
             out.append(None)
             continue
         row = keep[i]
-        n = int(counts[i])
-        info = {**source, "data_points": n, "data_flagged": row.size - n}
-        if has_depth[i]:
-            info["mean_indentation"] = float(np.nanmedian(depth[i][row]))
-        sigma_dof = None
-        if has_bins[i]:
-            kept = bins[i][row]
-            sigma_dof = np.where(kept > 0, 2.0 * kept, np.inf)
-        out.append(FitData(omega[row], k[i][row], w[i][row], info, "stderr", (), sigma_dof))
+        sigma_dof = None if bins is None else _stderr_dof(bins[i][row])
+        out.append(FitData(omega[row], k[i][row], w[i][row], _data_info(source, row, depth[i]),
+                           "stderr", (), sigma_dof))
     return out
 
 

@@ -25,7 +25,7 @@ from viscoforce.fitting.fit import local_identifiability, select, summary
 from viscoforce.fitting.identify import IDENTIFIABILITY
 from viscoforce.fitting.report import fit_report
 from viscoforce.fitting.verdict import PVALUE_WARN
-from viscoforce.schema import flag_attrs, validate_fit_result, validate_spectrum
+from viscoforce.schema import flag_attrs, index_values, validate_fit_result, validate_spectrum
 from viscoforce.schema.fit import SUCCESS_FLAGS, parameter_units
 
 #: Per-pixel ``quality`` codes of a map (CF ``flag_values`` → ``flag_meanings``).
@@ -70,7 +70,7 @@ def pixel_data(ds: xr.Dataset, model: str, *, segment: int | None = None
         validate_spectrum(ds, require=("stiffness", "phase"))
         dims = tuple(str(d) for d in ds["stiffness"].dims if d != "omega")
         arrays = spectrum_arrays(ds, dims)
-        omega = np.asarray(ds["omega"].values, dtype=float)
+        omega = np.asarray(index_values(ds, "omega"), dtype=float)
         source = {"data_kind": "spectrum"}
         # the pixels that need a note or a refusal, one by one
         out: list[FitData | str] = [
