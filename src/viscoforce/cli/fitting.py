@@ -781,9 +781,10 @@ def table_rows(result) -> tuple[list[str], list[list[Any]]]:
     """A fit result as table rows: ``name (unit)`` headers and one row per curve/pixel.
 
     Columns: the map's coordinates, each parameter and its stderr, the derived Young's and shear
-    moduli, ``redchi``, ``chi2_pvalue``, ``quality`` (maps), ``success``, ``modes``.
+    moduli, ``redchi``, ``chi2_pvalue``, ``quality`` (maps), ``success``, ``modes``; every column
+    read over the rows by dim name (:func:`viscoforce.schema.flat_over`).
     """
-    import numpy as np
+    from viscoforce.schema import flat_over
 
     names = [str(n) for n in result["param_i"].values]
     columns = [n for name in names for n in (name, f"{name}_stderr")]
@@ -795,19 +796,14 @@ def table_rows(result) -> tuple[list[str], list[list[Any]]]:
     coords = [str(c) for c in result.coords
               if c not in ("param_i", "param_j", "omega", "time", "tip_position")
               and set(result[c].dims) <= set(dims) and result[c].dims]
-    shape = tuple(result.sizes[d] for d in dims)
 
     def header(name: str) -> str:
         unit = str(result[name].attrs.get("units", ""))
         return f"{name} ({unit})" if unit else name
 
-    def column(name: str) -> np.ndarray:
-        da = result[name]
-        return np.broadcast_to(np.asarray(da.transpose(*(d for d in dims if d in da.dims))
-                                          .values), shape).reshape(-1)
-
     headers = [header(c) for c in (*coords, *columns)]
-    rows = [list(row) for row in zip(*(column(c) for c in (*coords, *columns)), strict=True)]
+    rows = [list(row) for row in zip(*(flat_over(result, c, tuple(dims))
+                                       for c in (*coords, *columns)), strict=True)]
     return headers, rows
 
 

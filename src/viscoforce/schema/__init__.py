@@ -47,6 +47,7 @@ from viscoforce.schema._core import (
     clean_attrs,
     flag_attrs,
     flag_meanings,
+    flat_over,
     index_values,
     parameter_names,
     plain_variable,
@@ -91,7 +92,7 @@ from viscoforce.schema.trajectory import (
 
 __all__ = [
     "SchemaError", "VariableSpec", "EXTRA", "clean_attrs", "plain_variable", "flag_attrs",
-    "flag_meanings", "index_values", "parameter_names",
+    "flag_meanings", "flat_over", "index_values", "parameter_names",
     "EQUILIBRIUM_VARIABLES", "SIGN_CONVENTION", "make_equilibrium", "validate_equilibrium",
     "TRAJECTORY_VARIABLES", "PROFILE_VARIABLES", "make_trajectory", "validate_trajectory",
     "SPECTRUM_VARIABLES", "PHASE_CONVENTION", "QUALITY_FLAGS", "QUALITY_COMMENT", "make_spectrum",
