@@ -100,3 +100,15 @@ def test_flat_over_broadcasts_by_dim_name():
     assert flat_over(ds, "v", ("x", "y")).tolist() == [0, 3, 1, 4, 2, 5]
     with pytest.raises(SchemaError, match="not one value per row"):
         flat_over(ds, "v", ("y",))
+
+
+def test_an_output_onto_a_file_of_an_input_folder_is_refused(capsys, tmp_path, spectrum_map):
+    folder = tmp_path / "inputs"
+    folder.mkdir()
+    spectrum_map.isel(y=slice(0, 1)).to_netcdf(folder / "m.nc")
+    victim = folder / "a.csv"
+    victim.write_text("frequency (Hz),stiffness (N/m),phase (deg)\n1,100,10\n2,110,12\n3,120,14\n")
+    before = victim.read_bytes()
+    assert main(["fit", str(folder), "--model", "prony", "--out", str(victim)]) == 2
+    assert "is an input of this command" in capsys.readouterr().err
+    assert victim.read_bytes() == before

@@ -714,12 +714,34 @@ def data_paths(items: list[str] | str) -> list[str]:
     return out
 
 
+def _refuse_writing_inputs(args: argparse.Namespace, paths: list[str]) -> None:
+    """Refuse an output that is one of the files DATA stands for (a folder's files included).
+
+    The parser's check (:func:`viscoforce.cli._args.check_outputs`) compares the outputs with
+    the arguments as typed; a folder given as DATA stands for the files in it.
+    """
+    from pathlib import Path
+
+    from viscoforce._files import same_file
+
+    for flag in ("out", "plot"):
+        target = getattr(args, flag, None)
+        if target is None or not Path(target).exists():
+            continue
+        for source in paths:
+            if same_file(target, source):
+                raise UsageError(f"--{flag} {target} is an input of this command ({source}, a "
+                                 "file of DATA): writing it would destroy the data; give another "
+                                 "file name")
+
+
 def run_fit(args: argparse.Namespace) -> int:
     """Fit DATA; one spectrum/curve → parameters, a map → per-pixel parameters.
 
     Several files (or a folder) are fitted one after the other into one table (:func:`run_batch`).
     """
     paths = data_paths(args.data)
+    _refuse_writing_inputs(args, paths)
     if len(paths) > 1:
         return run_batch(args, paths)
     args.data = paths[0]
