@@ -227,17 +227,18 @@ def read_data(path: str, fmt: str | None = None):
     """The dataset of DATA: netCDF as written, instrument files through ``load``'s route."""
     from pathlib import Path
 
-    import xarray as xr
-
     from viscoforce.cli.analysis import has_modulation, streamed_spectrum
+    from viscoforce.exceptions import EffortError
     from viscoforce.io.instruments import load_instrument
+    from viscoforce.io.netcdf import open_netcdf
 
     if Path(path).suffix.lower() == ".nc" and fmt is None:
         if not Path(path).is_file():
             raise UsageError(f"DATA {path}: no such file")
         try:
-            with xr.open_dataset(path) as ds:
-                return one_curve_squeezed(ds.load())
+            return one_curve_squeezed(open_netcdf(path))
+        except EffortError:
+            raise
         except (OSError, ValueError) as exc:
             raise UsageError(f"DATA {path}: not a readable netCDF file ({exc})") from None
     streamed = streamed_spectrum(path, fmt)  # a JPK map: demodulated in chunks of curves

@@ -44,13 +44,15 @@ def add_view(parser: argparse.ArgumentParser) -> None:
 
 
 def _open_netcdf(flag: str, path: str):
-    import xarray as xr
+    from viscoforce.exceptions import EffortError
+    from viscoforce.io.netcdf import open_netcdf
 
     if not Path(path).is_file():
         raise UsageError(f"{flag} {path}: no such file")
     try:
-        with xr.open_dataset(path) as ds:
-            return ds.load()
+        return open_netcdf(path)
+    except EffortError as exc:
+        raise UsageError(f"{flag} {exc}") from None
     except (OSError, ValueError) as exc:
         raise UsageError(f"{flag} {path}: not a readable netCDF file ({exc})") from None
 
