@@ -195,3 +195,34 @@ def test_measured_spectra_are_drawn_in_hz_simulated_in_rad_per_s(rng):
     assert "[Hz]" in bode_plot(measured).axes[-1].get_xlabel()
     assert "[rad/s]" in bode_plot(simulated).axes[-1].get_xlabel()
     assert "[rad/s]" in bode_plot(measured, frequency_unit="rad/s").axes[-1].get_xlabel()
+
+
+def test_a_dense_spectrum_is_drawn_as_few_paths(rng):
+    """Above DENSE_POINTS the stderr bars are one NaN-broken line, the legends sit in a corner.
+
+    matplotlib draws an ErrorbarContainer as one path per point and places a loc="best" legend
+    by testing every point: a 1e6-point spectrum took 206 s (issue 40 item 7).
+    """
+    from matplotlib.container import ErrorbarContainer
+
+    from viscoforce.plotting.bode import DENSE_POINTS
+
+    n = 3 * DENSE_POINTS
+    w = np.geomspace(10.0, 1e5, n)
+    k = _stiffness(w) * (1 + 0.02 * rng.standard_normal(n))
+    err = 0.02 * np.abs(k)
+    ds = make_spectrum(w, k, 1e-7, 1e-10, source="csv",
+                       stderr={"stiffness": err, "phase": np.full(n, 1.0)})
+    handle = bode_plot(ds, fit=_fit(), residuals=True)
+    magnitude = handle.axes[0]
+    assert not magnitude.containers and not magnitude.collections
+    assert not any(isinstance(a, ErrorbarContainer) for a in handle.lines)
+    (bars,) = [line for line in magnitude.get_lines() if line.get_label() == "_stderr"]
+    x, y = bars.get_xdata(), bars.get_ydata()
+    assert x.size == 3 * n  # (x, lower), (x, upper), a NaN break per point
+    np.testing.assert_array_equal(y[0::3], np.abs(k) - err)
+    np.testing.assert_array_equal(y[1::3], np.abs(k) + err)
+    assert np.isnan(y[2::3]).all()
+    for ax in handle.axes:
+        legend = ax.get_legend()
+        assert legend is None or legend._loc != 0  # 0 is "best"

@@ -41,6 +41,10 @@ FLAGGED_STYLE: dict[str, Any] = {"linestyle": "none", "marker": "o", "markersize
                                  "markeredgewidth": 1.5}
 #: Style of the best-fit curve.
 FIT_STYLE: dict[str, Any] = {"color": "k", "linewidth": 1.5}
+#: Points of one curve above which error bars are drawn as one NaN-broken line and legends
+#: are placed in a fixed corner: matplotlib draws an error bar as one path per point and
+#: places a ``loc="best"`` legend by testing every point (a 1e6-point spectrum took 206 s).
+DENSE_POINTS = 2000
 #: CF units of a fit parameter → the :func:`viscoforce.units.format_quantity` dimension.
 _PARAMETER_DIMENSIONS = {"s": "time", "Pa": "pressure", "N/m": "stiffness", "N": "force",
                          "m": "length", "1": "dimensionless"}
@@ -152,6 +156,24 @@ def _flag_meanings(quality: xr.DataArray, codes: FloatArray) -> str:
                      for c in np.unique(codes))
 
 
+def _error_bars(ax: Axes, x: FloatArray, y: FloatArray, yerr: FloatArray, **style: Any) -> Artist:
+    """``ax.errorbar(x, y, yerr, capsize=2, **style)``, or one path for many points.
+
+    Beyond :data:`DENSE_POINTS` points: the data as one line and the bars as ONE line broken by
+    NaN (x, y−e; x, y+e; NaN), where an error-bar container is one path per point. Returns what
+    the legend shows.
+    """
+    if x.size <= DENSE_POINTS:
+        return ax.errorbar(x, y, yerr=yerr, capsize=2, **style)
+    (line,) = ax.plot(x, y, **style)
+    bars = np.full((x.size, 3, 2), np.nan)
+    bars[:, :2, 0] = x[:, None]
+    bars[:, 0, 1], bars[:, 1, 1] = y - yerr, y + yerr
+    ax.plot(bars[..., 0].reshape(-1), bars[..., 1].reshape(-1), color=line.get_color(),
+            alpha=0.35, linewidth=0.8, label="_stderr")
+    return line
+
+
 def _draw_spectrum(axes: tuple[Axes, Axes], ds: xr.Dataset, label: str, magnitude: str,
                    scale: float, markers: bool | None, flag_label: str) -> list[Artist]:
     """Magnitude and phase of one spectrum (error bars where stderr is stored), then its flags."""
@@ -164,8 +186,8 @@ def _draw_spectrum(axes: tuple[Axes, Axes], ds: xr.Dataset, label: str, magnitud
         err = ds.get(f"{name}_stderr")
         if err is not None:
             yerr = np.broadcast_to(np.asarray(err.values, dtype=float), y.shape)
-            art = panel.errorbar(x, y, yerr=yerr, label=label,
-                                 capsize=2, linestyle="none" if show_markers else "-", **style)
+            art = _error_bars(panel, x, y, yerr, label=label,
+                              linestyle="none" if show_markers else "-", **style)
         else:
             (art,) = panel.plot(x, y, label=label, **style)
         drawn.append(art)
@@ -265,7 +287,7 @@ def _parameter_box(ax: Axes, fit: xr.Dataset) -> Artist:
     Returns the title (a Text); an existing legend of ``ax`` stays.
     """
     existing = ax.get_legend()
-    box = ax.legend(handles=[], title=_parameter_text(fit), loc="best", fontsize="small",
+    box = ax.legend(handles=[], title=_parameter_text(fit), loc=_legend_loc(ax), fontsize="small",
                     title_fontsize="small", framealpha=0.85, alignment="left")
     box.get_title().set_family("monospace")
     if existing is not None:
@@ -319,7 +341,7 @@ def _draw_residuals(ax: Axes, ds: xr.Dataset, fit: xr.Dataset, scale: float) -> 
     (im,) = ax.plot(x, r_im[keep], "s", ms=4, mfc="none", label="Im k*")
     ax.axhline(0.0, color="0.3", lw=0.8)
     ax.set_ylabel(label)
-    ax.legend(fontsize="small", ncol=2)
+    ax.legend(fontsize="small", ncol=2, loc=_legend_loc(ax))
     return [re, im]
 
 
@@ -334,14 +356,23 @@ def _draw_modulus(ax: Axes, ds: xr.Dataset, scale: float) -> list[Artist]:
         y = np.asarray(ds[name].values, dtype=float)
         err = ds.get(f"{name}_stderr")
         yerr = None if err is None else np.broadcast_to(np.asarray(err.values, float), y.shape)[keep]
-        art = ax.errorbar(x[keep], y[keep], yerr=yerr, marker="o", linestyle="none", capsize=2,
-                          mfc=face, label=label)
+        art = (ax.errorbar(x[keep], y[keep], marker="o", linestyle="none", mfc=face,
+                           label=label) if yerr is None else
+               _error_bars(ax, x[keep], y[keep], yerr, marker="o", linestyle="none", mfc=face,
+                           label=label))
         drawn.append(art)
     ax.set_yscale("log")
     nu = ds.attrs.get("poisson", 0.5)
     ax.set_ylabel(f"Young's modulus [Pa] (ν = {float(nu):g})")
-    ax.legend(fontsize="small", title=str(ds.attrs.get("tip", "")), title_fontsize="small")
+    ax.legend(fontsize="small", title=str(ds.attrs.get("tip", "")), title_fontsize="small",
+              loc=_legend_loc(ax))
     return drawn
+
+
+def _legend_loc(ax: Axes, dense: str = "upper left") -> str:
+    """``"best"``, or ``dense`` where ``ax`` holds more than :data:`DENSE_POINTS` points per line."""
+    counts = [np.size(line.get_xdata()) for line in ax.get_lines()]
+    return dense if counts and max(counts) > DENSE_POINTS else "best"
 
 
 def _on(artist: Artist, ax: Axes) -> bool:
@@ -491,7 +522,8 @@ def bode_plot(spectra: xr.Dataset | Mapping[str, xr.Dataset] | Sequence[xr.Datas
     axes[1].set_ylabel("phase $\\chi$ [deg] (force leads compression)")
     sym = "$\\omega$ [rad/s]" if frequency_unit == "rad/s" else "$f = \\omega/2\\pi$ [Hz]"
     axes[-1].set_xlabel(f"frequency {sym}")
-    axes[0].legend(handles=[a for a in drawn if _on(a, axes[0])], fontsize="small")
+    axes[0].legend(handles=[a for a in drawn if _on(a, axes[0])], fontsize="small",
+                   loc=_legend_loc(axes[0]))
     for a in axes:
         a.grid(True, which="both", alpha=0.3)
     if title:
