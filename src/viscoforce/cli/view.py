@@ -3,7 +3,10 @@
 ``view FITS.nc [--data SPECTRA.nc] --out report.html`` writes the page of
 :mod:`viscoforce.plotting.viewer` (Bokeh's JavaScript inline: it opens from a ``file://`` URL with
 no network); ``--serve`` serves the same page on 127.0.0.1 (a free port unless ``--port``),
-prints its URL and runs until Ctrl-C.
+prints its URL and runs until Ctrl-C. The server answers only requests addressed to it by its
+loopback name and port (the ``Host`` header: a page of another site reaching 127.0.0.1 through
+DNS rebinding gets 421) and sends the page's Content-Security-Policy as a header too
+(docs/security.md).
 """
 
 from __future__ import annotations
@@ -22,6 +25,8 @@ __all__ = ["SUBCOMMANDS", "add_view", "run_view", "serve_html"]
 
 #: Where ``--serve`` listens (loopback only: the page is never offered to the network).
 HOST = "127.0.0.1"
+#: The host names ``--serve`` answers to (with its port; any other ``Host`` header gets 421).
+LOOPBACK_NAMES = ("127.0.0.1", "localhost", "[::1]")
 #: The kind of ``--out`` (checked for a writable place by ``check_outputs``; ``.html`` here).
 HTML = "html"
 
@@ -118,6 +123,12 @@ def run_view(args: argparse.Namespace) -> int:
 def serve_html(html: str, *, port: int = 0, info: dict[str, Any] | None = None) -> int:
     """Serve ``html`` at ``http://127.0.0.1:PORT/`` until Ctrl-C (KeyboardInterrupt); return 0.
 
+    Only requests with one ``Host`` header naming this server (:data:`LOOPBACK_NAMES` with its
+    port) are answered, others get 421 (DNS rebinding: another site's page reaching 127.0.0.1
+    under its own name). Every response carries the page's Content-Security-Policy
+    (:func:`viscoforce.plotting.viewer.content_security_policy`, plus ``frame-ancestors
+    'none'``) and ``X-Content-Type-Options: nosniff``.
+
     Parameters
     ----------
     html : str
@@ -129,18 +140,35 @@ def serve_html(html: str, *, port: int = 0, info: dict[str, Any] | None = None) 
     """
     from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
 
+    from viscoforce.plotting.viewer import content_security_policy
+
     body = html.encode()
+    policy = f"{content_security_policy(html)}; frame-ancestors 'none'"
+    hosts: set[str] = set()  # filled once the port is known
 
     class Handler(BaseHTTPRequestHandler):
+        def end_headers(self) -> None:
+            self.send_header("Content-Security-Policy", policy)
+            self.send_header("X-Content-Type-Options", "nosniff")
+            super().end_headers()
+
+        def _send(self, status: int, content_type: str, content: bytes) -> None:
+            self.send_response(status)
+            self.send_header("Content-Type", content_type)
+            self.send_header("Content-Length", str(len(content)))
+            self.end_headers()
+            self.wfile.write(content)
+
         def do_GET(self) -> None:  # noqa: N802 - http.server's name
+            names = self.headers.get_all("Host") or []
+            if len(names) != 1 or names[0].strip().lower() not in hosts:
+                self._send(421, "text/plain; charset=utf-8",
+                           f"this server answers only at {url}\n".encode())
+                return
             if self.path.split("?")[0] not in ("/", "/index.html"):
                 self.send_error(404, "the viewer is at /")
                 return
-            self.send_response(200)
-            self.send_header("Content-Type", "text/html; charset=utf-8")
-            self.send_header("Content-Length", str(len(body)))
-            self.end_headers()
-            self.wfile.write(body)
+            self._send(200, "text/html; charset=utf-8", body)
 
         def log_message(self, format: str, *args: Any) -> None:  # noqa: A002 - the base's name
             return  # quiet: the terminal shows the URL and how to stop
@@ -150,6 +178,7 @@ def serve_html(html: str, *, port: int = 0, info: dict[str, Any] | None = None) 
     except OSError as exc:
         raise UsageError(f"--port {port}: cannot listen on {HOST} ({exc.strerror})") from None
     url = f"http://{HOST}:{server.server_address[1]}/"
+    hosts.update(f"{name}:{server.server_address[1]}" for name in LOOPBACK_NAMES)
     if info is not None:
         print_json({**info, "url": url})
     else:

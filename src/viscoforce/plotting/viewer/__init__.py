@@ -12,12 +12,20 @@ id="viscoforce-data">``.
 Compute and draw apart: :func:`map_view` gathers the arrays (no Bokeh), :func:`report_html` lays
 them out (Bokeh imported there only), :func:`best_fit_curves` evaluates each pixel's best fit
 where the map result holds only its parameters.
+
+A results file cannot run script in the reader's browser: every string from it reaches the
+page escaped for where it goes, and the page's Content-Security-Policy
+(:func:`content_security_policy`) runs only the page's own scripts (docs/security.md).
 """
 
 from __future__ import annotations
 
 from viscoforce.plotting.viewer._data import MapView, best_fit_curves, map_view, pixel_table
-from viscoforce.plotting.viewer._page import DATA_ISLAND_ID, report_html
+from viscoforce.plotting.viewer._page import (
+    DATA_ISLAND_ID,
+    content_security_policy,
+    report_html,
+)
 
-__all__ = ["DATA_ISLAND_ID", "MapView", "best_fit_curves", "map_view", "pixel_table",
-           "report_html"]
+__all__ = ["DATA_ISLAND_ID", "MapView", "best_fit_curves", "content_security_policy",
+           "map_view", "pixel_table", "report_html"]

@@ -20,17 +20,41 @@ The per-pixel table is also a JSON data island, ``<script type="application/json
 id="viscoforce-data">`` holding ``{"pixels": [...]}`` (:func:`.pixel_table`); the page's
 callbacks read it (parameter table, CSV export). The per-pixel spectra travel as float32
 arrays in Bokeh's binary encoding.
+
+Nothing from the netCDF runs (issue 40): its strings (quality meanings, dim names, parameter
+names and units, the ``model`` attribute) reach the page by one path per kind of place, each
+one function here:
+
+- as HTML (the ``Div`` texts, and the pixel title the click callback builds): escaped by
+  :func:`_html_text`, in Python; the callback only joins pieces escaped there with numbers;
+- as Bokeh text (figure titles, axis labels, the colour bar's title): :func:`_plain`, a
+  ``PlainText`` model, drawn as it is (a plain string would be parsed for TeX delimiters);
+  the table's cells, the selector's options and the hover tooltips are text nodes (Bokeh's
+  ``StringFormatter``, ``<option>``, its escaped tooltips) and take the strings as they are;
+- in the data island: :func:`_script_json`, JSON with ``<``, ``>``, ``&``, U+2028 and U+2029
+  written as JSON's unicode escapes, so that nothing in it can end the script element or open
+  markup (Bokeh's own document JSON is HTML-escaped by Bokeh);
+- the ``<title>``: Bokeh's template escapes it.
+
+The page also carries a Content-Security-Policy (:func:`content_security_policy`, a ``<meta>``
+element ahead of every script): its inline scripts run by their SHA-256 hashes, nothing else
+does, inline event handlers included, and nothing is loaded from anywhere.
 """
 
 from __future__ import annotations
 
+import base64
+import hashlib
+import html
 import json
+import re
+from typing import Any
 
 import numpy as np
 
 from viscoforce.plotting.viewer._data import MapView
 
-__all__ = ["DATA_ISLAND_ID", "report_html"]
+__all__ = ["DATA_ISLAND_ID", "content_security_policy", "report_html"]
 
 #: ``id`` of the page's JSON data island.
 DATA_ISLAND_ID = "viscoforce-data"
@@ -70,8 +94,14 @@ for (const name of ['redchi', 'chi2_pvalue']) {
 rows.name.push('quality'); rows.value.push(p.quality); rows.stderr.push(NaN);
 rows.unit.push(p.quality_name);
 table_data.data = rows;
-const where = dims.map((d) => d + ' ' + p[d]).join(', ');
-title.text = '<b>pixel ' + i + '</b> (' + where + '): quality ' + p.quality_name;
+// Bokeh 3.9 redraws a DataTable when its view's rows change, not when the same rows get new
+// values (issue 38; bokeh/bokeh#15328): ask for the redraw
+table.view.change.emit();
+// HTML from pieces escaped in Python (dims_html, quality_html) and numbers only
+const number = (v) => typeof v === 'number' ? String(v) : '–';
+const where = dims.map((d, k) => dims_html[k] + ' ' + number(p[d])).join(', ');
+title.text = '<b>pixel ' + i + '</b> (' + where + '): quality ' +
+  (quality_html[String(p.quality)] ?? number(p.quality));
 """
 
 _ON_DOUBLE_TAP = """
@@ -116,6 +146,74 @@ a.remove();
 """
 
 
+#: The page's Content-Security-Policy less its scripts' hashes (:func:`content_security_policy`).
+_POLICY = (
+    "default-src 'none'",
+    # Bokeh compiles each CustomJS callback's code with `new Function`: 'unsafe-eval'. It runs
+    # only code the page's own scripts hand it (the callbacks below), never a string of the
+    # data; inline event handlers and injected scripts stay blocked (a hash allows neither)
+    "script-src {hashes} 'unsafe-eval'",
+    "style-src 'unsafe-inline'",  # Bokeh's <style> elements and style attributes
+    "img-src data:",  # Bokeh's icons (data: URIs); the save tool and CSV export download blob:
+    # URLs through a link, which img-src does not govern
+    "object-src 'none'",
+    "base-uri 'none'",
+    "form-action 'none'",
+    "connect-src 'none'",
+)
+#: An inline script element: (attributes, text) up to the first ``</script``, as HTML parses.
+_SCRIPT = re.compile(r"<script(\s[^>]*)?>(.*?)</script", re.S | re.I)
+#: What JSON inside a script element must not hold literally.
+_SCRIPT_SAFE = str.maketrans({"<": "\\u003c", ">": "\\u003e", "&": "\\u0026",
+                              "\u2028": "\\u2028", "\u2029": "\\u2029"})
+
+
+def _html_text(text: object) -> str:
+    """``text`` as HTML text: the one escaping of what the page shows as HTML."""
+    return html.escape(str(text), quote=True)
+
+
+def _plain(text: str) -> Any:
+    """``text`` as Bokeh text drawn as it is (a ``PlainText``: no TeX, no markup)."""
+    from bokeh.models import PlainText
+
+    return PlainText(text=text)
+
+
+def _script_json(value: Any) -> str:
+    """``value`` as JSON that cannot end a script element or open markup in it."""
+    return json.dumps(value, allow_nan=False, separators=(",", ":")).translate(_SCRIPT_SAFE)
+
+
+def content_security_policy(page: str) -> str:
+    """The Content-Security-Policy of a viewer page: its own inline scripts, nothing else.
+
+    ``script-src`` lists the SHA-256 hash of each inline ``<script>`` element of ``page``
+    (its JSON data blocks are not run and not listed), so no other script and no inline event
+    handler runs; nothing is fetched, framed or embedded.
+
+    Parameters
+    ----------
+    page : str
+        The rendered page (:func:`report_html`); a ``<meta>`` policy in it does not change the
+        result.
+
+    Returns
+    -------
+    str
+        The policy, directives separated by ``"; "``.
+    """
+    hashes = []
+    for attrs, text in _SCRIPT.findall(page):
+        if "application/json" in attrs:
+            continue
+        # the hash is over the element's text as parsed: line ends normalised to LF
+        text = text.replace("\r\n", "\n").replace("\r", "\n")
+        digest = base64.b64encode(hashlib.sha256(text.encode("utf-8")).digest()).decode()
+        hashes.append(f"'sha256-{digest}'")
+    return "; ".join(_POLICY).replace("{hashes}", " ".join(dict.fromkeys(hashes)))
+
+
 def _label(view: MapView, name: str) -> str:
     display = view.units[name][1]
     return f"{name} [{display}]" if display else name
@@ -141,11 +239,10 @@ def _padded(values: np.ndarray, n: int) -> np.ndarray:
 
 
 def _island(view: MapView) -> str:
-    """The JSON data island (``</`` escaped so that no value can close the script element)."""
-    text = json.dumps({"dims": list(view.dims), "params": list(view.params),
-                       "pixels": view.table}, allow_nan=False, separators=(",", ":"))
-    return (f'<script type="application/json" id="{DATA_ISLAND_ID}">'
-            f'{text.replace("</", "<" + chr(92) + "/")}</script>')
+    """The JSON data island (:func:`_script_json`: nothing in it can end it or open markup)."""
+    text = _script_json({"dims": list(view.dims), "params": list(view.params),
+                         "pixels": view.table})
+    return f'<script type="application/json" id="{DATA_ISLAND_ID}">{text}</script>'
 
 
 def _first_pixel(view: MapView) -> int:
@@ -191,7 +288,7 @@ def report_html(view: MapView, *, csv_name: str = "viscoforce-map.csv") -> str:
 
     first_name = view.params[0]
     ranges = {n: _range(view.colour[n], view.log[n]) for n in view.params}
-    labels = {n: _label(view, n) for n in view.params}
+    labels = {n: _plain(_label(view, n)) for n in view.params}
     colour = ColumnDataSource({n: view.colour[n] for n in view.params}, name="colour_store")
     map_data = ColumnDataSource({
         "x": view.x, "y": view.y, "width": view.width, "height": view.height,
@@ -202,9 +299,11 @@ def report_html(view: MapView, *, csv_name: str = "viscoforce-map.csv") -> str:
     mapper = log_mapper if view.log[first_name] else linear_mapper
     mapper.low, mapper.high = ranges[first_name]
 
-    map_fig = figure(name="map", title=view.title, width=520, height=460, match_aspect=True,
-                     tools="tap,pan,wheel_zoom,reset,save", x_axis_label=view.axis_labels[0],
-                     y_axis_label=view.axis_labels[1])
+    map_fig = figure(name="map", width=520, height=460, match_aspect=True,
+                     tools="tap,pan,wheel_zoom,reset,save",
+                     x_axis_label=_plain(view.axis_labels[0]),
+                     y_axis_label=_plain(view.axis_labels[1]))
+    map_fig.title.text = _plain(view.title)
     renderer = map_fig.rect("x", "y", "width", "height", source=map_data, name="pixels",
                             fill_color={"field": "value", "transform": mapper},
                             line_color="white", line_width=0.5,
@@ -229,9 +328,10 @@ def report_html(view: MapView, *, csv_name: str = "viscoforce-map.csv") -> str:
     histogram_data = ColumnDataSource({"left": _padded(left, n_bins),
                                        "right": _padded(right, n_bins),
                                        "count": _padded(count, n_bins)}, name="histogram_data")
-    histogram = figure(name="histogram", title="over the good pixels", width=420, height=300,
+    histogram = figure(name="histogram", width=420, height=300,
                        tools="pan,wheel_zoom,reset,save", x_axis_label=labels[first_name],
-                       y_axis_label="pixels")
+                       y_axis_label=_plain("pixels"))
+    histogram.title.text = _plain("over the good pixels")
     histogram.quad(left="left", right="right", bottom=0, top="count", source=histogram_data,
                    fill_color="steelblue", line_color="white")
 
@@ -254,13 +354,13 @@ def report_html(view: MapView, *, csv_name: str = "viscoforce-map.csv") -> str:
         if k in view.fits else np.zeros(0) for k in ("stiffness", "phase")}}, name="fit_data")
 
     common = {"width": 420, "height": 260, "x_axis_type": "log",
-              "tools": "pan,wheel_zoom,reset,save", "x_axis_label": view.frequency_label}
-    magnitude = figure(name="bode_magnitude", y_axis_type="log", y_axis_label="|k*| [N/m]",
-                       **common)
+              "tools": "pan,wheel_zoom,reset,save", "x_axis_label": _plain(view.frequency_label)}
+    magnitude = figure(name="bode_magnitude", y_axis_type="log",
+                       y_axis_label=_plain("|k*| [N/m]"), **common)
     pixel_title = Div(text="", name="pixel_title")
-    phase = figure(name="bode_phase", y_axis_label="phase [deg]", x_range=magnitude.x_range,
-                   **common)
-    residuals = figure(name="bode_residuals", y_axis_label=view.residual_label,
+    phase = figure(name="bode_phase", y_axis_label=_plain("phase [deg]"),
+                   x_range=magnitude.x_range, **common)
+    residuals = figure(name="bode_residuals", y_axis_label=_plain(view.residual_label),
                        x_range=magnitude.x_range, **common)
     for fig, key in ((magnitude, "stiffness"), (phase, "phase")):
         fig.line("frequency", key, source=fit_data, color="black", line_width=2,
@@ -298,17 +398,20 @@ def report_html(view: MapView, *, csv_name: str = "viscoforce-map.csv") -> str:
     on_select = CustomJS(args={
         "map_data": map_data, "store": store, "fit_store": fit_store, "bode_data": bode_data,
         "fit_data": fit_data, "frequency": frequency, "fit_frequency": fit_frequency,
-        "keys": list(_SPECTRUM_KEYS), "table_data": table_data, "title": pixel_title,
+        "keys": list(_SPECTRUM_KEYS), "table_data": table_data, "table": table,
+        "title": pixel_title,
         "params": [[n, view.units[n][2], view.units[n][1]] for n in view.params],
-        "dims": list(view.dims)}, code=_ON_SELECT)
+        "dims": list(view.dims), "dims_html": [_html_text(d) for d in view.dims],
+        "quality_html": {str(row["quality"]): _html_text(row["quality_name"])
+                         for row in view.table}}, code=_ON_SELECT)
     map_data.selected.js_on_change("indices", on_select)
     map_data.selected.indices = [i0]
     export = Button(label="export table as CSV", name="export_csv", button_type="primary")
     export.js_on_event("button_click", CustomJS(args={"filename": csv_name}, code=_EXPORT_CSV))
-    notes = Div(text="<br>".join(view.notes), name="notes")
-    help_text = Div(text="Click a pixel to see its Bode plot and parameters. Grey pixels: the "
-                         "fit failed, does not describe the data, or the parameter is not "
-                         "determined there.")
+    notes = Div(text="<br>".join(_html_text(n) for n in view.notes), name="notes")
+    help_text = Div(text=_html_text("Click a pixel to see its Bode plot and parameters. Grey "
+                                    "pixels: the fit failed, does not describe the data, or "
+                                    "the parameter is not determined there."))
     layout = column(
         row(select, export, help_text), notes,
         row(map_fig, column(histogram)),
@@ -322,6 +425,15 @@ def report_html(view: MapView, *, csv_name: str = "viscoforce-map.csv") -> str:
     document.title = view.title
     from markupsafe import Markup
 
-    return file_html(document, resources=INLINE, title=view.title,
+    page = file_html(document, resources=INLINE, title=view.title,
                      template="{% block postamble %}{{ island }}{% endblock %}",
                      template_variables={"island": Markup(_island(view))})
+    # the policy goes ahead of every script: before <title>, where only the template's fixed
+    # text precedes it (the title itself, escaped, is the first text from the data)
+    head, title_tag, rest = page.partition("<title>")
+    if not title_tag or "<script" in head.lower():
+        raise RuntimeError("internal: Bokeh's page template changed: no <title> ahead of its "
+                           "scripts, so no place for the Content-Security-Policy")
+    # the policy is fixed text and base64 hashes: nothing to escape in a "-quoted attribute
+    meta = f'<meta http-equiv="Content-Security-Policy" content="{content_security_policy(page)}">'
+    return f"{head}{meta}\n    {title_tag}{rest}"
