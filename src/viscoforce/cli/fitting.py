@@ -126,7 +126,9 @@ MAP_FLAGS = FlagGroup("maps (several spectra or curves)", (
          "curvature can mislead), profile (every parameter) or local (no limits)"),
     Flag("--scheduler", None, None, "ADDRESS",
          "a running dask scheduler (tcp://host:8786); default: this process or a local "
-         "cluster, whichever the cost model expects to finish sooner"),
+         "cluster, whichever the cost model expects to finish sooner. Only give a "
+         "scheduler you control: dask exchanges pickles, so the scheduler can run code in "
+         "this process (docs/security.md)"),
     Flag("--workers", integer_type(1), None, "N",
          "workers of a local cluster (default: the cost model's choice)"),
 ))

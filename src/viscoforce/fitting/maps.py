@@ -108,10 +108,11 @@ def _start_local(workers: int) -> tuple[Any, Any]:
              "distributed.admin.system-monitor.interval": "2s",
              "distributed.worker.multiprocessing-method": start_method()}
     with dask.config.set(quiet):
-        # ":0": any free port for the scheduler's HTTP routes (None still tries 8787 and
-        # warns when another cluster holds it)
+        # "127.0.0.1:0": any free port for the scheduler's HTTP routes, on loopback only (":0"
+        # listened on every interface; None still tries 8787 and warns when another cluster
+        # holds it)
         local = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
-                             dashboard_address=":0")
+                             host="127.0.0.1", dashboard_address="127.0.0.1:0")
     _local_clusters += 1
     try:
         return local, Client(local)
