@@ -112,3 +112,18 @@ def test_an_output_onto_a_file_of_an_input_folder_is_refused(capsys, tmp_path, s
     assert main(["fit", str(folder), "--model", "prony", "--out", str(victim)]) == 2
     assert "is an input of this command" in capsys.readouterr().err
     assert victim.read_bytes() == before
+
+
+def test_the_viewer_table_of_a_non_square_map(capsys, tmp_path, spectrum_map):
+    from viscoforce.plotting.viewer import pixel_table
+
+    path = tmp_path / "narrow.nc"
+    spectrum_map.isel(x=slice(0, 3)).to_netcdf(path)
+    _, fits = _fit(tmp_path, path, "narrow_fits")
+    rows = pixel_table(fits)
+    assert len(rows) == 12
+    for row in rows:
+        pixel = fits.sel(y=row["y"], x=row["x"])
+        assert row["k_inf"] == pytest.approx(float(pixel["k_inf"]), rel=1e-12)
+    assert {(r["y"], r["x"]) for r in rows} == {
+        (float(y), float(x)) for y in fits["y"].values for x in fits["x"].values}

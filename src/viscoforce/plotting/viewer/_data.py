@@ -19,7 +19,7 @@ import xarray as xr
 from viscoforce._validation import describe_value
 from viscoforce.exceptions import ParameterError, SchemaError
 from viscoforce.plotting.maps import _DIMENSIONS, _bad_pixels, _rows
-from viscoforce.schema import flag_meanings
+from viscoforce.schema import flag_meanings, flat_over
 from viscoforce.units import format_quantity, unit_factor
 
 __all__ = ["MapView", "best_fit_curves", "map_view", "pixel_table"]
@@ -177,13 +177,6 @@ def _spacing(v: np.ndarray) -> float:
     return float(np.median(np.diff(centres))) if centres.size > 1 else 1.0
 
 
-def _flat(fits: xr.Dataset, name: str, dims: tuple[str, ...]) -> np.ndarray:
-    da = fits[name]
-    shape = tuple(fits.sizes[d] for d in dims)
-    values = np.asarray(da.transpose(*(d for d in dims if d in da.dims)).values)
-    return np.broadcast_to(values, shape).reshape(-1)
-
-
 def _number(v: Any) -> float | None:
     v = float(v)
     return v if math.isfinite(v) else None
@@ -208,11 +201,11 @@ def pixel_table(fits: xr.Dataset) -> list[dict[str, Any]]:
     dims = check_map(fits)
     *_, xs, ys = _layout(fits, dims)
     names = [str(n) for n in fits["param_i"].values]
-    columns = {n: _flat(fits, n, dims) for name in names for n in (name, f"{name}_stderr")
+    columns = {n: flat_over(fits, n, dims) for name in names for n in (name, f"{name}_stderr")
                if n in fits.variables}
-    columns.update({n: _flat(fits, n, dims) for n in ("redchi", "chi2_pvalue")
+    columns.update({n: flat_over(fits, n, dims) for n in ("redchi", "chi2_pvalue")
                     if n in fits.variables})
-    quality = _flat(fits, "quality", dims).astype(int)
+    quality = flat_over(fits, "quality", dims).astype(int)
     quality_names = flag_meanings(fits.variables["quality"])
     shape = tuple(fits.sizes[d] for d in dims)
     rows = []
@@ -252,7 +245,7 @@ def _match(fits: xr.Dataset, data: xr.Dataset, dims: tuple[str, ...], what: str)
                                  f"{dict(data.sizes)}")
     for c in ("x", "y"):
         if c in fits.variables and c in data.variables and set(data[c].dims) == set(dims):
-            a, b = _flat(fits, c, dims).astype(float), _flat(data, c, dims).astype(float)
+            a, b = flat_over(fits, c, dims).astype(float), flat_over(data, c, dims).astype(float)
             if not np.allclose(a, b, rtol=1e-9, atol=1e-12, equal_nan=True):
                 raise ParameterError(f"{what} is from another map: its pixel positions {c!r} "
                                      "differ from the fit's")
@@ -277,9 +270,7 @@ def _spectra(fits: xr.Dataset, spectra: xr.Dataset, dims: tuple[str, ...],
         shape = tuple(spectra.sizes[d] for d in order)
         if name not in spectra.variables:
             return np.full(shape, np.nan)
-        da = spectra[name]
-        return np.broadcast_to(np.asarray(da.transpose(*(d for d in order if d in da.dims))
-                                          .values, dtype=float), shape)
+        return flat_over(spectra, name, order).astype(float, copy=False).reshape(shape)
 
     stiff, phase = grid("stiffness"), grid("phase")
     s_err, p_err = grid("stiffness_stderr"), grid("phase_stderr")
@@ -358,16 +349,16 @@ def best_fit_curves(fits: xr.Dataset, spectra: xr.Dataset, *, points: int = FIT_
     omega_data = np.asarray(spectra["omega"].values, dtype=float)
     omega = np.geomspace(omega_data.min(), omega_data.max(), int(points))
     model, names = str(fits.attrs["model"]), [str(n) for n in fits["param_i"].values]
-    success = _flat(fits, "success", dims).astype(bool)
-    modes = _flat(fits, "modes", dims) if "modes" in fits.variables else np.ones(success.size)
-    values = {n: _flat(fits, n, dims).astype(float) for n in names}
+    success = flat_over(fits, "success", dims).astype(bool)
+    modes = flat_over(fits, "modes", dims) if "modes" in fits.variables else np.ones(success.size)
+    values = {n: flat_over(fits, n, dims).astype(float) for n in names}
     depth = None
     if model == "contact" and fixed.get("indentation") is None and (
             "mean_indentation" in spectra.variables):
         d = spectra["mean_indentation"]
         if "quality" in spectra.variables:
             d = d.where(spectra["quality"] == 0)
-        depth = _flat(d.median("omega", skipna=True).to_dataset(name="d"), "d", dims)
+        depth = flat_over(d.median("omega", skipna=True).to_dataset(name="d"), "d", dims)
     k = np.full((success.size, omega.size), np.nan, dtype=complex)
     for i in np.flatnonzero(success):
         inputs = dict(fixed)
@@ -411,10 +402,10 @@ def map_view(fits: xr.Dataset, spectra: xr.Dataset | None = None,
     dims = check_map(fits)
     names = tuple(str(n) for n in fits["param_i"].values)
     x, y, width, height, labels, _, _ = _layout(fits, dims)
-    quality = _flat(fits, "quality", dims).astype(int)
+    quality = flat_over(fits, "quality", dims).astype(int)
     units, colour, log, hists = {}, {}, {}, {}
     for name in names:
-        values = _flat(fits, name, dims).astype(float)
+        values = flat_over(fits, name, dims).astype(float)
         bad = _bad_pixels(fits, name, dims).reshape(-1)
         shown = np.isfinite(values) & ~bad
         unit = str(fits[name].attrs.get("units", ""))
