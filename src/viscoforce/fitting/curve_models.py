@@ -84,7 +84,7 @@ def _hertz_model(spec: ModelSpec) -> FitModel:
                 + v["E"] * tip.force_shape(delta))
 
     def guesser(f: np.ndarray, z: np.ndarray) -> dict[str, float]:
-        return hertz_guess(tip, np.asarray(z, dtype=float), np.asarray(f, dtype=float))
+        return hertz_start(tip, np.asarray(z, dtype=float), np.asarray(f, dtype=float))
 
     def windows(z: np.ndarray, f: np.ndarray | None = None) -> dict[str, tuple[float, float]]:
         out = {"contact_point": window if window is not None else contact_window(tip, z)}
@@ -136,11 +136,14 @@ def hertz_linear(tip: Any, z: np.ndarray, f: np.ndarray, contact: float
     return coef, float(np.sum((design @ coef - f) ** 2))
 
 
-def hertz_guess(tip: Any, z: np.ndarray, f: np.ndarray) -> dict[str, float]:
-    """A start for the Hertz fit: the best of a grid of contact points, each linear in the rest.
+def hertz_grid(tip: Any, z: np.ndarray, f: np.ndarray
+               ) -> tuple[float, float, np.ndarray] | None:
+    """The best (contact point, SSE, (E, baseline, slope)) of a grid of contact points.
 
     Given the contact point the model is linear in (E, baseline, slope); the grid spans the
-    contact window (:func:`contact_window`), then one refinement between its neighbours.
+    contact window (:func:`contact_window`), then one refinement between its neighbours. Only
+    contact points with E > 0 count; None when there is none (the force does not rise with z
+    beyond any of them).
     """
     lo, hi = contact_window(tip, z)
     inner = np.sort(z[(z >= lo) & (z <= hi)])
@@ -159,14 +162,52 @@ def hertz_guess(tip: Any, z: np.ndarray, f: np.ndarray) -> dict[str, float]:
         step = float(np.median(np.diff(grid))) if grid.size > 1 else float(np.ptp(z)) / 10
         grid = np.linspace(best[0] - step, best[0] + step, 21)
         grid = grid[(grid >= lo) & (grid <= hi)]
+    return best
+
+
+def _clipped_modulus(e: float) -> float:
+    return min(max(float(e), MODULUS_BOUNDS[0] * 10), MODULUS_BOUNDS[1] / 10)
+
+
+def hertz_guess(tip: Any, z: np.ndarray, f: np.ndarray) -> dict[str, float]:
+    """A start for the Hertz fit: the best of a grid of contact points (:func:`hertz_grid`).
+
+    Raises
+    ------
+    ParameterError
+        No contact point gives E > 0 (the force does not rise with the tip position).
+    """
+    best = hertz_grid(tip, z, f)
     if best is None:
         raise ParameterError("no contact point in the approach gives a positive modulus: the "
                              "force does not rise with the tip position (is this the approach "
                              "segment of a repulsive contact?)")
+    return _grid_start(best)
+
+
+def _grid_start(best: tuple[float, float, np.ndarray]) -> dict[str, float]:
     c, _, coef = best
-    e = min(max(float(coef[0]), MODULUS_BOUNDS[0] * 10), MODULUS_BOUNDS[1] / 10)
-    return {"E": e, "contact_point": c, "baseline": float(coef[1]),
+    return {"E": _clipped_modulus(coef[0]), "contact_point": c, "baseline": float(coef[1]),
             "baseline_slope": float(coef[2])}
+
+
+def hertz_start(tip: Any, z: np.ndarray, f: np.ndarray) -> dict[str, float]:
+    """The hertz model's start: :func:`hertz_guess`, or a start without contact where it has none.
+
+    An approach whose force rises with z beyond no contact point (noise only, or the tip
+    position's sign flipped) still gets a fit, so that it can be reported as what it is (E not
+    determined, :func:`viscoforce.fitting.verdict.hertz_checks` says why) rather than refused:
+    the straight baseline, the contact point at the deep end of the contact window and the
+    smallest modulus of the guess's range.
+    """
+    best = hertz_grid(tip, z, f)
+    if best is not None:
+        return _grid_start(best)
+    lo, hi = contact_window(tip, z)
+    c = lo + 0.98 * (hi - lo)
+    slope, baseline = np.polyfit(z - c, f, 1)
+    return {"E": _clipped_modulus(0.0), "contact_point": float(c), "baseline": float(baseline),
+            "baseline_slope": float(slope)}
 
 
 #: A sample of a position trace lying within this fraction of the trace's largest |h0| of the

@@ -26,8 +26,7 @@ from viscoforce.fitting.model_error import validity_note
 from viscoforce.fitting.models import make_model
 from viscoforce.fitting.moduli import add_derived_moduli
 from viscoforce.fitting.outcome import Outcome
-from viscoforce.fitting.report import carry
-from viscoforce.fitting.verdict import warn_fit
+from viscoforce.fitting.verdict import hertz_checks, warn_fit
 from viscoforce.problem import ContactProblem
 from viscoforce.schema import select_curve, validate_curves, validate_trajectory
 
@@ -336,92 +335,19 @@ def fit_curve(curves: xr.Dataset, model: str, *, curve: int = 0, segment: int | 
         if modes not in (1, None):
             raise ParameterError(f"the hertz model has no modes (modes=1), got {modes!r}")
         modes = 1
-        fixed["tip"] = required_tip(curves, tip, "hertz")
+        from viscoforce.physics.tips import tip_from
+
+        fixed["tip"] = tip_from(required_tip(curves, tip, "hertz"))
     elif tip is not None or poisson is not None:
         raise ParameterError("the creep model takes no tip or poisson (it fits the tip position)")
     ds = fit_data(data, model, modes=modes, criterion=criterion, **fixed)
     ds.attrs["validity"] = validity_note(model, ds)
+    if model == "hertz":  # first: its verdict on E is part of what warn_fit reports
+        ds = hertz_checks(ds, data, fixed["tip"])
     warn_fit(ds)
     if model == "hertz":
-        ds = hertz_checks(ds, data, fixed["tip"])
         ds = add_derived_moduli(ds, poisson)
     return ds
-
-
-#: Fraction of the maximum contact force up to which the Hertz depth check refits.
-DEPTH_CHECK_FRACTION = 0.5
-#: Shift of E (in its stderr) beyond which the depth check warns.
-DEPTH_CHECK_SIGMA = 2.0
-#: Rise of the fitted baseline before contact (fraction of the contact force) that warns.
-PRECONTACT_RISE_WARN = 0.2
-
-
-def hertz_checks(ds: xr.Dataset, data: FitData, tip: Any) -> xr.Dataset:
-    """Check a Hertz fit against its own data: E against the depth, the baseline before contact.
-
-    * **Depth**: the approach refitted up to :data:`DEPTH_CHECK_FRACTION` of the maximum
-      contact force; the shift of E in units of the standard error of the difference,
-      √(σ_shallow² − σ_full²) (the shallow points are a subset of the full fit's:
-      ``attrs["depth_check_shift"]``, ``depth_check_E``). A law that describes the curve gives
-      the same E within that error;
-      beyond :data:`DEPTH_CHECK_SIGMA` a :class:`GoodnessOfFitWarning` says that the stderr
-      cover the noise only, not the model error.
-    * **Baseline**: the rise of the tilted baseline from the start of the approach to the
-      contact point, as a fraction of the contact force (``attrs["precontact_rise"]``); above
-      :data:`PRECONTACT_RISE_WARN` a :class:`DataWarning` says the approach is not a free
-      cantilever before contact.
-    """
-    import warnings
-
-    from viscoforce.exceptions import DataWarning, GoodnessOfFitWarning, ViscoforceError
-
-    z, f = np.asarray(data.x, dtype=float), np.asarray(data.y, dtype=float)
-    c, b, slope = (float(ds[n]) for n in ("contact_point", "baseline", "baseline_slope"))
-    e, e_err = float(ds["E"]), float(ds["E_stderr"])
-    excess = f - (b + slope * (z - c))
-    contact = z > c
-    peak = float(np.max(excess[contact])) if contact.any() else 0.0
-    out = carry(ds, ds.copy())
-    if peak > 0:
-        rise = abs(slope) * max(c - float(np.min(z)), 0.0) / peak
-        out.attrs["precontact_rise"] = rise
-        if rise > PRECONTACT_RISE_WARN:
-            warnings.warn(
-                f"hertz: the fitted baseline rises by {100 * rise:.0f} % of the contact force "
-                "before the contact point: the approach is not a free cantilever there (a "
-                "long-range repulsion, a soft layer, or contact from the start of the "
-                "approach), so the contact point and E rest on the tilted baseline",
-                DataWarning, stacklevel=3)
-    keep = ~contact | (excess <= DEPTH_CHECK_FRACTION * peak)
-    if peak <= 0 or int(np.sum(contact & keep)) < 8 or not math.isfinite(e_err) or e_err <= 0:
-        out.attrs["depth_check"] = "not made (too few contact points, or E without stderr)"
-        return out
-    try:
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")
-            shallow = fit_data(FitData(z[keep], f[keep], None, {}), "hertz", tip=tip,
-                               profile=False)
-    except (ViscoforceError, ValueError, ArithmeticError) as exc:
-        out.attrs["depth_check"] = f"not made: the shallow refit failed ({exc})"
-        return out
-    e_half, e_half_err = float(shallow["E"]), float(shallow["E_stderr"])
-    # the shallow data are a subset of the full: for efficient estimators the variance of the
-    # difference is var(shallow) − var(full), not var(full) (a Hausman-type test)
-    spread = math.sqrt(max(e_half_err**2 - e_err**2, 0.0)) if math.isfinite(e_half_err) else 0.0
-    shift = (e_half - e) / max(spread, e_err * 1e-3)
-    out.attrs.update(depth_check_E=e_half, depth_check_shift=shift, depth_check=(
-        f"E refitted up to {100 * DEPTH_CHECK_FRACTION:.0f} % of the maximum contact force: "
-        f"{e_half:.4g} Pa, {shift:+.1f} standard errors of the difference "
-        f"({100 * (e_half / e - 1):+.1f} %) from the full fit"))
-    if abs(shift) > DEPTH_CHECK_SIGMA:
-        warnings.warn(
-            f"hertz: E depends on the indentation depth: up to {100 * DEPTH_CHECK_FRACTION:.0f} % "
-            f"of the maximum contact force E = {e_half:.4g} Pa, {shift:+.1f} standard errors "
-            f"({100 * (e_half / e - 1):+.1f} %) from the full fit's {e:.4g} Pa. The tip's elastic "
-            "law does not describe this approach (viscoelasticity, a finite thickness, the wrong "
-            "tip, or the contact point), and the stderr cover the noise only: report E with its "
-            "depth range", GoodnessOfFitWarning, stacklevel=3)
-    return out
 
 
 def trajectory_data(trajectory: xr.Dataset) -> tuple[FitData, tuple[np.ndarray, np.ndarray]]:

@@ -24,9 +24,18 @@ before the window). So does a step whose constrained fit did not converge within
 reported as not bounded, never as a bound. A step the fit cannot reach with every parameter free
 (the data hold it off) bounds it.
 
-Codes (:data:`IDENTIFIABILITY`): 0 determined (bounded on both sides), 1 lower bound only
-(q > lower: the likelihood is flat towards larger q), 2 upper bound only (q < upper), 3 not
-determined (flat on both sides).
+Codes (:data:`IDENTIFIABILITY`): 0 determined (bounded on both sides, and for a positive
+parameter within a factor :data:`WIDEST_DETERMINED`), 1 lower bound only (q > lower: the
+likelihood is flat towards larger q), 2 upper bound only (q < upper), 3 not determined (flat on
+both sides, or a positive parameter bounded on both sides by limits further apart than
+:data:`WIDEST_DETERMINED`: the limits are kept).
+
+The factor is the local test's rule (stderr > |value|: not determined) carried over to the
+coordinates the limits of a positive parameter are found in, log q: a quadratic profile with
+σ(ln q) = stderr/q = 1 has 2σ limits q·e^{±2}, a factor e⁴ ≈ 54.6 (1.74 decades) apart. So a
+profile does not call a parameter determined that the local test would not, merely because the
+likelihood rises to Δχ² = 4 somewhere within the window (a noise-only force curve bounded its
+E between 1.4 Pa and 30 kPa, issue 40).
 """
 
 from __future__ import annotations
@@ -47,6 +56,9 @@ IDENTIFIABILITY: dict[int, str] = {0: "determined", 1: "lower_bound_only",
                                    2: "upper_bound_only", 3: "not_determined"}
 #: Profile Δχ² of the reported limits (2σ of one parameter).
 DELTA_CHI2 = 4.0
+#: Widest ratio upper/lower of the 2σ limits of a positive parameter that is determined: e⁴,
+#: the limits q·e^{±2σ/q} of the local test's edge σ = q (module docstring).
+WIDEST_DETERMINED = math.exp(2.0 * math.sqrt(DELTA_CHI2))
 #: Below this Δχ² at the local 2σ step a side is flatter than the curvature says: walk on.
 FLAT = 1.0
 #: Factor of each further step of the walk.
@@ -121,17 +133,34 @@ def needs_profile(layout: Sequence[_params.Item], values: Mapping[str, float],
 def quadratic_limits(layout: Sequence[_params.Item], values: Mapping[str, float],
                      stderr: Mapping[str, float | None], names: Sequence[str]
                      ) -> dict[str, Profile]:
-    """The curvature's 2σ limits (code 0): ±2 stderr, in log10 for positive parameters."""
+    """The curvature's 2σ limits: ±2 stderr, in log10 for positive parameters.
+
+    Code 0, or 3 where a positive parameter's limits are further apart than
+    :data:`WIDEST_DETERMINED` (i.e. stderr > value: the local test's rule).
+    """
     positive = positive_names(layout)
     out = {}
     for name in names:
         value, err = values[name], float(stderr[name])  # type: ignore[arg-type]
         if name in positive:
             width = 2.0 * err / (value * math.log(10.0))
-            out[name] = Profile(0, value * 10.0 ** -width, value * 10.0 ** width)
+            lower, upper = value * 10.0 ** -width, value * 10.0 ** width
+            out[name] = Profile(limits_code(True, True, lower, upper, True), lower, upper)
         else:
             out[name] = Profile(0, value - 2.0 * err, value + 2.0 * err)
     return out
+
+
+def limits_code(lower_ok: bool, upper_ok: bool, lower: float, upper: float, log: bool) -> int:
+    """The :data:`IDENTIFIABILITY` code of 2σ limits, bounded (``*_ok``) or not on each side.
+
+    Bounded on both sides is determined (0), except a positive parameter (``log``) whose limits
+    are further apart than :data:`WIDEST_DETERMINED`: not determined (3).
+    """
+    if lower_ok and upper_ok:
+        too_wide = log and not (lower > 0 and upper <= WIDEST_DETERMINED * lower)
+        return 3 if too_wide else 0
+    return 1 if lower_ok else 2 if upper_ok else 3
 
 
 def profile_parameters(layout: Sequence[_params.Item], residual: Residual,
@@ -208,8 +237,8 @@ def _profile_one(layout: Sequence[_params.Item], residual: Residual, best: _para
         g = g0 + side * limit if math.isfinite(limit) else math.nan
         limits.append(10.0 ** g if log and math.isfinite(g) else g)
     lower_ok, upper_ok = bounded
-    code = 0 if lower_ok and upper_ok else 1 if lower_ok else 2 if upper_ok else 3
-    return Profile(code, limits[0], limits[1])
+    return Profile(limits_code(lower_ok, upper_ok, limits[0], limits[1], log), limits[0],
+                   limits[1])
 
 
 def _walk(root_at: Callable[[float], float], first: float, cap: float) -> float:
