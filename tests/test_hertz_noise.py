@@ -160,3 +160,29 @@ def test_clean_hertz_keeps_a_determined_e_within_its_stderr(tip, seed):
         assert ds.attrs["indentation_signal"] == pytest.approx(expected, rel=0.10)
         assert ds.attrs["indentation_signal"] > SIGNAL_SIGMA
         assert ds.attrs["approach_direction"].startswith("as recorded")
+
+
+# ── maps: each pixel takes the same verdict ─────────────────────────────────────────────────────
+
+def test_a_hertz_map_marks_noise_and_flipped_pixels_not_determined():
+    """Three curves, one map: clean, noise only, flipped. Only the clean one is quality 0."""
+    from viscoforce.fitting.maps import fit_map
+
+    tip = "paraboloid:5um"
+    rng = np.random.default_rng(7)
+    clean = _approach(TEXTBOOK[tip], rng, noise=30e-12, slope=1e-5)
+    noise = _approach(lambda d: 0.0 * d, rng, noise=30e-12, slope=0.0)
+    z, f = _approach(TEXTBOOK[tip], rng, noise=30e-12, slope=1e-5)
+    curves = [clean, noise, (-z, f)]
+    zs = np.concatenate([c[0] for c in curves])
+    fs = np.concatenate([c[1] for c in curves])
+    ds = make_curves(np.tile(np.linspace(0, 1, z.size), 3), fs, -zs, np.zeros_like(zs),
+                     tip_position=zs, segment=0, segment_names=("approach",),
+                     sample_count=[z.size] * 3, source="synthetic")
+    result = fit_map(ds, "hertz", tip=tip, scheduler="synchronous", progress=False)
+    quality = result["quality"].values.tolist()
+    assert quality[0] == 0 and quality[1] == 3 and quality[2] == 3, quality
+    messages = [str(m) for m in result["message"].values]
+    assert "no detectable indentation" in messages[1]
+    assert "looks flipped" in messages[2]
+    assert float(result["E"][0]) == pytest.approx(E_PAPER, rel=0.05)

@@ -24,7 +24,7 @@ from viscoforce.fitting.data import FitData, clean_pixels_fit_data, pixel_fit_da
 from viscoforce.fitting.fit import local_identifiability, select, summary
 from viscoforce.fitting.identify import IDENTIFIABILITY
 from viscoforce.fitting.report import fit_report
-from viscoforce.fitting.verdict import PVALUE_WARN
+from viscoforce.fitting.verdict import PVALUE_WARN, hertz_verdict
 from viscoforce.schema import flag_attrs, index_values, validate_fit_result, validate_spectrum
 from viscoforce.schema.fit import SUCCESS_FLAGS, parameter_units
 
@@ -166,6 +166,8 @@ def fit_block(items: Sequence[FitData | str], model: str, modes: int | str, crit
             info = summary(best)
             notes.append(f"the profile likelihood failed ({str(exc).splitlines()[0]}): the "
                          "identifiability is the local test")
+        if model == "hertz":  # the single fit's checks (verdict.hertz_checks), without warnings
+            notes += _hertz_notes(data, info, own["tip"])
         info["message"] = "; ".join([*notes, info["message"]])
         info["modes"] = best.model.spec.modes
         info["names"] = best.model.names
@@ -181,6 +183,28 @@ def fit_block(items: Sequence[FitData | str], model: str, modes: int | str, crit
                 info["report"] = f"no lmfit report: {str(exc).splitlines()[0]}"
         out.append(info)
     return out
+
+
+def _hertz_notes(data: FitData, info: dict[str, Any], tip: Any) -> list[str]:
+    """A Hertz pixel's verdict (:func:`~.verdict.hertz_verdict`), as notes.
+
+    E and the contact point become not determined (code 3) where no indentation was measured or
+    the tip position's sign looks flipped (the pixel's quality is then 3).
+    """
+    from viscoforce.physics.tips import tip_from
+
+    verdict = hertz_verdict(np.asarray(data.x), np.asarray(data.y), info["values"],
+                            tip_from(tip))
+    reason = (f"the tip position's sign looks flipped ({verdict['flipped']})"
+              if verdict["flipped"] is not None else
+              f"no detectable indentation ({verdict['indentation_signal']:.2g} sigma over the "
+              "baseline alone)" if verdict["no_signal"] else None)
+    if reason is None:
+        return []
+    for name in ("E", "contact_point"):
+        if name in info["identifiability"]:
+            info["identifiability"][name] = 3  # IDENTIFIABILITY[3]: "not_determined"
+    return [f"{reason}: E and the contact point are not determined"]
 
 
 def pixel_quality(result: dict[str, Any]) -> int:
