@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import errno
 import os
 import resource
 import subprocess
@@ -12,6 +13,7 @@ import numpy as np
 import pytest
 import xarray as xr
 
+import viscoforce._files as files
 from viscoforce._files import atomic_output, refuse_overwriting_inputs, write_netcdf
 from viscoforce.cli import main
 from viscoforce.exceptions import ParameterError
@@ -66,6 +68,34 @@ def test_file_size_limit_is_a_clean_error_and_keeps_the_old_file(tmp_path):
     assert target.read_bytes() == before
     assert sorted(p.name for p in tmp_path.iterdir()) == ["out.nc"]
     assert resource.getrlimit(resource.RLIMIT_FSIZE)  # the parent's limit is untouched
+
+
+def test_a_dataset_over_the_memory_bound_is_written_by_hdf5_and_a_full_disk_is_an_oserror(
+        tmp_path, monkeypatch):
+    """Over NETCDF_IN_MEMORY HDF5 writes the temporary file itself: the same dataset as the
+    in-memory route gives; ENOSPC there is an OSError naming the target, nothing left (HDF5
+    never sees it: pytest would fail the test on an error HDF5's objects printed and ignored)."""
+    ds = _dataset(200_000)
+    write_netcdf(ds, tmp_path / "in_memory.nc")
+    monkeypatch.setattr(files, "NETCDF_IN_MEMORY", 0)
+    target = tmp_path / "big.nc"
+    write_netcdf(ds, target)
+    with xr.open_dataset(target) as big, xr.open_dataset(tmp_path / "in_memory.nc") as small:
+        xr.testing.assert_identical(big.load(), small.load())
+    before = target.read_bytes()
+    pwrite = os.pwrite
+
+    def full_disk(fd, data, offset):
+        if offset + len(data) > 100_000:
+            raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+        return pwrite(fd, data, offset)
+
+    monkeypatch.setattr(os, "pwrite", full_disk)
+    with pytest.raises(OSError, match="No space left on device") as caught:
+        write_netcdf(ds, target)
+    assert caught.value.filename == str(target)
+    assert target.read_bytes() == before
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["big.nc", "in_memory.nc"]
 
 
 def test_concurrent_writers_leave_one_whole_file(tmp_path):

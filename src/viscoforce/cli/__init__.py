@@ -2,7 +2,9 @@
 
 The CLI parses flags (SI or unit-suffixed quantities), calls the public API and prints or writes
 results; it holds no physics. Exit status: 0 success, 2 user error (one message on stderr, no
-traceback), 1 internal error. ``--json`` prints one JSON object in SI units.
+traceback; also an output that cannot be written: a full disk, a file-size limit), 1 internal
+error, 143 stopped by SIGTERM (partial outputs removed). ``--json`` prints one JSON object in SI
+units.
 
 Commands are rows of :data:`COMMANDS`: a name, the module of this package that implements it and
 a one-line help. A command module holds a ``SUBCOMMANDS`` mapping, name → (function adding the
@@ -14,11 +16,14 @@ alone; adding a command is one row here and one entry in its module.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import importlib
+import signal
 import sys
+import threading
 import traceback
 import warnings
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
 from typing import NamedTuple
 
 from viscoforce import __version__
@@ -114,9 +119,26 @@ def _build_parser(command: Command | None) -> tuple[argparse.ArgumentParser,
     return parser, selected
 
 
-def _message(exc: BaseException) -> str:
-    """One line: the error's text with any line breaks (e.g. a parser's) folded."""
+def _output_flag(args: argparse.Namespace, filename: object) -> str | None:
+    """The output flag (as typed) whose value is ``filename``, if one is."""
+    for o in getattr(args, "outputs_", ()):
+        dest = o.flag.lstrip("-").replace("-", "_")
+        if filename is not None and getattr(args, dest, None) == filename:
+            return getattr(args, "typed_", {}).get(dest, (o.flag,))[0]
+    return None
+
+
+def _message(exc: BaseException, args: argparse.Namespace | None = None) -> str:
+    """One line: the error's text with any line breaks (e.g. a parser's) folded.
+
+    An output that could not be written (an :class:`OSError` naming the value of an output flag,
+    as :mod:`viscoforce._files` raises it) is told with its flag.
+    """
     if isinstance(exc, OSError) and exc.strerror and exc.filename is not None:
+        flag = _output_flag(args, exc.filename) if args is not None else None
+        if flag is not None:
+            return (f"{flag} {exc.filename}: could not write ({exc.strerror}); any previous file "
+                    "there is unchanged")
         return f"{exc.strerror}: {exc.filename}"
     return "; ".join(line.strip() for line in str(exc).splitlines() if line.strip())
 
@@ -136,7 +158,7 @@ def _run(args: argparse.Namespace) -> int:
             check_outputs(args)
             return int(args.run_(args))
     except (ViscoforceError, OSError) as exc:
-        text = _message(exc)
+        text = _message(exc, args)
         if isinstance(exc, ViscoforceError) and not isinstance(exc, UsageError):
             text = name_flag_in_error(text, getattr(args, "typed_", {}))
         print(f"viscoforce {name}: error: {text}", file=sys.stderr)
@@ -146,6 +168,33 @@ def _run(args: argparse.Namespace) -> int:
               "it with the traceback below", file=sys.stderr)
         traceback.print_exc()
         return 1
+
+
+class _Terminated(SystemExit):
+    """SIGTERM during :func:`main`: unwinds like an error (partial outputs are removed)."""
+
+
+@contextlib.contextmanager
+def _sigterm_raises() -> Iterator[None]:
+    """SIGTERM raises :class:`_Terminated` inside the block, if it would kill the process.
+
+    Only SIGTERM's default action (end the process at once, leaving a half-written temporary
+    file) is replaced: a handler someone installed, or SIGTERM ignored, stays. The previous
+    setting is restored on leaving. Signal handlers can be set in the main thread only.
+    """
+    if (threading.current_thread() is not threading.main_thread()
+            or signal.getsignal(signal.SIGTERM) is not signal.SIG_DFL):
+        yield
+        return
+
+    def terminate(signum: int, frame: object) -> None:  # noqa: ARG001 - a signal handler's
+        raise _Terminated(128 + signum)
+
+    previous = signal.signal(signal.SIGTERM, terminate)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGTERM, previous)
 
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -161,7 +210,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     int
         0 success (also ``--help`` and ``--version``), 2 user error (a bad flag or value, a file
         that cannot be read or written, any :class:`~viscoforce.exceptions.ViscoforceError`:
-        one message on stderr, no traceback), 1 internal error (message and traceback).
+        one message on stderr, no traceback), 1 internal error (message and traceback), 143
+        SIGTERM while the command ran (one message; the temporary file of an output being
+        written is removed, as on an error; :func:`_sigterm_raises`).
     """
     argv = list(sys.argv[1:] if argv is None else argv)
     parser, selected = _build_parser(_requested(argv))
@@ -176,4 +227,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     except SystemExit as exc:  # argparse printed the help, the version or its error message
         return 0 if exc.code is None else exc.code if isinstance(exc.code, int) else 2
     args.typed_ = typed_flags(selected, argv) if selected is not None else {}
-    return _run(args)
+    try:
+        with _sigterm_raises():
+            return _run(args)
+    except _Terminated as exc:
+        print(f"viscoforce {args.command}: stopped by SIGTERM", file=sys.stderr)
+        return int(exc.code)

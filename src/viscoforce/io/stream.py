@@ -183,7 +183,9 @@ def write_curves_netcdf(archive: JPKArchive, path: str | os.PathLike[str], *,
     The file equals ``jpk_to_curves(archive, ...)`` written with ``to_netcdf`` (same variables,
     values, attributes; ``sample``, ``curve`` and ``segment_table`` are unlimited dimensions).
     It is written to a temporary file beside ``path`` and renamed only when complete; on any
-    error no file appears at ``path`` (a previous file there is left as it was).
+    error no file appears at ``path`` (a previous file there is left as it was), nor does the
+    temporary file stay (see :mod:`viscoforce._files`: a failed write, SIGTERM in the command
+    line; one that SIGKILL left is removed by the next write of ``path``).
 
     Parameters
     ----------
@@ -201,6 +203,11 @@ def write_curves_netcdf(archive: JPKArchive, path: str | os.PathLike[str], *,
     dict
         ``dims`` (name → size, in the dataset's order), ``variables`` (sorted data variable
         names), ``chunks`` (how many were written).
+
+    Raises
+    ------
+    OSError
+        The file cannot be written (disk full, a file-size limit): ``filename`` is ``path``.
     """
     chunks = iter_curves(archive, curves=curves, chunk=chunk, height_channel=height_channel,
                          memory_bytes=memory_bytes)
