@@ -289,7 +289,7 @@ def test_synthetic_deflection_in_nm_and_extra_column(tmp_path):
     ("flat punch", {"Tip_radius(m)": "1.0E-06"}, {"tip_shape": "flat", "tip_radius": 1e-6}, None),
     ("parabolic", {"Tip_radius(m)": "?"}, {}, "parabolic tip without a plausible radius"),
     ("pyramidal", {"Tip_half_angle(deg)": "-1"}, {},
-     "pyramidal tip without a half angle in (0, 90) degrees"),
+     "pyramidal tip without a half angle in [0.1, 89.9] degrees"),
     ("blade", {}, {}, "Tip_geometry 'blade' names no known tip shape"),
     ("?", {}, {}, None),
 ])

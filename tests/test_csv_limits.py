@@ -245,11 +245,11 @@ def test_a_number_error_comes_before_a_range_error(tmp_path):
 
 def test_options_beyond_physics_are_refused(tmp_path):
     path = write(tmp_path / "d.csv", "time (s),deflection (nm),height (nm)\n0,1,2\n1,2,3\n")
-    with pytest.raises(ParameterError, match=r"spring_constant = 1e\+308 is beyond the physical "
-                                             r"range 0 < spring_constant <= 1000 N/m"):
+    with pytest.raises(ParameterError, match=r"spring_constant must be within the plausible "
+                                             r"range \[1e-05, 1000\] N/m, got 1e\+308 N/m"):
         read_curves_csv(path, spring_constant=1e308)
-    with pytest.raises(ParameterError, match=r"sensitivity = '2m/V' is beyond the physical "
-                                             r"range 0 < sensitivity <= 0.001 m/V"):
+    with pytest.raises(ParameterError, match=r"sensitivity must be within the plausible range "
+                                             r"\[1e-12, 0.001\] m/V \(given as '2m/V'\), got 2.0"):
         read_curves_csv(path, sensitivity="2m/V")
     spectrum = write(tmp_path / "s.csv", "frequency (Hz),amplitude (1),phase (deg),"
                                          "mean_force (N)\n1,0.1,10,1e-9\n")

@@ -175,7 +175,11 @@ def test_sphere_beyond_its_limit_raises():
     (lambda: Pyramid(math.pi / 2), r"half_angle must be in \(0, π/2\) rad"),
     (lambda: Cone(20), r"half_angle is in radians — for 20° use Cone\.from_degrees\(20\)"),
     (lambda: Pyramid(math.nan), r"half_angle must be finite, got nan"),
-    (lambda: Cone.from_degrees(90), r"half_angle \(degree\) must be in \(0, 90\), got 90"),
+    (lambda: Cone.from_degrees(90), r"half_angle \(degree\) must be in \[0.1, 89.9\], got 90"),
+    (lambda: Cone(1e-5), r"half_angle must be within the plausible range \[0.001745, 1.569\] rad "
+                         r"= \[0.1°, 89.9°\], got 1e-05 rad"),
+    (lambda: Sphere(2.0), r"radius must be within the plausible range \[1e-09, 1\] m .*got 2\.0 m"),
+    (lambda: Flat(5e-320), r"radius must be within the plausible range \[1e-09, 1\] m"),
 ])
 def test_bad_parameters_raise(make, match):
     with pytest.raises(ParameterError, match=match):
@@ -235,7 +239,7 @@ def test_conversions_pass_nan_and_reject_bad_values():
     ("sphere:10um", Sphere(1e-5)),
     ("sphere:10µm", Sphere(1e-5)),
     ("paraboloid:2.5 µm", Paraboloid(2.5e-6)),
-    ("paraboloid:1e-5", Paraboloid(1e-5)),  # a bare length is metres
+    ("paraboloid:1e-5m", Paraboloid(1e-5)),
     ("flat:500nm", Flat(5e-7)),
     ("  Sphere : 20nm ", Sphere(2e-8)),
     ("cone:20", Cone(math.radians(20))),
@@ -252,19 +256,31 @@ def test_parse_tip(text, expected):
             assert getattr(tip, name) == pytest.approx(getattr(expected, name), rel=1e-15)
 
 
+_ACCEPTED = (r"accepted: sphere:R \| paraboloid:R \| cone:ANGLE \| pyramid:ANGLE \| flat:RADIUS; "
+             r"R, RADIUS: a length with its unit in \[1e-09, 1\] m, 1 nm to 1 m .*ANGLE: the "
+             r"half-angle in degrees in \[0.1, 89.9\]")
+
+
 @pytest.mark.parametrize(("text", "match"), [
-    ("sphere", r"tip must be one of sphere:R \| paraboloid:R \| cone:HALF_ANGLE"),
-    ("ball:10um", r"tip must be one of sphere:R .*got 'ball:10um'"),
-    ("sphere:", r"tip must be one of .*got 'sphere:'"),
-    ("sphere:10 furlongs", r"cannot read tip 'sphere:10 furlongs': unknown unit 'furlongs'.*accepted: "
-                           r"sphere:R"),
+    ("sphere", r"tip 'sphere' has no ':' between the shape and its size; write SHAPE:SIZE, one of "
+               r"sphere:R \| paraboloid:R \| cone:ANGLE"),
+    ("ball:10um", r"tip 'ball:10um': unknown shape 'ball' before ':' \(the shapes are sphere, "
+                  r"paraboloid, cone, pyramid, flat\); " + _ACCEPTED),
+    ("sphere:", r"tip 'sphere:': no radius after ':'; " + _ACCEPTED),
+    ("sphere:5", r"tip 'sphere:5': the radius after ':' is wrong: '5' has no unit: a length needs "
+                 r"one .*; " + _ACCEPTED),
+    ("sphere:10 furlongs", r"tip 'sphere:10 furlongs': the radius after ':' is wrong: unknown "
+                           r"unit 'furlongs'.*" + _ACCEPTED),
     ("sphere:10ms", r"'ms' is a unit of time.*accepted: sphere:R"),
-    ("flat:-5um", r"cannot read tip 'flat:-5um': radius must be > 0, got -5e-06"),
-    ("cone:95", r"half_angle \(degree\) must be in \(0, 90\), got 95.*accepted: sphere:R"),
-    ("cone:2rad", r"half_angle \(degree\) must be in \(0, 90\), got 114\.59"),
-    ("pyramid:abc", r"cannot read 'abc' as a half-angle.*accepted"),
-    ("cone:20grad", r"cannot read '20grad' as a half-angle"),
-    ("cone:nan", r"cannot read 'nan' as a half-angle"),
+    ("sphere:1e300m", r"the radius after ':' is wrong: radius must be within the plausible range "
+                      r"\[1e-09, 1\] m .*got 1e\+300 m; " + _ACCEPTED),
+    ("flat:-5um", r"tip 'flat:-5um': the radius after ':' is wrong: radius must be > 0, got -5e-06"),
+    ("cone:95", r"tip 'cone:95': the half-angle after ':' is wrong: half_angle \(degree\) must be "
+                r"in \[0.1, 89.9\], got 95.*" + _ACCEPTED),
+    ("cone:2rad", r"half_angle \(degree\) must be in \[0.1, 89.9\], got 114\.59"),
+    ("pyramid:abc", r"'abc' is not a half-angle \(a number in degrees.*" + _ACCEPTED),
+    ("cone:20grad", r"'20grad' is not a half-angle"),
+    ("cone:nan", r"'nan' is not a half-angle"),
 ])
 def test_parse_tip_rejects_bad_text(text, match):
     with pytest.raises(ParameterError, match=match):

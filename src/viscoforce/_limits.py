@@ -20,7 +20,9 @@ MAX_MEMORY_BYTES = 2 * 1024**3
 # Archives and instrument files (zip bombs, lying headers): each member's size is checked against
 # the zip's declared size before it is decompressed, and decompression stops at that size.
 #: Largest decompressed size of one archive member [bytes]: a JPK channel, a zip member read by
-#: afmformats, or a JPK archive inside a zip of archives (which is held in memory whole).
+#: afmformats, or a JPK archive inside a zip of archives (which is held in memory whole, one at a
+#: time: its size once, decompressed chunk by chunk; refused up front when that exceeds
+#: MAX_MEMORY_BYTES).
 MAX_MEMBER_BYTES = 1024**3
 #: Largest decompressed size of one JPK properties header [bytes] (real ones: 3-60 kB).
 MAX_HEADER_BYTES = 16 * 1024**2
@@ -39,6 +41,24 @@ MAX_PARSED_TOTAL_BYTES = 1024**3
 SPRING_CONSTANT_RANGE = (1e-5, 1e3)
 #: Deflection sensitivity [m/V].
 SENSITIVITY_RANGE = (1e-12, 1e-3)
+
+# Plausible ranges of what a user states about the probe and the measurement (outside: refused
+# naming the parameter and the range). Each is far wider than any instrument, and far inside the
+# double-precision range, so that nothing computed from them underflows or overflows.
+#: Radius of a sphere, paraboloid or flat-punch tip [m]: a sharp tip's apex (nm) to a
+#: macroscopic sphere (a surface force apparatus' cylinders are cm).
+TIP_RADIUS_RANGE = (1e-9, 1.0)
+#: Half-angle of a cone or pyramid tip [degree] (real tips: 5-45°).
+TIP_HALF_ANGLE_RANGE = (0.1, 89.9)
+#: Hydrodynamic drag coefficient B [N·s/m]: 0 (none) to far beyond the lubrication drag of a
+#: centimetre sphere at a nanometre from a wall in water, 6πηR²/h ≈ 2e3 N·s/m.
+DRAG_RANGE = (0.0, 1e6)
+#: Mean (static) force of a measurement, the setpoint [N]: an attonewton (below the thermal
+#: noise of any force probe) to a kilonewton.
+MEAN_FORCE_RANGE = (1e-18, 1e3)
+#: Shortest sample interval of a measured time series [s] (no instrument samples at a THz); a
+#: shorter step is a wrong time unit or a damaged column, and its reciprocal overflows downstream.
+MIN_TIME_STEP = 1e-12
 
 
 def check_effort(what: str, estimate: float, limit: float, *, unit: str = "",

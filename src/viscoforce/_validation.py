@@ -113,6 +113,22 @@ def require_in_range(name: str, value: Any, low: float, high: float, *,
     return x
 
 
+def require_plausible(name: str, value: Any, bounds: tuple[float, float], unit: str, *,
+                      why: str = "") -> float:
+    """Return ``value`` as a float, raising unless it is finite and within ``bounds`` (inclusive).
+
+    For a physical quantity with a plausible range (:mod:`viscoforce._limits`): the message
+    reads ``"radius must be within the plausible range [1e-09, 1] m (why), got 1e+300 m"``.
+    """
+    x = require_finite(name, value)
+    low, high = bounds
+    if not low <= x <= high:
+        note = f" ({why})" if why else ""
+        raise ParameterError(f"{name} must be within the plausible range [{low:g}, {high:g}] "
+                             f"{unit}{note}, got {shown(value)!r} {unit}")
+    return x
+
+
 def require_int(name: str, value: Any, minimum: int) -> int:
     """Return ``value`` as an int, raising unless it is an integer >= ``minimum``."""
     if isinstance(value, bool) or not isinstance(value, int | np.integer):

@@ -487,9 +487,33 @@ class FlagGroup:
     flags: tuple[Flag, ...]
 
 
+class _LibraryType:
+    """A ``type=`` callable of the library (``parse_tip``) whose errors argparse prints as is.
+
+    argparse turns a ValueError from ``type=`` into "invalid <name> value: '...'", dropping the
+    message; a :class:`~viscoforce.exceptions.ViscoforceError` (which names the parameter, the
+    wrong part and the range) becomes an :class:`argparse.ArgumentTypeError` with its text.
+    """
+
+    def __init__(self, function: Callable[[str], Any]) -> None:
+        self.function = function
+        self.__name__ = getattr(function, "__name__", "value")
+
+    def __call__(self, text: str) -> Any:
+        try:
+            return self.function(text)
+        except ViscoforceError as exc:
+            raise argparse.ArgumentTypeError(str(exc)) from exc
+
+    def __repr__(self) -> str:
+        return repr(self.function)
+
+
 def _type(dimension: str | Callable[[str], Any] | None) -> Callable[[str], Any] | None:
-    if dimension is None or callable(dimension):
-        return dimension
+    if dimension is None:
+        return None
+    if callable(dimension):
+        return dimension if isinstance(dimension, _QuantityType) else _LibraryType(dimension)
     return quantity_type(dimension)
 
 
@@ -741,6 +765,7 @@ PARAMETER_FLAGS: dict[str, tuple[tuple[str, ...], str]] = {
     "rise_time": (("duration",), "the rise time"),
     "n_jobs": (("jobs",), "the number of workers"),
     "reference_frequency": (("reference_frequency",), "the reference frequency"),
+    "load": (("mean_force",), "the mean force"),
 }
 
 _ALTERNATIVES_RE = re.compile(r"argument ((?:--?[\w-]+/)+--?[\w-]+)")

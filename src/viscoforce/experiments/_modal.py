@@ -21,6 +21,7 @@ import scipy.linalg
 from numpy.typing import NDArray
 
 from viscoforce._typing import FloatArray
+from viscoforce.exceptions import ParameterError
 from viscoforce.problem import ContactProblem
 from viscoforce.solvers.newton import NewtonResult
 from viscoforce.solvers.static import equilibrium_gap
@@ -62,6 +63,15 @@ def decompose(problem: ContactProblem, sol: NewtonResult) -> Decomposition:
     stiff = -d1  # s = −p′ (> 0 where repulsive)
     area = problem.grid.area_weights
     active = np.flatnonzero(stiff != 0.0)
+    if active.size == 0:
+        closest = float(np.min(sol.gap))
+        decay = float(problem.surface_force.decay_length)
+        raise ParameterError(
+            f"position must be where the surfaces interact: at the closest gap, {closest:.3g} m "
+            f"({closest / decay:.3g} decay lengths of {decay:.3g} m), the surface force's "
+            "derivative p'(h) is 0 at every node of the grid, so the linear response (stiffness "
+            "and phase) is undefined there; give a position within a few decay lengths of "
+            "contact")
     if active.size == stiff.size:  # every node (the paper's law): no copies by index
         d, kernel = area * stiff, problem.influence
     else:

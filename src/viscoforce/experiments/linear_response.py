@@ -43,9 +43,14 @@ import numpy as np
 import xarray as xr
 from numpy.typing import ArrayLike, NDArray
 
-from viscoforce._limits import MAX_SAMPLES, check_effort
+from viscoforce._limits import MAX_SAMPLES, MEAN_FORCE_RANGE, check_effort
 from viscoforce._typing import FloatArray
-from viscoforce._validation import require_finite, require_instance, require_positive
+from viscoforce._validation import (
+    require_finite,
+    require_instance,
+    require_plausible,
+    require_positive,
+)
 from viscoforce.exceptions import ParameterError
 from viscoforce.experiments._checks import require_frequencies, require_number, require_problem
 from viscoforce.experiments._modal import (
@@ -147,13 +152,14 @@ class LinearizedState:
         Raises
         ------
         ParameterError
-            ``load`` ≤ 0 or not finite, or another argument out of range.
+            ``load`` ≤ 0, not finite or outside :data:`~viscoforce._limits.MEAN_FORCE_RANGE`,
+            or another argument out of range.
         ConvergenceError
             The load cannot be bracketed within the grid, or a static solve failed.
         """
         problem = require_problem(problem)
         modulus = _relaxed_modulus(problem, relaxed_modulus)
-        position, sol = equilibrium_at_load(problem, load, modulus)
+        position, sol = equilibrium_at_load(problem, _mean_force(load), modulus)
         return cls._from_decomposition(problem, position, modulus, decompose(problem, sol))
 
     @classmethod
@@ -283,6 +289,15 @@ def _require_compliance(compliance: Any) -> NDArray[np.complex128]:
 _STATES = StateCache(STATE_CACHE_SIZE)
 
 
+def _mean_force(load: Any) -> float:
+    """The mean force [N], > 0 and within :data:`~viscoforce._limits.MEAN_FORCE_RANGE`.
+
+    A subnormal load (5e-320 N) made the load bracketing divide by zero.
+    """
+    value = require_number("load", load, require_positive, "> 0 [N] (finite; the mean force)")
+    return require_plausible("load", value, MEAN_FORCE_RANGE, "N")
+
+
 def linearized_state(problem: ContactProblem, position: float | None = None,
                      relaxed_modulus: float | None = None, *,
                      load: float | None = None) -> LinearizedState:
@@ -302,7 +317,8 @@ def linearized_state(problem: ContactProblem, position: float | None = None,
     relaxed_modulus : float, optional
         E_inf [Pa], > 0; default the problem material's.
     load : float, optional
-        Mean (static E_inf) force [N], > 0 (:meth:`LinearizedState.at_load`).
+        Mean (static E_inf) force [N], > 0, within
+        :data:`~viscoforce._limits.MEAN_FORCE_RANGE` (:meth:`LinearizedState.at_load`).
 
     Returns
     -------
@@ -330,7 +346,7 @@ def linearized_state(problem: ContactProblem, position: float | None = None,
                 problem, position, modulus, decomposition(problem, position, modulus))
 
         return _STATES.get((*base, "position", position), build)
-    load = require_number("load", load, require_positive, "> 0 [N] (finite; the mean force)")
+    load = _mean_force(load)
     return _STATES.get((*base, "load", load),
                        lambda: LinearizedState.at_load(problem, load, modulus))
 

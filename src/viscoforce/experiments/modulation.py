@@ -165,8 +165,10 @@ import numpy as np
 import xarray as xr
 from scipy.optimize import minimize_scalar
 
+from viscoforce._limits import DRAG_RANGE
+from viscoforce._validation import require_plausible
 from viscoforce.exceptions import ParameterError
-from viscoforce.io.curves import _read_block
+from viscoforce.io.curves import _read_block, check_height_channel, unique_curves
 from viscoforce.io.jpk import JPKArchive, read_jpk
 from viscoforce.io.quality import SENSOR_CHANNELS, phase_basis, quality_notes, spectrum_quality
 from viscoforce.lockin import harmonics
@@ -596,6 +598,8 @@ def _check_corrections(phase_lag: Any, drag: Any, phase_reference: Any) -> None:
                              or not math.isfinite(drag) or drag < 0):
         raise ParameterError(f"drag must be a finite number >= 0 [N·s/m] (a viscous drag "
                              f"dissipates), got {drag!r}")
+    if drag is not None:
+        require_plausible("drag", drag, DRAG_RANGE, "N·s/m", why="a hydrodynamic drag B")
     if phase_lag is not None:
         values = list(phase_lag.values()) if isinstance(phase_lag, Mapping) else [phase_lag]
         for lag in values:
@@ -889,6 +893,14 @@ def _curves_of(data: Any, curves: int | Iterable[int] | None, height_channel: st
         return _input_of_archive(data, curves, height_channel)
     if isinstance(data, xr.Dataset):
         ds = validate_curves(data)
+        own = ds.attrs.get("height_channel")
+        if height_channel is not None and height_channel != own:
+            made = ("does not record its height channel" if own is None else
+                    f"was made with {own!r} (attrs['height_channel'])")
+            raise ParameterError(
+                f"height_channel {height_channel!r} chooses the height of a JPK archive; this "
+                f"curves dataset {made}: read the archive again with that height_channel, or "
+                "leave it None")
         if curves is None:
             return _input_of_dataset(ds, None)
         picked = [curves] if isinstance(curves, int | np.integer) else list(curves)
@@ -896,7 +908,8 @@ def _curves_of(data: Any, curves: int | Iterable[int] | None, height_channel: st
         if not picked or any(isinstance(c, bool) or not isinstance(c, int | np.integer)
                              or not -n <= c < n for c in picked):
             raise ParameterError(f"curves {picked} must be integers in [{-n}, {n})")
-        return _input_of_dataset(ds, np.asarray([c % n for c in picked]))
+        return _input_of_dataset(ds, np.asarray(unique_curves([int(c) % n for c in picked],
+                                                              [int(c) for c in picked])))
     raise ParameterError("modulation_spectrum needs a JPKArchive, a path to one, or a curves "
                          f"dataset, got {type(data).__name__}")
 
@@ -935,7 +948,9 @@ def modulation_spectrum(data: Any, *, curves: int | Iterable[int] | None = None,
     subtract_baseline : bool
         Subtract the file's free-cantilever baseline from the mean force (default True).
     height_channel : str, optional
-        Height channel for a JPK archive (default: the calibrated sensor).
+        Height channel for a JPK archive (default: the calibrated sensor), one of
+        :data:`~viscoforce.io.curves.HEIGHT_CHANNELS` (refused before anything is read). A
+        curves dataset has its own: None or that one.
     phase_reference : xarray.Dataset, optional
         Spectrum measured on a hard (elastic) surface at the same frequencies (e.g. this
         function's output on a glass/sapphire map): its median phase per frequency is the
@@ -988,7 +1003,7 @@ def modulation_spectrum(data: Any, *, curves: int | Iterable[int] | None = None,
     else:
         raise ParameterError(f"contact_point must be True, False or a mapping of "
                              f"find_contact_point options, got {contact_point!r}")
-    inp = _curves_of(data, curves, height_channel)
+    inp = _curves_of(data, curves, check_height_channel(height_channel))
     names, freq, nominal, base = inp.names, inp.freq, inp.nominal, inp.base
 
     results: list[dict[float, tuple[int, dict[str, Any]]]] = []

@@ -24,6 +24,8 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
+from viscoforce._limits import DRAG_RANGE
+from viscoforce._validation import require_plausible
 from viscoforce.exceptions import ModelValidityError, ParameterError
 from viscoforce.physics.tips import DEFAULT_POISSON, Tip, tip_from, young_from_paper
 
@@ -78,6 +80,7 @@ def add_complex_modulus(spectrum: xr.Dataset, tip: Tip | str, *, poisson: float 
     if drag is not None:
         if not (isinstance(drag, int | float) and math.isfinite(drag) and drag >= 0):
             raise ParameterError(f"drag must be >= 0 N*s/m and finite, got {drag!r}")
+        require_plausible("drag", drag, DRAG_RANGE, "N*s/m", why="a hydrodynamic drag B")
         if already:
             raise ParameterError(f"this spectrum already had a drag of {already:g} N*s/m "
                                  "subtracted (load --drag); do not subtract it again")

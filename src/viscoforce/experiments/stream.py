@@ -24,7 +24,7 @@ import xarray as xr
 
 from viscoforce.exceptions import ParameterError
 from viscoforce.experiments.modulation import contact_point_summary, modulation_spectrum
-from viscoforce.io.curves import _select
+from viscoforce.io.curves import _select, check_height_channel
 from viscoforce.io.jpk import JPKArchive, read_jpk
 from viscoforce.io.quality import quality_notes
 from viscoforce.io.stream import DEFAULT_CHUNK_BYTES, chunk_size, curve_chunks, selection_height
@@ -78,6 +78,7 @@ phase_reference, contact_point
         ``data`` is not an archive or a path, bad ``chunk`` or ``memory_bytes``, curves whose
         frequency sets differ between chunks, and whatever ``modulation_spectrum`` raises.
     """
+    check_height_channel(height_channel)  # before the file is opened
     if isinstance(data, str | Path):
         with read_jpk(data) as archive:
             return stream_spectrum(

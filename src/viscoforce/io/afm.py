@@ -45,7 +45,9 @@ declared size (zipfile stops there and checks the CRC: a header that lies is ref
 Calibrations in the file or given by the caller are refused outside
 :data:`~viscoforce._limits.SPRING_CONSTANT_RANGE` / :data:`~viscoforce._limits.SENSITIVITY_RANGE`,
 and a non-finite time, force or height sample names the file (and member), the curve, the segment
-and the channel.
+and the channel; so does a sample beyond :data:`~viscoforce.io.quality.PHYSICAL_RANGES`, or a
+channel whose every sample is below its smallest scale (:data:`~viscoforce.io.quality.
+SMALLEST_SCALES`).
 
 afmformats' exceptions derive from ``BaseException``; they are caught by name
 (``afmformats.errors.AFMFileFormatError`` and its subclasses, ``MissingMetaDataError``) together
@@ -74,8 +76,15 @@ import xarray as xr
 
 from viscoforce import _limits
 from viscoforce._limits import check_effort
-from viscoforce._validation import require_positive
+from viscoforce._validation import require_plausible, require_positive
 from viscoforce.exceptions import InstrumentFormatError, ParameterError, ViscoforceError
+from viscoforce.io.quality import (
+    PHYSICAL_RANGES,
+    below_scale,
+    first_beyond,
+    range_text,
+    scale_text,
+)
 from viscoforce.schema import make_curves
 
 __all__ = ["AFMFORMATS_EXTENSIONS", "detect_afmformats", "read_afmformats"]
@@ -328,6 +337,23 @@ def _require_finite_samples(values: np.ndarray, channel: str, where: str, index:
         f"{values.size} samples are not finite (first: sample {bad[0]} = {float(values[bad[0]])})")
 
 
+def _require_physical(values: np.ndarray, channel: str, where: str, index: int) -> None:
+    """Refuse samples beyond the channel's physical range, or a channel below its scale."""
+    unit = PHYSICAL_RANGES[channel][2]
+    i = first_beyond(channel, values)
+    if i is not None:
+        raise InstrumentFormatError(
+            f"{where}: curve {index}, channel '{channel}': sample {i} is {float(values[i]):g} "
+            f"{unit}, beyond the physical range {range_text(channel)}: the file's calibration "
+            "or its data are damaged")
+    tiny = below_scale(channel, values)
+    if tiny is not None:
+        raise InstrumentFormatError(
+            f"{where}: curve {index}, channel '{channel}': every sample is at most "
+            f"{abs(tiny[1]):g} {unit} in magnitude (sample {tiny[0]}), below "
+            f"{scale_text(channel)}: the file's calibration or its data are damaged")
+
+
 def _convert(kind: str, fmt: str, path: Path, afm: Any, k_user: float | None,
              s_user: float | None, where: str, index: int, dropped: str) -> _Curve:
     """Curve ``index`` of the file (``where`` names it in errors; ``dropped``: afmformats' notes)."""
@@ -397,6 +423,7 @@ def _convert(kind: str, fmt: str, path: Path, afm: Any, k_user: float | None,
     table, local = _segments(kind, path, afm, n, height, notes)
     for channel, values in (("time", time), ("force", force), ("height", height)):
         _require_finite_samples(values, channel, where, index, table, local)
+        _require_physical(values, channel, where, index)
     x = _finite_or_nan(meta.get("position x"))
     y = _finite_or_nan(meta.get("position y"))
     return _Curve(time=time, force=force, height=height, deflection=deflection, segments=table,
@@ -567,12 +594,7 @@ def _optional_calibration(name: str, value: Any, unit: str, limits: tuple[float,
     """None, or ``value`` when positive and within ``limits`` (else ParameterError)."""
     if value is None:
         return None
-    value = require_positive(name, value)
-    low, high = limits
-    if not low <= value <= high:
-        raise ParameterError(f"{name} must be within the plausible range [{low:g}, {high:g}] "
-                             f"{unit}, got {value!r} {unit}")
-    return value
+    return require_plausible(name, require_positive(name, value), limits, unit)
 
 
 def read_afmformats(path: str | Path, *, spring_constant: float | None = None,

@@ -53,12 +53,28 @@ lines ``<code> <segment number> <column 0> <column 1> …``; ``****`` ends the f
   ``attrs["tip_note"]`` says what was not used and why.
 
 Only single-curve UFF files (``Entry_tot_nb_curve`` = 1) are read.
+
+Plausible values (as the JPK and afmformats readers): a header's spring constant or sensitivity,
+or one given by the caller, outside :data:`~viscoforce._limits.SPRING_CONSTANT_RANGE` /
+:data:`~viscoforce._limits.SENSITIVITY_RANGE` is refused (the header's as corrupt, naming the
+field); so is a height, deflection or force beyond
+:data:`~viscoforce.io.quality.PHYSICAL_RANGES` or below its smallest scale
+(:data:`~viscoforce.io.quality.SMALLEST_SCALES`: a curve scaled by 1e-300), a velocity that
+gives a sample interval below :data:`~viscoforce._limits.MIN_TIME_STEP`, and a position beyond a
+metre. A tip is recorded only within :data:`~viscoforce._limits.TIP_RADIUS_RANGE` (and 1 mm) or
+:data:`~viscoforce._limits.TIP_HALF_ANGLE_RANGE`.
+
+Bounded reading: the file (at most :data:`MAX_UFF_BYTES`) is read once; the header is found
+without visiting the data lines, which are then parsed in file order, each checked as it comes,
+and a segment with more lines than its ``nb_point`` is refused at the first one too many.
 """
 
 from __future__ import annotations
 
 import math
 import re
+from array import array
+from collections.abc import Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, NoReturn
@@ -66,10 +82,24 @@ from typing import Any, NoReturn
 import numpy as np
 import xarray as xr
 
-from viscoforce._limits import check_effort
-from viscoforce._validation import require_path
+from viscoforce._limits import (
+    SENSITIVITY_RANGE,
+    SPRING_CONSTANT_RANGE,
+    TIP_HALF_ANGLE_RANGE,
+    TIP_RADIUS_RANGE,
+    check_effort,
+)
+from viscoforce._validation import require_path, require_plausible
 from viscoforce.exceptions import InstrumentFormatError, ParameterError, UnitError
 from viscoforce.io.csv_formats import segment_label
+from viscoforce.io.quality import (
+    MIN_TIME_STEP,
+    PHYSICAL_RANGES,
+    below_scale,
+    first_beyond,
+    range_text,
+    scale_text,
+)
 from viscoforce.schema import make_curves
 from viscoforce.units import parse_quantity, unit_factor
 
@@ -215,7 +245,8 @@ class _Segment:
     number: str  # Recording_segment_<i>_nb as written
     n_points: int
     columns: list[_Column]
-    rows: list[list[float]] = field(default_factory=list)
+    #: the data, one row per sample (filled by :func:`_parse`)
+    rows: np.ndarray = field(default_factory=lambda: np.empty((0, 0)))
 
 
 @dataclass
@@ -241,38 +272,80 @@ def _read_text(path: Path) -> str:
     except OSError as exc:
         raise InstrumentFormatError(f"{path}: cannot read ({exc.strerror or exc})") from None
     try:
-        return data.decode("utf-8-sig")
+        text = data.decode("utf-8-sig")
     except UnicodeDecodeError:
-        return data.decode("latin-1")
+        text = data.decode("latin-1")
+    del data
+    if "\n" not in text and "\r" in text:  # classic Mac OS line ends
+        text = text.replace("\r", "\n")
+    return text
 
 
-def _parse_lines(path: Path, text: str) -> tuple[dict[str, str], list[tuple[int, list[str]]]]:
-    """Header fields (key → value text) and the data lines (line number, tokens)."""
+def _lines(text: str) -> Iterator[tuple[int, str]]:
+    """(1-based line number, stripped line) of every non-blank line of ``text``, one at a time.
+
+    The lines are cut out of ``text`` lazily: a list of every line (or of every line's tokens)
+    of a 256 MB file would take several times the file in memory before anything is checked.
+    """
+    start, lineno, size = 0, 0, len(text)
+    while start < size:
+        end = text.find("\n", start)
+        if end < 0:
+            end = size
+        lineno += 1
+        line = text[start:end].strip()
+        if line:
+            yield lineno, line
+        start = end + 1
+
+
+def _line_number(text: str, offset: int) -> int:
+    """1-based line number of character ``offset`` (for messages only: it counts)."""
+    return text.count("\n", 0, offset) + 1
+
+
+def _whole_lines(text: str, token: str, end: int | None = None) -> Iterator[tuple[int, str]]:
+    """(offset, stripped line) of the lines of ``text[:end]`` that start with ``token``.
+
+    Found by ``str.find`` (C speed) rather than by visiting every line: a header's few lines
+    among millions of data lines.
+    """
+    end = len(text) if end is None else end
+    pos = 0
+    while (i := text.find(token, pos, end)) >= 0:
+        start = text.rfind("\n", 0, i) + 1
+        stop = text.find("\n", i, end)
+        stop = end if stop < 0 else stop
+        if not text[start:i].strip():
+            yield start, text[start:stop].strip()
+        pos = stop + 1 if stop > i else i + len(token)
+
+
+def _parse_header(path: Path, text: str) -> tuple[dict[str, str], str]:
+    """Header fields (key → value text), and the text up to the ``****`` end marker.
+
+    The data lines are not visited here; content after the end marker is refused.
+    """
+    marker = next((offset for offset, line in _whole_lines(text, "*") if _END.match(line)), None)
+    body = text if marker is None else text[:marker]
     fields: dict[str, str] = {}
-    data: list[tuple[int, list[str]]] = []
-    ended = False
-    for lineno, raw in enumerate(text.splitlines(), start=1):
-        line = raw.strip()
-        if not line:
-            continue
-        if ended:
-            raise InstrumentFormatError(f"{path}: line {lineno}: content after the '****' end "
-                                        "marker")
-        if _END.match(line):
-            ended = True
-        elif line.startswith("HE "):
-            key, sep, value = line[3:].partition(":")
-            key = key.strip()
-            if not sep or not key:
-                raise InstrumentFormatError(f"{path}: line {lineno}: header line without "
-                                            f"'key: value' ({line[:60]!r})")
-            if key in fields:
-                raise InstrumentFormatError(f"{path}: line {lineno}: header field {key!r} given "
-                                            "twice")
-            fields[key] = value.strip().strip('"').strip()
-        else:
-            data.append((lineno, line.split()))
-    return fields, data
+    for offset, line in _whole_lines(body, "HE "):
+        key, sep, value = line[3:].partition(":")
+        key = key.strip()
+        if not sep or not key:
+            raise InstrumentFormatError(f"{path}: line {_line_number(text, offset)}: header "
+                                        f"line without 'key: value' ({line[:60]!r})")
+        if key in fields:
+            raise InstrumentFormatError(f"{path}: line {_line_number(text, offset)}: header "
+                                        f"field {key!r} given twice")
+        fields[key] = value.strip().strip('"').strip()
+    if marker is not None:
+        stop = text.find("\n", marker)
+        after = None if stop < 0 else re.compile(r"\S").search(text, stop)
+        if after is not None:
+            raise InstrumentFormatError(f"{path}: line {_line_number(text, after.start())}: "
+                                        "content after the '****' end marker")
+    return fields, body
 
 
 def _field(uff_path: Path, fields: dict[str, str], key: str) -> str:
@@ -303,7 +376,13 @@ def _float_field(fields: dict[str, str], key: str) -> float:
 
 
 def _parse(path: Path) -> _Uff:
-    fields, data = _parse_lines(path, _read_text(path))
+    """The header, then the data lines in file order, each checked as it is read.
+
+    A segment with more data lines than its ``nb_point`` is refused at the first line too many,
+    before the rest of the file is parsed (a 200 MB file of a 1024-point curve took 30 s and
+    3 GB to be refused when every line was parsed first).
+    """
+    fields, text = _parse_header(path, _read_text(path))
     n_curves = _int_field(path, fields, "Entry_tot_nb_curve", 1)
     if n_curves != 1:
         raise InstrumentFormatError(f"{path}: the UFF file holds {n_curves} curves "
@@ -323,7 +402,12 @@ def _parse(path: Path) -> _Uff:
     if len(by_code) != len(segments):
         raise InstrumentFormatError(f"{path}: segment codes {[s.code for s in segments]} are not "
                                     "unique")
-    for lineno, tokens in data:
+    values: dict[str, array] = {s.code: array("d") for s in segments}
+    counts = dict.fromkeys(by_code, 0)
+    for lineno, line in _lines(text):
+        if line.startswith("HE "):
+            continue
+        tokens = line.split()
         seg = by_code.get(tokens[0])
         if seg is None:
             raise InstrumentFormatError(
@@ -335,18 +419,26 @@ def _parse(path: Path) -> _Uff:
                 f"'{seg.code} {seg.number}' and {len(seg.columns)} numbers, got "
                 f"{' '.join(tokens)[:80]!r}")
         try:
-            values = [float(t) for t in tokens[2:]]
+            row = [float(t) for t in tokens[2:]]
         except ValueError:
-            values = [math.nan]
-        if not all(math.isfinite(v) for v in values):
+            row = [math.nan]
+        if not all(math.isfinite(v) for v in row):
             raise InstrumentFormatError(f"{path}: line {lineno}: not finite numbers "
                                         f"({' '.join(tokens[2:])[:80]!r})")
-        seg.rows.append(values)
-    for seg in segments:
-        if len(seg.rows) != seg.n_points:
+        counts[seg.code] += 1
+        if counts[seg.code] > seg.n_points:
             raise InstrumentFormatError(
                 f"{path}: segment {seg.index} ({seg.code}) declares {seg.n_points} points "
-                f"(Recording_segment_{seg.index}_nb_point), the file has {len(seg.rows)}")
+                f"(Recording_segment_{seg.index}_nb_point), the file has more: line {lineno} is "
+                f"its data line {counts[seg.code]}; refused there, before reading the rest")
+        values[seg.code].extend(row)
+    for seg in segments:
+        if counts[seg.code] != seg.n_points:
+            raise InstrumentFormatError(
+                f"{path}: segment {seg.index} ({seg.code}) declares {seg.n_points} points "
+                f"(Recording_segment_{seg.index}_nb_point), the file has {counts[seg.code]}")
+        seg.rows = np.frombuffer(values.pop(seg.code), dtype=float).reshape(
+            seg.n_points, len(seg.columns))
     return _Uff(path=path, fields=fields, segments=segments)
 
 
@@ -391,7 +483,7 @@ class _Channel:
 
 def _columns(uff: _Uff, seg: _Segment) -> dict[str, _Channel]:
     """Role (height, deflection) → channel of one segment; other columns are noted, unused."""
-    table = np.asarray(seg.rows, dtype=float).reshape(len(seg.rows), len(seg.columns))
+    table = seg.rows
     out: dict[str, _Channel] = {}
     for j, col in enumerate(seg.columns):
         role, unit, title = _role(col.title), col.unit.strip(), col.title.strip()
@@ -413,7 +505,8 @@ def _columns(uff: _Uff, seg: _Segment) -> dict[str, _Channel]:
             raise InstrumentFormatError(
                 f"{uff.path}: segment {seg.index} ({seg.code}) column {title!r}: unit {unit!r} "
                 f"is not {allowed}") from None
-        out[role] = _Channel(table[:, j] * factor, unit, title)
+        out[role] = _Channel(_measured(uff, seg, title, role, table[:, j] * factor), unit,
+                             title)
     missing = [name for role, name in (("height", "height (Displacement, Height or Z)"),
                                        ("deflection", "Deflection")) if role not in out]
     if missing:
@@ -421,6 +514,27 @@ def _columns(uff: _Uff, seg: _Segment) -> dict[str, _Channel]:
             f"{uff.path}: segment {seg.index} ({seg.code}) lacks a {' and a '.join(missing)} "
             f"column (it has {', '.join(c.title.strip() for c in seg.columns)})")
     return out
+
+
+def _measured(uff: _Uff, seg: _Segment, title: str, role: str, values: np.ndarray
+              ) -> np.ndarray:
+    """``values`` [SI] of channel ``role``, refused beyond its physical range or scale."""
+    with np.errstate(over="ignore"):  # an overflow is refused here
+        values = np.asarray(values, dtype=float)
+    where = f"{uff.path}: segment {seg.index} ({seg.code}) column {title!r}"
+    i = first_beyond(role, values)
+    if i is not None:
+        raise InstrumentFormatError(
+            f"{where}: sample {i} is {float(values[i]):g} {PHYSICAL_RANGES[role][2]}, beyond the "
+            f"physical range {range_text(role)}: the header's unit or calibration, or the data, "
+            "are damaged")
+    tiny = below_scale(role, values)
+    if tiny is not None:
+        raise InstrumentFormatError(
+            f"{where} is at most {abs(tiny[1]):g} {PHYSICAL_RANGES[role][2]} in magnitude (sample "
+            f"{tiny[0]}), below {scale_text(role)}: the header's unit or calibration, or the "
+            "data, are damaged")
+    return values
 
 
 def _order_and_time(uff: _Uff, seg: _Segment, height: np.ndarray, name: str
@@ -441,6 +555,12 @@ def _order_and_time(uff: _Uff, seg: _Segment, height: np.ndarray, name: str
         raise InstrumentFormatError(f"{where}: no positive {key} ({uff.fields.get(key)!r}): the "
                                     "sample times are unknown (the file records no time)")
     dt = abs(float(height[-1] - height[0])) / (n - 1) / velocity
+    if not MIN_TIME_STEP <= dt <= PHYSICAL_RANGES["time"][1] / n:
+        raise InstrumentFormatError(
+            f"{where}: {key} = {uff.fields[key]} gives a sample interval of {dt:g} s (mean "
+            f"height step / velocity), outside [{MIN_TIME_STEP:g} s, "
+            f"{PHYSICAL_RANGES['time'][1] / n:.3g} s] (from {MIN_TIME_STEP:g} s to a curve of "
+            f"{PHYSICAL_RANGES['time'][1]:g} s): a corrupt velocity")
     reverse = bool(steps[0] < 0) != (name == "approach")  # approach: height decreasing in time
     order = np.arange(n)[::-1] if reverse else np.arange(n)
     how = f"dt = mean height step / velocity = {dt:.6g} s" + (", rows reversed" if reverse
@@ -461,7 +581,7 @@ def _deflection(uff: _Uff, channel: _Channel, s: tuple[float, str], notes: dict[
             "lever sensitivity (Recording_inv_optical_lever_sens_used(m/V)); "
             + _CLI_HINT.format(name="sensitivity", flag="--sensitivity 50nm/V"))
     notes["deflection_channel"] = f"{channel.title} [V] x sensitivity {value:g} m/V ({source})"
-    return channel.values * value
+    return channel.values * value  # checked with the force by _assemble
 
 
 def _tip_attrs(fields: dict[str, str]) -> tuple[dict[str, Any], str]:
@@ -471,18 +591,20 @@ def _tip_attrs(fields: dict[str, str]) -> tuple[dict[str, Any], str]:
     angle = _float_field(fields, "Tip_half_angle(deg)")
     radius = _float_field(fields, "Tip_radius(m)")
     notes = []
-    radius_ok = 0 < radius < _MAX_TIP_RADIUS
+    radius_ok = TIP_RADIUS_RANGE[0] <= radius <= _MAX_TIP_RADIUS
     if not math.isnan(radius) and radius != -1 and not radius_ok:
         notes.append(f"Tip_radius(m) = {fields.get('Tip_radius(m)')} is not a plausible tip "
-                     f"radius in metres (0 to {_MAX_TIP_RADIUS:g} m); not used")
+                     f"radius in metres ({TIP_RADIUS_RANGE[0]:g} to {_MAX_TIP_RADIUS:g} m); not "
+                     "used")
     if shape is None:
         if geometry not in _UNKNOWN:
             notes.append(f"Tip_geometry {fields.get('Tip_geometry')!r} names no known tip shape")
         return {}, "; ".join(notes)
     if shape in ("cone", "pyramid"):
-        if 0 < angle < 90:
+        low, high = TIP_HALF_ANGLE_RANGE
+        if low <= angle <= high:
             return {"tip_shape": shape, "tip_half_angle": angle}, "; ".join(notes)
-        notes.append(f"{geometry} tip without a half angle in (0, 90) degrees "
+        notes.append(f"{geometry} tip without a half angle in [{low:g}, {high:g}] degrees "
                      f"(Tip_half_angle(deg) = {fields.get('Tip_half_angle(deg)')!r}); not used")
         return {}, "; ".join(notes)
     if radius_ok:
@@ -507,6 +629,11 @@ def _meta(fields: dict[str, str]) -> dict[str, Any]:
     return out
 
 
+#: name → (plausible range, unit, what it is) of the calibrations (:mod:`viscoforce._limits`).
+_RANGES = {"spring_constant": (SPRING_CONSTANT_RANGE, "N/m", "spring constant"),
+           "sensitivity": (SENSITIVITY_RANGE, "m/V", "inverse optical lever sensitivity")}
+
+
 def _option(name: str, value: Any, dimension: str) -> float | None:
     if value is None:
         return None
@@ -515,17 +642,30 @@ def _option(name: str, value: Any, dimension: str) -> float | None:
     out = parse_quantity(value, dimension, name=name) if isinstance(value, str) else float(value)
     if not (math.isfinite(out) and out > 0):
         raise ParameterError(f"{name} must be finite and > 0, got {value!r}")
-    return out
+    bounds, unit, _ = _RANGES[name]
+    return require_plausible(name, out, bounds, unit,
+                             why=f"given as {value!r}" if isinstance(value, str) else "")
 
 
 def _calibration(uff: _Uff, keys: tuple[str, ...], user: float | None, name: str
                  ) -> tuple[float, str]:
-    """(value, where it came from): the caller's, else the first positive header field."""
+    """(value, where it came from): the caller's, else the first positive header field.
+
+    A header value outside the plausible range (:data:`_RANGES`) is refused as a corrupt
+    header (UFF writes -1 or ``?`` for "not recorded": those are skipped).
+    """
     if user is not None:
         return user, name
+    (low, high), unit, what = _RANGES[name]
     for key in keys:
         value = _float_field(uff.fields, key)
         if value > 0:
+            if not low <= value <= high:
+                flag = "--" + name.replace("_", "-")
+                raise InstrumentFormatError(
+                    f"{uff.path}: the header's {what} {key} = {uff.fields[key]} is outside the "
+                    f"plausible range [{low:g}, {high:g}] {unit} ({name}): a corrupt header; "
+                    f"pass the right value as {name} (CLI: {flag})")
             return value, key
     return math.nan, ""
 
@@ -558,7 +698,9 @@ def read_uff(path: str | Path, *, spring_constant: float | str | None = None,
         the header; the message gives the line), holds several curves, lacks the calibration a
         deflection in volts needs, or a segment's sample times cannot be known.
     ParameterError, UnitError
-        If ``spring_constant`` / ``sensitivity`` is not a positive quantity.
+        If ``spring_constant`` / ``sensitivity`` is not a positive quantity within
+        :data:`~viscoforce._limits.SPRING_CONSTANT_RANGE` /
+        :data:`~viscoforce._limits.SENSITIVITY_RANGE`.
     """
     path = require_path("path", path)
     k_user = _option("spring_constant", spring_constant, "stiffness")
@@ -616,10 +758,30 @@ def _assemble(uff: _Uff, parts: dict[str, list[np.ndarray]], table: list[tuple[s
     per_curve: dict[str, Any] = {"spring_constant": [k], "sensitivity": [s]}
     x = _float_field(uff.fields, "Recording_xposition(m)")
     y = _float_field(uff.fields, "Recording_yposition(m)")
+    for axis, value in (("x", x), ("y", y)):
+        if first_beyond(axis, value) is not None:
+            raise InstrumentFormatError(
+                f"{uff.path}: the header's Recording_{axis}position(m) = {value:g} m is beyond "
+                f"the physical range {range_text(axis)}: a corrupt header")
     if math.isfinite(x) and math.isfinite(y):
         per_curve["x"], per_curve["y"] = [x], [y]
     deflection = np.concatenate(parts["deflection"])
-    ds = make_curves(np.concatenate(parts["time"]), k * deflection,
+    with np.errstate(over="ignore"):  # an overflow is refused below
+        force = k * deflection
+    for role, values, what in (("deflection", deflection, "deflection"),
+                               ("force", force, "force (spring constant x deflection)")):
+        i = first_beyond(role, values)
+        tiny = None if i is not None else below_scale(role, values)
+        if i is not None or tiny is not None:
+            unit = PHYSICAL_RANGES[role][2]
+            problem = (f"sample {i} is {float(values[i]):g} {unit}, beyond the physical range "
+                       f"{range_text(role)}" if i is not None else
+                       f"it is at most {abs(tiny[1]):g} {unit} in magnitude (sample {tiny[0]}), "
+                       f"below {scale_text(role)}")
+            raise InstrumentFormatError(
+                f"{uff.path}: the {what}: {problem}; the calibration (spring constant {k:g} N/m, "
+                f"sensitivity {s:g} m/V) or the data are damaged")
+    ds = make_curves(np.concatenate(parts["time"]), force,
                      np.concatenate(parts["height"]), deflection,
                      segment=np.concatenate(parts["segment"]),
                      segment_names=[r[0] for r in table], segment_types=[r[1] for r in table],

@@ -21,14 +21,22 @@ Table rules (every reader):
   PHYSICAL_RANGES`, in SI after the unit conversion, which may not overflow) is an error naming
   the column, the row, the cell and the range: e.g. a stiffness must be finite, > 0 and <= 1e10
   N/m, a phase within ±360°, a frequency > 0 and <= 1 GHz. Such values are no measurement (a
-  wrong unit, a damaged file) and would overflow downstream.
+  wrong unit, a damaged file) and would overflow downstream. So is a column whose largest
+  magnitude is below the smallest scale of its quantity (:data:`viscoforce.io.quality.
+  SMALLEST_SCALES`, e.g. a force column of 1e-309 N: it underflows downstream), and a time series
+  that steps by less than :data:`~viscoforce._limits.MIN_TIME_STEP`. A spring constant or
+  sensitivity given to the reader lies in :data:`~viscoforce._limits.SPRING_CONSTANT_RANGE` /
+  :data:`~viscoforce._limits.SENSITIVITY_RANGE`.
 * Bounded reading: a file above :data:`~viscoforce._limits.MAX_CSV_BYTES` (1 GB) is refused
   before it is read, a table of more than :data:`~viscoforce._limits.MAX_CSV_ROWS` (1e7) rows
   (a drive trace: :data:`~viscoforce._limits.MAX_TRACE_ROWS`) before it is parsed (estimated
   from the size and the first lines) or after that many rows; the numeric columns are parsed
   straight to float64 by pandas' C parser and unknown columns are skipped, so reading takes a
   small multiple of the data it returns (about 3x for curves and traces, 6x for a spectrum with
-  its derived variables). A 1e6-row table (~30 MB) reads in about 0.3 s.
+  its derived variables). A 1e6-row table (~30 MB) reads in about 0.3 s. The first
+  :data:`_PROBE_ROWS` rows are parsed first, so a file of text is refused at once; text further
+  down is found chunk by chunk (:data:`_CHUNK_ROWS` rows), not by turning whole columns into
+  Python strings.
 * Text encodings: UTF-8 (with or without a BOM), else Latin-1; UTF-16/32 text is refused with
   "save it as UTF-8".
 * The file is only read (opened read-only, never written).
@@ -71,7 +79,7 @@ import math
 import mmap
 import re
 import warnings
-from collections.abc import Mapping
+from collections.abc import Iterator, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -81,15 +89,24 @@ import pandas as pd
 import xarray as xr
 from pandas.api.types import is_bool_dtype, is_numeric_dtype
 
-from viscoforce._limits import MAX_CSV_BYTES, MAX_CSV_ROWS, MAX_TRACE_ROWS
-from viscoforce._validation import require_path
+from viscoforce._limits import (
+    MAX_CSV_BYTES,
+    MAX_CSV_ROWS,
+    MAX_TRACE_ROWS,
+    SENSITIVITY_RANGE,
+    SPRING_CONSTANT_RANGE,
+)
+from viscoforce._validation import require_path, require_plausible
 from viscoforce.exceptions import EffortError, InstrumentFormatError, ParameterError, UnitError
 from viscoforce.io.quality import (
+    MIN_TIME_STEP,
     PHYSICAL_RANGES,
+    below_scale,
     first_beyond,
     phase_basis,
     quality_notes,
     range_text,
+    scale_text,
     spectrum_quality,
 )
 from viscoforce.schema import make_curves, make_spectrum, validate_spectrum
@@ -251,6 +268,14 @@ class _Table:
             return
         row = first_beyond(col.name, values)
         if row is None:
+            tiny = below_scale(col.name, values)
+            if tiny is not None:
+                unit = PHYSICAL_RANGES[col.name][2]
+                raise ParameterError(
+                    f"{self.path}: column '{col.header}' is at most {abs(tiny[1]):g} {unit} in "
+                    f"magnitude ({self.where(tiny[0])}: {self.cell(tiny[0], col)!r}"
+                    f"{self.in_curve(tiny[0])}), below {scale_text(col.name)}; check the "
+                    "header's unit and the values (scaled by mistake?)")
             return
         unit = PHYSICAL_RANGES[col.name.removesuffix("_stderr")][2]
         overflow = (" (the conversion to SI overflows)"
@@ -585,13 +610,26 @@ def _read_table(path: str | Path, known: Mapping[str, str], *, max_rows: int | N
         index_col=False, engine="c", decimal="," if delimiter in ("\t", ";") else ".")
     table = _Table(path, delimiter, delimiter in ("\t", ";"), columns, pd.DataFrame(), header,
                    start, n_fields, encoding, skipped)
-    table.cells = _parse(table, options)
+    # the first rows first: a cell that is no number there is refused at once, not after the
+    # whole file has been parsed (1e7 rows of text took 10 s and GBs as Python strings)
+    table.cells = _parse(table, dict(options, nrows=min(_PROBE_ROWS, max_rows + 1)))
+    _refuse_text(table, known, table.cells)
     if options["usecols"] is not None and _more_delimiters(path, header_end, delimiter,
                                                            n_fields - 1):
-        # pandas checks the field count only when it reads every column: check it here
+        # pandas checks the field count only when it reads every column: check it here, before
+        # the whole table is parsed
         error = _bad_line(table)
         if error is not None:
             raise error
+    numbers = {c.index: np.float64 for c in columns if c.index in wanted and c.index not in
+               text_columns}
+    try:  # straight to float64: a text cell further down cannot turn a column into strings
+        table.cells = _parse(table, dict(options, dtype={**options["dtype"], **numbers}),
+                             floats=True)
+    except _TextCell:  # find it chunk by chunk (bounded memory), else the text-tolerant parse
+        for offset, chunk in _chunks(table, options):
+            _refuse_text(table, known, chunk, offset)
+        table.cells = _parse(table, options)
     if table.n_rows == 0:
         raise InstrumentFormatError(f"{path}: the table has a header but no data rows")
     if table.n_rows > max_rows:
@@ -611,8 +649,60 @@ def _read_table(path: str | Path, known: Mapping[str, str], *, max_rows: int | N
     return table
 
 
-def _parse(table: _Table, options: dict[str, Any]) -> pd.DataFrame:
-    """Run pandas' C parser over the file; its warnings and errors become precise messages."""
+#: Data rows parsed before the whole table, to refuse a file of text at once (:func:`_refuse_text`).
+_PROBE_ROWS = 1000
+
+
+#: Data rows per step when a table with text in a quantity column is searched for it.
+_CHUNK_ROWS = 200_000
+
+
+class _TextCell(Exception):
+    """pandas met a cell that is no number in a column parsed straight to float64."""
+
+
+def _chunks(table: _Table, options: dict[str, Any]) -> Iterator[tuple[int, pd.DataFrame]]:
+    """(first data row, cells) of the table, :data:`_CHUNK_ROWS` rows at a time."""
+    offset = 0
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", pd.errors.DtypeWarning)
+        reader = pd.read_csv(table.path, encoding=table.encoding, chunksize=_CHUNK_ROWS,
+                             **options)
+        with reader:
+            for chunk in reader:
+                yield offset, chunk.reset_index(drop=True)
+                offset += len(chunk)
+
+
+def _refuse_text(table: _Table, known: Mapping[str, str], cells: pd.DataFrame,
+                 offset: int = 0) -> None:
+    """Refuse the first non-empty cell of a quantity column that is no finite number.
+
+    ``cells`` holds data rows ``offset``, ``offset + 1``, … Empty cells pass (some columns
+    allow them, each reader decides); the message is the one the reader gives after parsing.
+    """
+    for col in table.columns:
+        if col.name in _LABELS or (col.name not in known
+                                   and col.name.removesuffix("_stderr") not in known):
+            continue
+        series = cells.get(col.index)
+        if series is None or (is_numeric_dtype(series.dtype)
+                              and not is_bool_dtype(series.dtype)):
+            continue
+        raw = series.astype(str).str.strip()
+        text = raw.str.replace(",", ".", regex=False) if table.decimal_comma else raw
+        values = pd.to_numeric(text, errors="coerce").to_numpy(dtype=float)
+        bad = np.flatnonzero((raw != "").to_numpy() & ~np.isfinite(values))
+        if bad.size:
+            table._not_a_number(col, offset + int(bad[0]))
+
+
+def _parse(table: _Table, options: dict[str, Any], *, floats: bool = False) -> pd.DataFrame:
+    """Run pandas' C parser over the file; its warnings and errors become precise messages.
+
+    With ``floats`` (some columns' dtype float64), a cell that is no number raises
+    :class:`_TextCell` for the caller to locate.
+    """
     for encoding in dict.fromkeys((table.encoding, "latin-1")):
         table.encoding = encoding
         try:
@@ -625,6 +715,8 @@ def _parse(table: _Table, options: dict[str, Any]) -> pd.DataFrame:
         except pd.errors.EmptyDataError:
             return pd.DataFrame()
         except (pd.errors.ParserError, pd.errors.ParserWarning, ValueError, OverflowError) as exc:
+            if floats and type(exc) is ValueError:  # a conversion, not the parser's error
+                raise _TextCell(str(exc)) from None
             raise _bad_line(table, short=True) or InstrumentFormatError(
                 f"{table.path}: not a readable table ({exc})") from None
     raise InstrumentFormatError(f"{table.path}: not a readable text table")  # pragma: no cover
@@ -653,15 +745,57 @@ def _more_delimiters(path: Path, offset: int, delimiter: str, most: int) -> bool
     return carry > most
 
 
+def _odd_lines(path: Path, delimiter: str, most: int) -> Iterator[tuple[int, int, int]]:
+    """(0-based line, first byte, end byte) of each line whose fields may not number ``most + 1``.
+
+    NumPy counts the delimiters of every line, 1 MiB at a time; only the lines with another
+    count, or with a quote (a quoted delimiter is no field separator), are given to be parsed
+    (a Python loop over every line of a 1e7-row table took 30 s before its bad last line was
+    named).
+    """
+    code, quote = ord(delimiter), ord('"')
+    line = line_start = offset = carry = 0
+    quoted = False
+    with path.open("rb") as fh:
+        while chunk := fh.read(1 << 20):
+            block = np.frombuffer(chunk, dtype=np.uint8)
+            ends = np.flatnonzero(block == 10)
+            count = np.cumsum(block == code, dtype=np.int32)
+            quotes = np.cumsum(block == quote, dtype=np.int32)
+            if ends.size:
+                per_line = np.diff(count[ends], prepend=0)
+                per_line[0] += carry
+                has_quote = np.diff(quotes[ends], prepend=0) > 0
+                has_quote[0] |= quoted
+                starts = np.concatenate(([line_start], offset + ends[:-1] + 1))
+                for k in np.flatnonzero((per_line != most) | has_quote):
+                    yield line + int(k), int(starts[k]), offset + int(ends[k]) + 1
+                line += ends.size
+                line_start = offset + int(ends[-1]) + 1
+                carry = int(count[-1] - count[ends[-1]])
+                quoted = bool(quotes[-1] > quotes[ends[-1]])
+            else:
+                carry += int(count[-1])
+                quoted |= bool(quotes[-1] > 0)
+            offset += len(chunk)
+    if offset > line_start and (carry != most or quoted):  # a last line without a line end
+        yield line, line_start, offset
+
+
 def _bad_line(table: _Table, *, short: bool = False) -> ParameterError | None:
     """The first line with more fields than the header, as an error (None if there is none).
 
-    With ``short``, else the first data line with fewer fields than the header.
+    With ``short``, else the first data line with fewer fields than the header. Only the lines
+    :func:`_odd_lines` finds are parsed.
     """
     shorter = None
     with table.path.open("rb") as fh:
-        for i, raw in enumerate(fh):
-            if i <= table.header_index or not raw.strip() or raw.lstrip().startswith(b"#"):
+        for i, start, stop in _odd_lines(table.path, table.delimiter, table.n_fields - 1):
+            if i <= table.header_index:
+                continue
+            fh.seek(start)
+            raw = fh.read(stop - start)
+            if not raw.strip() or raw.lstrip().startswith(b"#"):
                 continue
             found = _split(raw.decode(table.encoding, errors="replace").rstrip("\r\n"),
                            table.delimiter)
@@ -709,6 +843,11 @@ def _ignored(table: _Table, known: Mapping[str, str]) -> list[str]:
             and c.name not in known and c.name.removesuffix("_stderr") not in known]
 
 
+#: Plausible ranges (SI) and units of the calibrations a reader is given.
+_CALIBRATION_RANGES = {"spring_constant": (SPRING_CONSTANT_RANGE, "N/m"),
+                       "sensitivity": (SENSITIVITY_RANGE, "m/V")}
+
+
 def _option(name: str, value: Any, dimension: str, shown: Any = None) -> float | None:
     if value is None:
         return None
@@ -720,6 +859,11 @@ def _option(name: str, value: Any, dimension: str, shown: Any = None) -> float |
         out = float(value)
     if not (math.isfinite(out) and out > 0):
         raise ParameterError(f"{name} must be finite and > 0, got {value!r}")
+    if name in _CALIBRATION_RANGES:  # a cantilever calibration: refused outside its range
+        bounds, unit = _CALIBRATION_RANGES[name]
+        text = value if shown is None else shown
+        return require_plausible(name, out, bounds, unit,
+                                 why=f"given as {text!r}" if isinstance(text, str) else "")
     if first_beyond(name, out) is not None:
         raise ParameterError(f"{name} = {value if shown is None else shown!r} is beyond the "
                              f"physical range {range_text(name)}; check the value and its unit")
@@ -854,6 +998,14 @@ def read_curves_csv(path: str | Path, *, spring_constant: float | str | None = N
     index = np.concatenate(rows)
     for label, r in zip(order, rows, strict=True):
         steps = np.diff(time[r])
+        if np.any(steps < MIN_TIME_STEP) and not np.any(steps <= 0):
+            i = int(np.flatnonzero(steps < MIN_TIME_STEP)[0])
+            where = "" if len(order) == 1 else f" of curve {label!r}"
+            raise ParameterError(
+                f"{p}: time{where} steps by {float(steps[i]):g} s at {table.where(int(r[i + 1]))} "
+                f"({float(time[r[i + 1]])!r} s after {float(time[r[i]])!r} s): a sample interval "
+                f"must be at least {MIN_TIME_STEP:g} s (no instrument samples faster); check the "
+                "time column and its unit")
         if np.any(steps <= 0):
             i = int(np.flatnonzero(steps <= 0)[0])
             bad, before = int(r[i + 1]), int(r[i])

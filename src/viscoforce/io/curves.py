@@ -28,6 +28,12 @@ Height channel: the calibrated sensor where the file has one, in the order ``str
 the whole dataset: the first of that order present in every segment of every selected curve (a
 channel that exists in some segments only, e.g. ``capacitiveSensorHeight`` in extend and retract,
 would make the height jump between segments).
+
+Refused before anything is decoded: a curve selected twice (``curves=[0, 0]``), an unknown
+``height_channel``, and one that the segment headers do not list. A channel whose samples leave
+:data:`~viscoforce.io.quality.PHYSICAL_RANGES`, or are all below the smallest scale of a
+measurement (:data:`~viscoforce.io.quality.SMALLEST_SCALES`), is refused naming the file, curve,
+segment and channel.
 """
 
 from __future__ import annotations
@@ -43,10 +49,17 @@ import xarray as xr
 
 from viscoforce.exceptions import InstrumentFormatError, ParameterError
 from viscoforce.io.jpk import JPKArchive, JPKCurve, JPKSegment
-from viscoforce.io.quality import PHYSICAL_RANGES, first_beyond, range_text
+from viscoforce.io.quality import (
+    PHYSICAL_RANGES,
+    below_scale,
+    first_beyond,
+    range_text,
+    scale_text,
+)
 from viscoforce.schema import make_curves, validate_curves
 
-__all__ = ["HEIGHT_CHANNELS", "jpk_to_curves", "segment_name"]
+__all__ = ["HEIGHT_CHANNELS", "check_height_channel", "jpk_to_curves", "segment_name",
+           "unique_curves"]
 
 #: Height channels in order of preference (calibrated sensors first, the piezo last).
 HEIGHT_CHANNELS = ("strainGaugeHeight", "measuredHeight", "capacitiveSensorHeight", "height")
@@ -88,20 +101,54 @@ def _select(archive: JPKArchive, curves: int | Iterable[int] | None) -> list[int
     for c in picked:
         if not -n <= c < n:
             raise ParameterError(f"curve index {c} out of range for {n} curves in {archive.path}")
-    return [c % n for c in picked]
+    return unique_curves([c % n for c in picked], picked)
 
 
-def _height_channel(decoded: list[JPKCurve], wanted: str | None) -> str:
-    if wanted is not None:
-        if wanted not in HEIGHT_CHANNELS:
-            raise ParameterError(f"height_channel must be one of {HEIGHT_CHANNELS}, got "
-                                 f"{wanted!r}")
-        missing = [f"curve {c.index} segment {s.index}" for c in decoded for s in c.segments
-                   if wanted not in s.channels]
-        if missing:
-            raise ParameterError(f"height_channel {wanted!r} is missing in {', '.join(missing[:5])}")
-        return wanted
-    return _default_height([[s.units for s in c.segments] for c in decoded])
+def unique_curves(indices: list[int], given: list[int] | None = None) -> list[int]:
+    """``indices`` (curve rows, negative ones already wrapped), refused when one repeats.
+
+    A curve selected twice would be decoded, stored and fitted twice (a map's pixel counted
+    twice); ``given`` is the selection as the caller wrote it, for the message.
+
+    Raises
+    ------
+    ParameterError
+        Naming the repeated curve and where it was given.
+    """
+    given = indices if given is None else given
+    first: dict[int, int] = {}
+    for k, c in enumerate(indices):
+        if c in first:
+            j = first[c]
+            same = "" if given[j] == given[k] else f" (as {given[j]!r} and {given[k]!r})"
+            raise ParameterError(
+                f"curves selects curve {c} twice{same}, at positions {j} and {k} of "
+                f"{_shown_list(given)}; give each curve once (None: all)")
+        first[c] = k
+    return indices
+
+
+def _shown_list(values: list[int]) -> str:
+    shown = ", ".join(str(int(v)) for v in values[:10])
+    return f"[{shown}]" if len(values) <= 10 else f"[{shown}, ...] ({len(values)} indices)"
+
+
+def check_height_channel(height_channel: Any) -> str | None:
+    """``height_channel`` unchanged when None or one of :data:`HEIGHT_CHANNELS`, else refused.
+
+    Called before anything is decoded (an unknown name was refused only after every selected
+    curve had been read).
+
+    Raises
+    ------
+    ParameterError
+        Naming the value and the allowed names.
+    """
+    if height_channel is None or (isinstance(height_channel, str)
+                                  and height_channel in HEIGHT_CHANNELS):
+        return height_channel
+    raise ParameterError(f"height_channel must be None (the first of {', '.join(HEIGHT_CHANNELS)} "
+                         f"present in every segment) or one of them, got {height_channel!r}")
 
 
 def _default_height(units: list[list[dict[str, str]]]) -> str:
@@ -148,6 +195,12 @@ def _refuse_bad_samples(values: np.ndarray, seg: JPKSegment, curve: JPKCurve, na
         raise InstrumentFormatError(
             f"{where}: sample {i} of {values.size} is {float(values[i]):g} "
             f"{PHYSICAL_RANGES[key][2]}, beyond the physical range {range_text(key)}; the file's "
+            "calibration (spring constant, sensitivity, scaling) or its data are damaged")
+    tiny = below_scale(key, values)
+    if tiny is not None:
+        raise InstrumentFormatError(
+            f"{where}: every sample is at most {abs(tiny[1]):g} {PHYSICAL_RANGES[key][2]} in "
+            f"magnitude (sample {tiny[0]} of {values.size}), below {scale_text(key)}; the file's "
             "calibration (spring constant, sensitivity, scaling) or its data are damaged")
 
 
@@ -213,14 +266,20 @@ def _read_block(archive: JPKArchive, curves: int | Iterable[int] | None,
     if not isinstance(archive, JPKArchive):
         raise ParameterError(f"archive must be a JPKArchive (from read_jpk), got "
                              f"{type(archive).__name__}")
+    check_height_channel(height_channel)
     picked = _select(archive, curves)
-    if height_channel is None:  # chosen from the headers: the other heights are not decoded
-        height = _default_height([archive._units(i) for i in picked])
-        keep = frozenset(("vDeflection", height))
-        decoded = [archive._curve_only(i, keep) for i in picked]
+    units = [archive._units(i) for i in picked]  # from the headers, before any decoding
+    if height_channel is None:  # the other heights are not decoded
+        height = _default_height(units)
     else:
-        decoded = [archive.curve(i) for i in picked]  # through the archive's one open zip
-        height = _height_channel(decoded, height_channel)
+        missing = [f"curve {i} segment {k}" for i, curve in zip(picked, units, strict=True)
+                   for k, segment in enumerate(curve) if height_channel not in segment]
+        if missing:
+            raise ParameterError(f"height_channel {height_channel!r} is missing in "
+                                 f"{', '.join(missing[:5])}")
+        height = height_channel
+    keep = frozenset(("vDeflection", height))
+    decoded = [archive._curve_only(i, keep) for i in picked]  # through the archive's one zip
 
     cols: dict[str, list[Any]] = {"time": [], "force": [], "height": [], "deflection": [],
                                  "segment": []}
@@ -277,7 +336,8 @@ def jpk_to_curves(archive: JPKArchive, *, curves: int | Iterable[int] | None = N
     archive : JPKArchive
         An archive opened by :func:`viscoforce.io.jpk.read_jpk`.
     curves : int or iterable of int, optional
-        Indices of the curves to convert (negative count from the end); default all.
+        Indices of the curves to convert (negative count from the end; each curve once);
+        default all.
     height_channel : str, optional
         Force one of :data:`HEIGHT_CHANNELS`; default the first of them present in every
         segment of every selected curve.
@@ -291,8 +351,9 @@ def jpk_to_curves(archive: JPKArchive, *, curves: int | Iterable[int] | None = N
     Raises
     ------
     ParameterError
-        If ``archive`` is not a JPKArchive, ``curves`` is malformed or out of range, or
-        ``height_channel`` is unknown or missing somewhere.
+        If ``archive`` is not a JPKArchive, ``curves`` is malformed, out of range or repeats
+        a curve, or ``height_channel`` is unknown (refused before anything is decoded) or
+        missing somewhere.
     InstrumentFormatError
         If a segment lacks a calibrated ``vDeflection``/``force`` or any height channel.
     """

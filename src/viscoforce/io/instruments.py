@@ -79,6 +79,7 @@ from viscoforce.io.csv_formats import (
 )
 from viscoforce.io.curves import jpk_to_curves
 from viscoforce.io.jpk import read_jpk
+from viscoforce.io.quality import check_measured
 from viscoforce.schema import validate_curves, validate_spectrum
 
 __all__ = ["FORMATS", "InstrumentFormat", "detect_format", "get_format", "load_instrument"]
@@ -377,7 +378,9 @@ def load_instrument(path: str | Path, *, format: str | InstrumentFormat | None =
     TypeError
         An option the format does not take.
     InstrumentFormatError, ParameterError, UnitError, SchemaError
-        Unreadable or malformed file, bad option values; the message names the file.
+        Unreadable or malformed file, bad option values, a measured value beyond its physical
+        range or scale (:func:`viscoforce.io.quality.check_measured`); the message names the
+        file.
     """
     path = _require_file(path)
     try:
@@ -394,6 +397,7 @@ def load_instrument(path: str | Path, *, format: str | InstrumentFormat | None =
             ds = validate_curves(ds)
         else:
             ds = validate_spectrum(ds)
+        check_measured(ds, str(path))  # the same physical ranges whichever reader made it
     except (InstrumentFormatError, ParameterError, UnitError, SchemaError) as exc:
         raise _named(exc, path) from exc
     ds.attrs["source"] = fmt.name

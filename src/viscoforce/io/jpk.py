@@ -35,6 +35,11 @@ against :data:`~viscoforce._limits.MAX_HEADER_BYTES`, anything else against
 :data:`~viscoforce._limits.MAX_ARCHIVE_BYTES` (an :class:`~viscoforce.exceptions.EffortError`
 with the size and the limit) — and decompression stops one byte past the declared size, so a
 header that lies about it is refused (InstrumentFormatError) with at most that much in memory.
+A member above 1 MiB is decompressed chunk by chunk into one buffer of its declared size, so it
+costs its size once (a deflated JPK archive inside a zip of archives, which is held whole, took
+three times its size); such a member archive is also refused up front when holding it would
+exceed :data:`~viscoforce._limits.MAX_MEMORY_BYTES` (EffortError with the estimate). A segment
+whose duration over num-points is below :data:`~viscoforce._limits.MIN_TIME_STEP` is refused.
 A segment's ``num-points`` is checked against the declared size of each channel member before
 any array is allocated, and the segment's float arrays against
 :data:`~viscoforce._limits.MAX_MEMORY_BYTES`. Calibrations are refused when not finite (every
@@ -69,7 +74,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from viscoforce import _limits
-from viscoforce._limits import check_effort
+from viscoforce._limits import MIN_TIME_STEP, check_effort
 from viscoforce._typing import FloatArray
 from viscoforce.exceptions import InstrumentFormatError
 from viscoforce.io._properties import (
@@ -313,6 +318,89 @@ class _MemberIndex:
                    method=column("compress_type", np.uint16), flags=column("flag_bits", np.uint16))
 
 
+#: Members larger than this [bytes] are decompressed chunk by chunk into one buffer of their size.
+_STREAM_ABOVE = 1 << 20
+#: Compressed bytes read per step of a streamed member.
+_CHUNK = 1 << 20
+
+
+def _streamed(fp: BinaryIO, name: str, method: int, compressed: int, declared: int
+              ) -> tuple[bytearray, bool]:
+    """Read a stored or deflated member of ``compressed`` bytes at ``fp``'s position.
+
+    Returns (its content in a bytearray of ``declared`` bytes, whether the deflate stream
+    ended). At most one chunk of compressed input is held beside the output, and the output is
+    never copied or grown: the member costs its declared size in memory.
+    """
+    out = bytearray(declared)
+    if method == zipfile.ZIP_STORED:
+        got = fp.readinto(out)
+        if got != compressed:
+            raise zipfile.BadZipFile(f"truncated data of {name!r}")
+        return out, True
+    view = memoryview(out)
+    inflater = zlib.decompressobj(-zlib.MAX_WBITS)
+    pos, remaining, pending = 0, compressed, b""
+    while not inflater.eof:
+        if not pending:
+            if remaining == 0:
+                break
+            pending = fp.read(min(_CHUNK, remaining))
+            if not pending:
+                raise zipfile.BadZipFile(f"truncated data of {name!r}")
+            remaining -= len(pending)
+        piece = inflater.decompress(pending, declared + 1 - pos)  # one byte past: a lie shows
+        pending = inflater.unconsumed_tail
+        if pos + len(piece) > declared:
+            raise zipfile.BadZipFile(f"{name!r} decompresses to more than the {declared} bytes "
+                                     "the zip declares")
+        view[pos:pos + len(piece)] = piece
+        pos += len(piece)
+    view.release()
+    if pos != declared:
+        del out[pos:]
+    return out, inflater.eof
+
+
+class _BufferFile(io.RawIOBase):
+    """A read-only, seekable file over a bytes-like buffer, without copying it.
+
+    ``io.BytesIO(bytearray)`` copies the buffer: for a JPK archive held inside a zip of
+    archives that doubles the memory it takes.
+    """
+
+    def __init__(self, buffer: bytes | bytearray) -> None:
+        super().__init__()
+        self._view = memoryview(buffer).cast("B")
+        self._pos = 0
+
+    def readable(self) -> bool:
+        return True
+
+    def seekable(self) -> bool:
+        return True
+
+    def readinto(self, target: bytearray | memoryview) -> int:  # type: ignore[override]
+        n = max(0, min(len(target), len(self._view) - self._pos))
+        target[:n] = self._view[self._pos:self._pos + n]
+        self._pos += n
+        return n
+
+    def seek(self, offset: int, whence: int = io.SEEK_SET) -> int:
+        base = {io.SEEK_SET: 0, io.SEEK_CUR: self._pos, io.SEEK_END: len(self._view)}[whence]
+        if base + offset < 0:
+            raise ValueError(f"negative seek position {base + offset}")
+        self._pos = base + offset
+        return self._pos
+
+    def tell(self) -> int:
+        return self._pos
+
+    def getbuffer(self) -> memoryview:
+        """The whole buffer (as ``io.BytesIO.getbuffer``)."""
+        return self._view
+
+
 class _IndexedZip:
     """The members of one zip (a file, or the bytes of a member archive) through its index.
 
@@ -323,7 +411,8 @@ class _IndexedZip:
     the archive's lock serialises use.
     """
 
-    def __init__(self, source: Path | bytes, index: _MemberIndex, where: _Where) -> None:
+    def __init__(self, source: Path | bytes | bytearray, index: _MemberIndex,
+                 where: _Where) -> None:
         self.source, self.index, self.where = source, index, where
         self._fp: BinaryIO | None = None
         self._zip: zipfile.ZipFile | None = None
@@ -338,11 +427,14 @@ class _IndexedZip:
         """Decompressed size of member ``name`` as the central directory declares it; KeyError."""
         return int(self.index.size[self.index.rows[name]])
 
-    def read(self, name: str) -> bytes:
+    def read(self, name: str) -> bytes | bytearray:
         """Content of member ``name``; KeyError if absent, zipfile.BadZipFile if damaged.
 
         Never more than the declared size (+ 1 byte to see a lie) is decompressed: callers check
-        that size against the limits first (:func:`_read_member`).
+        that size against the limits first (:func:`_read_member`). A member above
+        :data:`_STREAM_ABOVE` comes as a ``bytearray`` of exactly its size, filled chunk by chunk
+        (compressed input and output are never both held whole: a deflated member costs its
+        size once, not three times); a smaller one as ``bytes``, in one step.
         """
         row = self.index.rows[name]
         method, flags = int(self.index.method[row]), int(self.index.flags[row])
@@ -365,25 +457,28 @@ class _IndexedZip:
         if compressed > bound:
             raise zipfile.BadZipFile(f"{name!r}: {compressed} compressed bytes declared for "
                                      f"{declared} decompressed ones, impossible")
-        raw = fp.read(compressed)
-        if len(raw) != compressed:
-            raise zipfile.BadZipFile(f"truncated data of {name!r}")
-        if method == zipfile.ZIP_DEFLATED:
-            inflater = zlib.decompressobj(-zlib.MAX_WBITS)
-            data = inflater.decompress(raw, declared + 1)   # output stops one byte past the size
-            del raw
-            if len(data) > declared:
-                raise zipfile.BadZipFile(f"{name!r} decompresses to more than the {declared} "
-                                         "bytes the zip declares")
-            complete = inflater.eof
+        if declared > _STREAM_ABOVE:
+            data, complete = _streamed(fp, name, method, compressed, declared)
         else:
-            data, complete = raw, True
+            raw = fp.read(compressed)
+            if len(raw) != compressed:
+                raise zipfile.BadZipFile(f"truncated data of {name!r}")
+            if method == zipfile.ZIP_DEFLATED:
+                inflater = zlib.decompressobj(-zlib.MAX_WBITS)
+                data = inflater.decompress(raw, declared + 1)   # output stops one byte past it
+                del raw
+                if len(data) > declared:
+                    raise zipfile.BadZipFile(f"{name!r} decompresses to more than the {declared} "
+                                             "bytes the zip declares")
+                complete = inflater.eof
+            else:
+                data, complete = raw, True
         if not complete or len(data) != declared or zlib.crc32(data) != int(self.index.crc[row]):
             raise zipfile.BadZipFile(f"bad CRC-32 or size for {name!r} ({len(data)} bytes "
                                      f"decompressed, {declared} declared)")
         return data
 
-    def _read_through_zipfile(self, name: str, declared: int) -> bytes:
+    def _read_through_zipfile(self, name: str, declared: int) -> bytearray:
         """An encrypted, bzip2 or LZMA member, through zipfile, in small bounded steps."""
         out = bytearray()
         with self._zipfile().open(name) as handle:
@@ -393,12 +488,12 @@ class _IndexedZip:
                 if len(out) > declared:  # zipfile stops at the declared size; in case it did not
                     raise zipfile.BadZipFile(f"{name!r} decompresses to more than the {declared} "
                                              "bytes the zip declares")
-        return bytes(out)
+        return out
 
     def _file(self) -> BinaryIO:
         if self._fp is None:
-            if isinstance(self.source, bytes):
-                self._fp = io.BytesIO(self.source)
+            if not isinstance(self.source, Path):
+                self._fp = _BufferFile(self.source)
             elif not self.source.is_file():
                 raise self.where.error("no such file (moved or deleted since read_jpk)")
             else:
@@ -410,7 +505,7 @@ class _IndexedZip:
 
     def _zipfile(self) -> zipfile.ZipFile:
         if self._zip is None:
-            source = io.BytesIO(self.source) if isinstance(self.source, bytes) else self.source
+            source = self.source if isinstance(self.source, Path) else _BufferFile(self.source)
             self._zip = _open_zip(source, self.where)
         return self._zip
 
@@ -600,8 +695,8 @@ class JPKArchive:
             if handles.inner is not None:
                 handles.inner[1].close()
                 handles.inner = None
-            data = _read_member(handles.outer, layout.member, where, "MAX_MEMBER_BYTES")
-            with _open_zip(io.BytesIO(data), layout.where) as zf:
+            data = _read_archive_member(handles.outer, layout.member, where)
+            with _open_zip(_BufferFile(data), layout.where) as zf:
                 handles.inner = (layout.member, _IndexedZip(data, _MemberIndex.of(zf), layout.where))
         return handles.inner[1]
 
@@ -661,7 +756,7 @@ def read_jpk(path: str | Path) -> JPKArchive:
 # ── archive access ──────────────────────────────────────────────────────────────────────────
 
 
-def _open_zip(source: Path | io.BytesIO, where: _Where) -> zipfile.ZipFile:
+def _open_zip(source: Path | _BufferFile, where: _Where) -> zipfile.ZipFile:
     """Open a zip read-only; a bad one raises InstrumentFormatError. The caller closes it."""
     try:
         return zipfile.ZipFile(source, mode="r")
@@ -680,7 +775,7 @@ def _open_zip(source: Path | io.BytesIO, where: _Where) -> zipfile.ZipFile:
             f"the {size}-byte file is truncated or corrupt") from None
 
 
-def _first_member(source: Path | io.BytesIO) -> str | None:
+def _first_member(source: Path | _BufferFile) -> str | None:
     """Name in the first local header of a zip-like file, or None when it does not start as a zip."""
     try:
         if isinstance(source, Path):
@@ -696,7 +791,7 @@ def _first_member(source: Path | io.BytesIO) -> str | None:
     return head[_LOCAL_HEADER.size:_LOCAL_HEADER.size + name_length].decode("cp437")
 
 
-def _read_member(zf: _Members, name: str, where: _Where, limit: str) -> bytes:
+def _read_member(zf: _Members, name: str, where: _Where, limit: str) -> bytes | bytearray:
     """Member ``name``, refused before reading when its declared size exceeds the named limit.
 
     ``limit`` is ``"MAX_HEADER_BYTES"`` or ``"MAX_MEMBER_BYTES"`` (of :mod:`viscoforce._limits`).
@@ -714,6 +809,26 @@ def _read_member(zf: _Members, name: str, where: _Where, limit: str) -> bytes:
                                    "supported") from None
     except (*_ZIP_ERRORS, OSError) as exc:
         raise where.at(name).error(f"cannot be read ({exc}); the archive is truncated or corrupt") from None
+
+
+def _read_archive_member(zf: _Members, name: str, where: _Where) -> bytes | bytearray:
+    """A JPK archive inside a zip of archives, which is read into memory whole.
+
+    Refused before anything is decompressed when its declared size exceeds MAX_MEMBER_BYTES,
+    or when holding it (its size and one chunk of compressed input: nothing else is held while
+    it is read, the previous member archive is released first) would exceed MAX_MEMORY_BYTES;
+    the message gives the estimate.
+    """
+    try:
+        declared = zf.size(name)
+    except KeyError:
+        raise where.at(name).error("missing from the archive") from None
+    check_effort(f"{where.at(name).place}: holding this JPK archive in memory (a member of a zip "
+                 "of archives is read whole)", declared + 2 * _CHUNK,
+                 _limits.MAX_MEMORY_BYTES, unit="bytes",
+                 hint="unzip the outer zip and read the archives one by one, or raise "
+                      "viscoforce._limits.MAX_MEMORY_BYTES")
+    return _read_member(zf, name, where, "MAX_MEMBER_BYTES")
 
 
 def _check_archive(where: _Where, total: int) -> None:
@@ -789,8 +904,8 @@ def _scan_zip(zf: _Members, where: _Where) -> tuple[_Layout, ...]:
     layouts = []
     for member in members:
         inner_where = _Where(f"{where.label}!{member}")
-        data = _read_member(zf, member, where, "MAX_MEMBER_BYTES")
-        with _open_zip(io.BytesIO(data), inner_where) as inner_zip:
+        data = _read_archive_member(zf, member, where)
+        with _open_zip(_BufferFile(data), inner_where) as inner_zip:
             index = _MemberIndex.of(inner_zip)
         if "header.properties" not in index.rows:
             raise inner_where.error("not a JPK archive (no header.properties)")
@@ -801,6 +916,7 @@ def _scan_zip(zf: _Members, where: _Where) -> tuple[_Layout, ...]:
             layouts.append(_scan(inner, inner_where, member))
         finally:
             inner.close()
+        del data, inner  # one member archive in memory at a time, not the last one and this one
     return tuple(layouts)
 
 
@@ -881,6 +997,10 @@ def _segment_plan(props: dict[str, str]) -> _SegmentPlan:
         raise HeaderError(f"num-points={n}, duration={duration}: must be >= 0")
     if not math.isfinite(duration):
         raise HeaderError(f"'{_SEG}duration' = {duration} s is not finite")
+    if n > 1 and 0 < duration / n < MIN_TIME_STEP:
+        raise HeaderError(f"'{_SEG}duration' = {duration!r} s over num-points={n} gives a sample "
+                          f"interval of {duration / n:g} s, below {MIN_TIME_STEP:g} s (no "
+                          "instrument samples faster): a corrupt header")
     names = get(props, "channels.list").split()
     if "vDeflection" in names:
         _calibration_values(props)  # first: a bad spring constant is named as one
@@ -934,7 +1054,7 @@ def _require_scaling(key: str, multiplier: float, offset: float) -> None:
 def _plan_of(zf: _Members, layout: _Layout, seg_dir: str) -> _SegmentPlan:
     """The plan of segment ``seg_dir``'s header (kept by the reader, see the module docstring)."""
     name = f"{seg_dir}segment-header.properties"
-    data = _read_member(zf, name, layout.where, "MAX_HEADER_BYTES")
+    data = bytes(_read_member(zf, name, layout.where, "MAX_HEADER_BYTES"))  # a key: hashable
     plans = zf.plans
     plan = plans.get(data)
     if plan is None:

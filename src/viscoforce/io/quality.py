@@ -15,21 +15,28 @@ beside :func:`viscoforce.schema.phase_quality` and can move there.
 :data:`PHYSICAL_RANGES` bounds every measured quantity the readers convert to SI (a value beyond
 them is no measurement: a wrong unit in a header or a damaged file, and its square overflows
 downstream); :func:`first_beyond` finds the first such value and :func:`range_text` states the
-range in the readers' refusals.
+range in the readers' refusals. At the other end, :data:`SMALLEST_SCALES` bounds the largest
+magnitude of a measured column (a force curve scaled by 1e-300 is no measurement either, and it
+underflows downstream; :func:`below_scale`, :func:`scale_text`), and :data:`MIN_TIME_STEP` the
+sample interval of a time series.
 """
 
 from __future__ import annotations
 
 import math
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike
 
+from viscoforce._limits import MIN_TIME_STEP
+from viscoforce.exceptions import ParameterError
 from viscoforce.schema import QUALITY_FLAGS, phase_quality
 
-__all__ = ["LOW_SIGNAL_RATIO", "PHASE_REMAINS", "PHYSICAL_RANGES", "PIEZO_CHANNELS",
-           "SENSOR_CHANNELS", "first_beyond", "phase_basis", "quality_notes", "range_text",
-           "spectrum_quality"]
+__all__ = ["LOW_SIGNAL_RATIO", "MIN_TIME_STEP", "PHASE_REMAINS", "PHYSICAL_RANGES",
+           "PIEZO_CHANNELS", "SENSOR_CHANNELS", "SMALLEST_SCALES", "below_scale", "check_measured",
+           "first_beyond",
+           "phase_basis", "quality_notes", "range_text", "scale_text", "spectrum_quality"]
 
 _METRE = (-1.0, 1.0, "m")  # no piezo, stage or cantilever moves a metre
 #: Physical range ``(lowest, highest, SI unit)`` of each measured quantity, by its column or
@@ -56,6 +63,96 @@ PHYSICAL_RANGES: dict[str, tuple[float, float, str]] = {
     "spring_constant": (0.0, 1e3, "N/m"),  # the stiffest cantilevers are ~1e2 N/m
     "sensitivity": (0.0, 1e-3, "m/V"),  # deflection sensitivities are 1e-8 to 1e-6 m/V
 }
+
+
+#: Smallest magnitude the LARGEST value of a measured column or channel may have, by name (SI,
+#: the unit of :data:`PHYSICAL_RANGES`): below it the whole column is no measurement — a wrong
+#: unit in a header, or values scaled by 1e-300 — and what is computed from it underflows (a
+#: subnormal force curve gives a fit bounds closer than double precision tells apart). Each is
+#: far below any instrument's resolution. A column of zeros is left to each reader's own checks.
+SMALLEST_SCALES: dict[str, float] = {
+    "force": 1e-15,  # a femtonewton: below the thermal noise of optical tweezers
+    "force_amplitude": 1e-15,
+    "height": 1e-12, "position": 1e-12, "z": 1e-12,  # a picometre: no ramp is that short
+    "deflection": 1e-13, "vDeflection": 1e-13, "drive_amplitude": 1e-13,
+    "time": 1e-9,  # a curve shorter than a nanosecond
+    "stiffness": 1e-12,  # far below the softest optical trap (1e-7 N/m)
+    "frequency": 1e-6, "omega": 2e-6 * math.pi,  # a period of 12 days
+}
+
+
+def _largest_magnitude(v: np.ndarray) -> float:
+    """The largest |v| ignoring NaN (NaN if none), by two reductions: no temporary array."""
+    if v.size == 0:
+        return math.nan
+    return float(np.fmax(abs(np.fmax.reduce(v)), abs(np.fmin.reduce(v))))
+
+
+def below_scale(name: str, values: ArrayLike) -> tuple[int, float] | None:
+    """(flat index, value) of the largest magnitude when it is nonzero and below ``name``'s scale.
+
+    None when ``name`` has no entry in :data:`SMALLEST_SCALES`, when every value is zero or NaN,
+    or when the largest magnitude reaches the scale.
+    """
+    floor = SMALLEST_SCALES.get(name)
+    if floor is None:
+        return None
+    v = np.asarray(values, dtype=float).ravel()
+    if not 0 < _largest_magnitude(v) < floor:  # also NaN: nothing measured to judge
+        return None
+    i = int(np.nanargmax(np.abs(v)))
+    return i, float(v[i])
+
+
+def scale_text(name: str) -> str:
+    """The smallest scale of ``name`` (a key of :data:`SMALLEST_SCALES`) for a refusal.
+
+    E.g. ``"the smallest scale of a measured force, 1e-15 N (far below any instrument's
+    resolution)"``.
+    """
+    return (f"the smallest scale of a measured {name}, {SMALLEST_SCALES[name]:g} "
+            f"{PHYSICAL_RANGES[name][2]} (far below any instrument's resolution)")
+
+
+def check_measured(ds: Any, where: str) -> None:
+    """Refuse a dataset whose measured variables leave :data:`PHYSICAL_RANGES` or their scale.
+
+    Every data variable and coordinate named in :data:`PHYSICAL_RANGES` (and ``<name>_stderr``)
+    is checked: no value beyond the range, and (:data:`SMALLEST_SCALES`) not every value tinier
+    than any measurement. The boundary check of :func:`~viscoforce.io.instruments.
+    load_instrument` after each reader's own (which name the column or channel), and the one a
+    dataset read from elsewhere (a netCDF file) needs before it is fitted.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        A curves or spectrum dataset (SI).
+    where : str
+        What to name in the message (the file).
+
+    Raises
+    ------
+    ParameterError
+        Naming the variable, the value and the range.
+    """
+    for name in list(ds.data_vars) + list(ds.coords):
+        base = str(name).removesuffix("_stderr")
+        if base not in PHYSICAL_RANGES:
+            continue
+        values = np.asarray(ds[name].values)
+        if values.dtype.kind not in "fiu":
+            continue
+        unit = PHYSICAL_RANGES[base][2]
+        i = first_beyond(str(name), values)
+        if i is not None:
+            raise ParameterError(
+                f"{where}: {name} holds {float(values.ravel()[i]):g} {unit} (entry {i}), beyond "
+                f"the physical range {range_text(str(name))}; check its unit and the values")
+        tiny = below_scale(str(name), values)
+        if tiny is not None:
+            raise ParameterError(
+                f"{where}: {name} is at most {abs(tiny[1]):g} {unit} in magnitude (entry "
+                f"{tiny[0]}), below {scale_text(str(name))}; check its unit and the values")
 
 
 def _bounds(name: str) -> tuple[float, float, str]:
@@ -85,6 +182,8 @@ def first_beyond(name: str, values: ArrayLike) -> int | None:
     low, high, _ = _bounds(name)
     limit = max(abs(low), abs(high))
     v = np.asarray(values, dtype=float).ravel()
+    if not _largest_magnitude(v) > limit:  # the usual case, without a temporary array
+        return None
     with np.errstate(invalid="ignore"):
         bad = np.abs(v) > limit
     hits = np.flatnonzero(bad)

@@ -23,11 +23,19 @@ below are written with E_star; the code uses E_star = E/2. :func:`young_from_pap
 
 Text form
 ---------
-:func:`parse_tip` reads the command-line grammar ``sphere:R | paraboloid:R | cone:HALF_ANGLE |
-pyramid:HALF_ANGLE | flat:RADIUS``: lengths as :func:`viscoforce.units.parse_quantity` reads
-them (``sphere:10um``, ``flat:2.5 µm``; a bare number is metres), angles in degrees unless they
-carry ``rad`` (``cone:20``, ``pyramid:17.5deg``, ``cone:35°``, ``cone:0.35rad``).
-:meth:`Tip.as_attrs` / :meth:`Tip.from_attrs` store a tip in netCDF-safe dataset attrs.
+:func:`parse_tip` reads the command-line grammar ``sphere:R | paraboloid:R | cone:ANGLE |
+pyramid:ANGLE | flat:RADIUS``: lengths with their unit as :func:`viscoforce.units.parse_quantity`
+reads them (``sphere:10um``, ``flat:2.5 µm``; a bare number is refused: ``sphere:5`` is not a
+5 m sphere), half-angles in degrees unless they carry ``rad`` (``cone:20``, ``pyramid:17.5deg``,
+``cone:35°``, ``cone:0.35rad``). :meth:`Tip.as_attrs` / :meth:`Tip.from_attrs` store a tip in
+netCDF-safe dataset attrs.
+
+Plausible ranges
+----------------
+A radius lies in :data:`~viscoforce._limits.TIP_RADIUS_RANGE` (1 nm to 1 m) and a half-angle in
+:data:`~viscoforce._limits.TIP_HALF_ANGLE_RANGE` (0.1° to 89.9°), whichever way the tip is made;
+anything else is refused naming the parameter and the range (a subnormal radius or a 1e300 m
+sphere would otherwise underflow or overflow the contact laws).
 
 References
 ----------
@@ -55,6 +63,7 @@ from typing import Any, ClassVar
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from viscoforce._limits import TIP_HALF_ANGLE_RANGE, TIP_RADIUS_RANGE
 from viscoforce._validation import (
     as_float_array,
     as_real_array,
@@ -96,12 +105,18 @@ BILODEAU_COEFFICIENT = 0.7453
 #: The shape names of :func:`parse_tip` and the ``tip_shape`` attribute.
 TIP_SHAPES: tuple[str, ...] = ("sphere", "paraboloid", "cone", "pyramid", "flat")
 
-_FORMS = ("sphere:R | paraboloid:R | cone:HALF_ANGLE | pyramid:HALF_ANGLE | flat:RADIUS "
-          "(lengths with a unit, e.g. sphere:10um; a bare length is metres; angles in degrees "
-          "or with a deg/°/rad suffix, e.g. cone:20, pyramid:17.5deg, cone:0.35rad)")
+_FORMS = (f"sphere:R | paraboloid:R | cone:ANGLE | pyramid:ANGLE | flat:RADIUS; R, RADIUS: a "
+          f"length with its unit in [{TIP_RADIUS_RANGE[0]:g}, {TIP_RADIUS_RANGE[1]:g}] m, 1 nm to "
+          f"1 m (sphere:10um, flat:2.5 µm); ANGLE: the half-angle in degrees in "
+          f"[{TIP_HALF_ANGLE_RANGE[0]:g}, {TIP_HALF_ANGLE_RANGE[1]:g}] (cone:20, pyramid:17.5deg, "
+          f"cone:35°, cone:0.35rad)")
 
-_ANGLE_RE = re.compile(
-    r"(?P<number>[+-]?(?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eE][+-]?[0-9]+)?)\s*(?P<unit>deg|°|rad)?")
+_NUMBER = r"[+-]?(?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eE][+-]?[0-9]+)?"
+_ANGLE_RE = re.compile(rf"(?P<number>{_NUMBER})\s*(?P<unit>deg|°|rad)?")
+_BARE_RE = re.compile(_NUMBER)
+_RADIANS = tuple(math.radians(a) for a in TIP_HALF_ANGLE_RANGE)
+#: Degrees a half-angle may lie beyond its range by rounding (a radian → degree round trip).
+_ANGLE_SLACK = 1e-9
 
 #: Taylor coefficients of f(s) = (1 + tanh²s)·s − tanh s = Σ c_k s^k (odd k = 3 … 15), used for
 #: s < _SERIES_BELOW where the closed form cancels (its relative rounding error is ~ eps/s²).
@@ -305,7 +320,13 @@ class _RadiusTip(Tip):
     _label: ClassVar[str] = "R"
 
     def __post_init__(self):
-        object.__setattr__(self, "radius", require_positive("radius", self.radius))
+        radius = require_positive("radius", self.radius)
+        low, high = TIP_RADIUS_RANGE
+        if not low <= radius <= high:
+            raise ParameterError(
+                f"radius must be within the plausible range [{low:g}, {high:g}] m (1 nm to 1 m: "
+                f"a sharp tip's apex to a macroscopic sphere), got {shown(self.radius)!r} m")
+        object.__setattr__(self, "radius", radius)
 
     def describe(self) -> str:
         """Short human text, e.g. ``"sphere R = 10 µm"``."""
@@ -514,6 +535,12 @@ class _AngledTip(Tip):
             raise ParameterError(
                 f"half_angle must be in (0, π/2) rad = (0°, 90°), got {shown(self.half_angle)!r} rad"
                 f"{hint}")
+        low, high = TIP_HALF_ANGLE_RANGE
+        if not _RADIANS[0] <= theta <= _RADIANS[1]:
+            raise ParameterError(
+                f"half_angle must be within the plausible range [{_RADIANS[0]:.4g}, "
+                f"{_RADIANS[1]:.4g}] rad = [{low:g}°, {high:g}°], got {shown(self.half_angle)!r} "
+                f"rad = {math.degrees(theta):.4g}°")
         object.__setattr__(self, "half_angle", theta)
 
     @classmethod
@@ -523,7 +550,8 @@ class _AngledTip(Tip):
         Parameters
         ----------
         half_angle_deg : float
-            Half-angle θ [degree], in (0, 90).
+            Half-angle θ [degree], in :data:`~viscoforce._limits.TIP_HALF_ANGLE_RANGE`
+            ([0.1, 89.9]).
 
         Returns
         -------
@@ -533,11 +561,14 @@ class _AngledTip(Tip):
         Raises
         ------
         ParameterError
-            If the angle is not a finite number in (0, 90).
+            If the angle is not a finite number in that range.
         """
-        deg = require_in_range("half_angle (degree)", half_angle_deg, 0.0, 90.0,
-                               inclusive=(False, False))
-        return cls(math.radians(deg))
+        deg = require_finite("half_angle (degree)", half_angle_deg)
+        low, high = TIP_HALF_ANGLE_RANGE
+        if not low - _ANGLE_SLACK <= deg <= high + _ANGLE_SLACK:  # slack: attrs round trips
+            raise ParameterError(f"half_angle (degree) must be in [{low:g}, {high:g}], got "
+                                 f"{shown(half_angle_deg)!r}")
+        return cls(min(max(math.radians(deg), _RADIANS[0]), _RADIANS[1]))
 
     @property
     def half_angle_degrees(self) -> float:
@@ -636,10 +667,18 @@ def _parse_angle(text: str) -> float:
     """An angle in degrees (bare, ``deg`` or ``°``) or radians (``rad``) → degrees."""
     match = _ANGLE_RE.fullmatch(text.strip())
     if match is None:
-        raise ParameterError(f"cannot read {text.strip()!r} as a half-angle (a number with an "
-                             f"optional deg, ° or rad)")
+        raise ParameterError(f"{text.strip()!r} is not a half-angle (a number in degrees, bare or "
+                             "with deg or °, or with rad)")
     value = float(match["number"])
     return math.degrees(value) if match["unit"] == "rad" else value
+
+
+def _parse_length(text: str) -> float:
+    """A length with its unit [m]; a bare number is refused (``5`` is not 5 m)."""
+    if _BARE_RE.fullmatch(text.strip()):
+        raise ParameterError(f"{text.strip()!r} has no unit: a length needs one (m, cm, mm, "
+                             "um/µm, nm, pm, Å), e.g. '10um'")
+    return parse_quantity(text, "length")
 
 
 def parse_tip(text: str) -> Tip:
@@ -648,11 +687,13 @@ def parse_tip(text: str) -> Tip:
     Parameters
     ----------
     text : str
-        ``sphere:R | paraboloid:R | cone:HALF_ANGLE | pyramid:HALF_ANGLE | flat:RADIUS``. The
-        shape name is case-insensitive; lengths are read by
-        :func:`viscoforce.units.parse_quantity` (``10um``, ``2.5 µm``, ``1e-5``: a bare number
-        is metres); half-angles are in degrees unless suffixed ``rad`` (``20``, ``17.5deg``,
-        ``35°``, ``0.35rad``). The pyramid's angle is its face semi-angle (:class:`Pyramid`).
+        ``sphere:R | paraboloid:R | cone:ANGLE | pyramid:ANGLE | flat:RADIUS``. The shape name is
+        case-insensitive; lengths carry their unit and are read by
+        :func:`viscoforce.units.parse_quantity` (``10um``, ``2.5 µm``; a bare number is refused),
+        half-angles are in degrees unless suffixed ``rad`` (``20``, ``17.5deg``, ``35°``,
+        ``0.35rad``). The pyramid's angle is its face semi-angle (:class:`Pyramid`). Radii lie in
+        :data:`~viscoforce._limits.TIP_RADIUS_RANGE`, half-angles in
+        :data:`~viscoforce._limits.TIP_HALF_ANGLE_RANGE`.
 
     Returns
     -------
@@ -662,22 +703,33 @@ def parse_tip(text: str) -> Tip:
     Raises
     ------
     ParameterError
-        For anything else (not a string, unknown shape, missing ``:``, bad number or unit, value
-        out of range); the message lists the accepted forms.
+        For anything else (not a string, no ``:``, unknown shape, a size without a unit, bad
+        number or unit, value out of range); the message says which part is wrong and lists the
+        accepted forms and ranges.
     """
     if not isinstance(text, str):
         raise ParameterError(f"tip must be text of the form {_FORMS}; got {describe_value(text)}")
     shape, sep, value = text.strip().partition(":")
     shape = shape.strip().lower()
-    if not sep or shape not in _CLASSES or not value.strip():
-        raise ParameterError(f"tip must be one of {_FORMS}; got {text!r}")
+    if not sep:
+        raise ParameterError(f"tip {text!r} has no ':' between the shape and its size; write "
+                             f"SHAPE:SIZE, one of {_FORMS}")
+    if shape not in _CLASSES:
+        what = f"unknown shape {shape!r}" if shape else "no shape"
+        raise ParameterError(f"tip {text!r}: {what} before ':' (the shapes are "
+                             f"{', '.join(TIP_SHAPES)}); accepted: {_FORMS}")
     cls = _CLASSES[shape]
+    angled = issubclass(cls, _AngledTip)
+    part = "half-angle" if angled else "radius"
+    if not value.strip():
+        raise ParameterError(f"tip {text!r}: no {part} after ':'; accepted: {_FORMS}")
     try:
-        if issubclass(cls, _AngledTip):
+        if angled:
             return cls.from_degrees(_parse_angle(value))
-        return cls(parse_quantity(value, "length"))
+        return cls(_parse_length(value))
     except (ParameterError, UnitError) as err:
-        raise ParameterError(f"cannot read tip {text!r}: {err}; accepted: {_FORMS}") from err
+        raise ParameterError(f"tip {text!r}: the {part} after ':' is wrong: {err}; accepted: "
+                             f"{_FORMS}") from err
 
 
 def tip_from(value: Tip | str | None) -> Tip | None:

@@ -1,0 +1,502 @@
+"""Extreme but parseable values are computed or refused with the parameter and its range (issue 40).
+
+Items 6 and 7 of the hostile-input test of the command line: a force column scaled by 1e-300, a
+UFF spring constant of 1e-308, ``--tip sphere:1e300m`` and their kin ended in tracebacks; a tip
+that did not parse said only "invalid _tip_type value"; ``curves=[0, 0]`` and an unknown
+``height_channel`` were accepted (or refused only after every curve was decoded); a JPK archive
+in a zip of archives took three times its size in memory; a UFF file with more rows than it
+declares, and a CSV of text, were parsed whole before the first bad line was refused. Every test
+here failed before the fix. No test measures time: early refusals are shown by what the message
+names (the first line too many) and by the memory the work took (tracemalloc).
+"""
+
+from __future__ import annotations
+
+import io
+import re
+import tracemalloc
+import zipfile
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from viscoforce import _limits
+from viscoforce.cli import main
+from viscoforce.exceptions import EffortError, InstrumentFormatError, ParameterError
+from viscoforce.io import csv_formats
+from viscoforce.io.bruker import read_uff
+from viscoforce.io.curves import jpk_to_curves
+from viscoforce.io.instruments import load_instrument
+from viscoforce.io.jpk import read_jpk
+from viscoforce.physics.tips import Cone, Flat, Paraboloid, Pyramid, Sphere, parse_tip
+
+REPO = Path(__file__).resolve().parents[1]
+JPK = REPO / "tests" / "data" / "jpk" / "synthetic.jpk-force"
+MAP = REPO / "tests" / "data" / "jpk" / "synthetic-2x2.jpk-force-map"
+MODULATION = REPO / "data_examples" / "sls_modulation.jpk-force"
+SPECTRUM = REPO / "data_examples" / "sls_spectrum.csv"
+MiB = 1024**2
+
+
+def _cli(capsys, *argv) -> tuple[int, str]:
+    code = main([str(a) for a in argv])
+    err = capsys.readouterr().err
+    assert "Traceback" not in err and "internal error" not in err, err
+    return code, err
+
+
+def _curve_csv(path: Path, *, force=1.0, height=1.0, time=1.0, times=None) -> Path:
+    """A Hertz-like approach, pause and retract (force [N], height [m]) with scaled columns."""
+    n = 60
+    h = np.linspace(3e-6, 1e-6, n)
+    f = 1.3e4 * np.sqrt(5e-6) * np.clip(2e-6 - h, 0, None) ** 1.5 + 1e-11 * np.cos(np.arange(n))
+    heights = np.concatenate([h, np.full(20, h[-1]), h[::-1]])
+    forces = np.concatenate([f, np.full(20, f[-1]) * 0.9, f[::-1] * 0.8])
+    labels = ["approach"] * n + ["pause"] * 20 + ["retract"] * n
+    t = np.arange(heights.size) * 1e-3 if times is None else np.asarray(times)
+    lines = ["time (s),force (N),deflection (m),height (m),segment"]
+    lines += [",".join(repr(float(v)) for v in (ti * time, fi * force, fi / 0.1 * force,
+                                                  hi * height)) + f",{s}"
+              for ti, fi, hi, s in zip(t, forces, heights, labels, strict=True)]
+    path.write_text("\n".join(lines) + "\n")
+    return path
+
+
+_UFF_HEADER = {
+    "UFF_code": "_1_2_3_4_5", "Entry_UFF_version": "0", "Entry_tot_nb_curve": "1",
+    "Cantilever_springK_used(N/m)": "1.0E-01", "Tip_geometry": "pyramidal",
+    "Tip_half_angle(deg)": "1.75E+01", "Tip_radius(m)": "-1",
+    "Recording_xposition(m)": "1.0E-06", "Recording_yposition(m)": "2.0E-06",
+    "Recording_inv_optical_lever_sens_used(m/V)": "5.0E-08", "Recording_number_segment": "2",
+}
+
+
+def _uff(path: Path, header=None, *, approach=None, scale=1.0, extra_rows=0,
+         velocity="1.0E-06", tail=()) -> Path:
+    """A two-segment UFF text curve (Displacement [m], Deflection [V]), as Nanoscope writes it."""
+    fields = dict(_UFF_HEADER, **(header or {}))
+    rows = {"AP": [(0.0, 1.0), (1e-8, 0.6), (2e-8, 0.2)] if approach is None else approach,
+            "RE": [(0.0, 0.9), (1e-8, 0.1), (2e-8, 0.0)]}
+    lines = [f"HE {k}: {v}" for k, v in fields.items()]
+    for i, (code, kind) in enumerate((("AP", "Approach"), ("RE", "Retract"))):
+        pre = f"HE Recording_segment_{i}_"
+        lines += [f"{pre}type: {kind}", f"{pre}code: {code}", f"{pre}nb: {i}",
+                  f"{pre}nb_point: {len(rows[code])}", f"{pre}nb_col: 2",
+                  f"{pre}col_0_title: Displacement", f"{pre}col_0_unit: m",
+                  f"{pre}col_1_title: Deflection", f"{pre}col_1_unit: volt",
+                  f"{pre}velocity(m/s): {velocity if code == 'AP' else '1.0E-06'}"]
+        lines += [f"{code} {i} {z:E} {d * scale:E}" for z, d in rows[code]]
+        if code == "AP":
+            lines += [f"AP 0 {3e-8 + 1e-9 * k:E} 0.1" for k in range(extra_rows)]
+    path.write_text("\n".join([*lines, *tail]) + "\n****\n")
+    return path
+
+
+# ── 6. tips: every part named, the ranges stated, the argparse message kept ─────────────────
+
+
+@pytest.mark.parametrize(("tip", "match"), [
+    ("sphere:1e300m", r"argument --tip: tip 'sphere:1e300m': the radius after ':' is wrong: "
+                      r"radius must be within the plausible range \[1e-09, 1\] m"),
+    ("pyramid:1e300", r"argument --tip: tip 'pyramid:1e300': the half-angle after ':' is wrong: "
+                      r"half_angle \(degree\) must be in \[0.1, 89.9\], got 1e\+300"),
+    ("sphere:5", r"tip 'sphere:5': the radius after ':' is wrong: '5' has no unit: a length "
+                 r"needs one"),
+    ("cone:1e-300", r"half_angle \(degree\) must be in \[0.1, 89.9\], got 1e-300"),
+    ("flat:5e-320m", r"radius must be within the plausible range \[1e-09, 1\] m"),
+    ("ball:5um", r"unknown shape 'ball' before ':' \(the shapes are sphere, paraboloid, cone, "
+                 r"pyramid, flat\)"),
+])
+def test_cli_tip_names_the_wrong_part_and_the_forms(capsys, tmp_path, tip, match):
+    code, err = _cli(capsys, "fit", _curve_csv(tmp_path / "c.csv"), "--model", "hertz",
+                     "--tip", tip)
+    assert code == 2
+    assert "invalid _tip_type value" not in err
+    assert re.search(match, err), err
+    assert ("accepted: sphere:R | paraboloid:R | cone:ANGLE | pyramid:ANGLE | flat:RADIUS" in err
+            or "one of sphere:R" in err)
+    assert "1 nm to 1 m" in err and "[0.1, 89.9]" in err
+
+
+@pytest.mark.parametrize(("make", "match"), [
+    (lambda: Sphere(1e300), r"radius must be within the plausible range \[1e-09, 1\] m"),
+    (lambda: Paraboloid(5e-320), r"radius must be within the plausible range"),
+    (lambda: Flat(2.0), r"radius must be within the plausible range .*got 2\.0 m"),
+    (lambda: Cone.from_degrees(1e-300), r"half_angle \(degree\) must be in \[0.1, 89.9\]"),
+    (lambda: Pyramid(1e-300), r"half_angle must be within the plausible range .* rad = "
+                              r"\[0.1°, 89.9°\]"),
+    (lambda: parse_tip("sphere:1e-5"), r"'1e-5' has no unit"),
+])
+def test_tips_refuse_values_outside_their_ranges(make, match):
+    with pytest.raises(ParameterError, match=match):
+        make()
+
+
+def test_tips_at_the_ends_of_their_ranges_are_made_and_beyond_refused():
+    assert parse_tip("sphere:1nm").radius == 1e-9 and parse_tip("flat:1m").radius == 1.0
+    for text in ("cone:0.1", "pyramid:89.9deg"):
+        tip = parse_tip(text)
+        assert type(tip).from_attrs(tip.as_attrs()) == tip  # the degree round trip stays in
+    for text in ("sphere:0.999nm", "flat:1.001m", "cone:0.099", "pyramid:89.91deg"):
+        with pytest.raises(ParameterError, match=r"plausible range|must be in \[0.1, 89.9\]"):
+            parse_tip(text)
+
+
+def test_contact_fit_with_a_subnormal_radius_is_refused(capsys):
+    code, err = _cli(capsys, "fit", SPECTRUM, "--model", "contact", "--R", "5e-320m",
+                     "--indentation", "5nm")
+    assert code == 2 and "radius must be within the plausible range [1e-09, 1] m" in err
+
+
+# ── 6. data files scaled by 1e±300, subnormal values, absurd time steps ─────────────────────
+
+
+def test_force_column_times_1e_300_is_refused_not_a_traceback(capsys, tmp_path):
+    path = _curve_csv(tmp_path / "tiny.csv", force=1e-300)
+    code, err = _cli(capsys, "fit", path, "--model", "hertz", "--tip", "sphere:5um")
+    assert code == 2
+    assert "column 'force (N)' is at most" in err
+    assert "below the smallest scale of a measured force, 1e-15 N" in err
+
+
+@pytest.mark.parametrize(("kwargs", "match"), [
+    ({"force": 1e-310}, r"column 'force \(N\)' is at most \d\.\d+e-3\d\d N in magnitude "),
+    ({"height": 1e-12}, r"column 'height \(m\)' .* below the smallest scale of a measured height, "
+                        r"1e-12 m"),
+    ({"time": 1e-15}, r"column 'time \(s\)' .* below the smallest scale of a measured time, "
+                      r"1e-09 s"),
+    ({"force": 1e-300, "height": 1e-300}, r"column 'height \(m\)'"),
+])
+def test_curve_columns_below_any_measurement_are_refused(tmp_path, kwargs, match):
+    with pytest.raises(ParameterError, match=match):
+        load_instrument(_curve_csv(tmp_path / "c.csv", **kwargs))
+
+
+def test_subnormal_time_steps_are_refused(tmp_path):
+    t = np.arange(140) * 1e-3
+    t[1:4] = [1e-300, 2e-300, 3e-300]
+    with pytest.raises(ParameterError, match=r"time steps by 1e-300 s at data row 2 \(line 3\) "
+                                             r"\(1e-300 s after 0\.0 s\): a sample interval must "
+                                             r"be at least 1e-12 s"):
+        load_instrument(_curve_csv(tmp_path / "c.csv", times=t))
+
+
+def test_spectrum_column_times_1e_300_is_refused(tmp_path):
+    text = SPECTRUM.read_text().splitlines()
+    header, rows = text[1], [r.split(",") for r in text[2:]]
+    lines = [header] + [",".join([r[0], repr(float(r[1]) * 1e-300), *r[2:]]) for r in rows]
+    path = tmp_path / "s.csv"
+    path.write_text("\n".join(lines) + "\n")
+    with pytest.raises(ParameterError, match=r"column 'stiffness \(N/m\)' is at most .* below "
+                                             r"the smallest scale of a measured stiffness"):
+        load_instrument(path)
+
+
+@pytest.mark.parametrize(("option", "value", "match"), [
+    ("spring_constant", 1e-300, r"spring_constant must be within the plausible range "
+                                r"\[1e-05, 1000\] N/m, got 1e-300 N/m"),
+    ("sensitivity", "5e-320m/V", r"sensitivity must be within the plausible range \[1e-12, "
+                                 r"0.001\] m/V \(given as '5e-320m/V'\)"),
+])
+def test_csv_calibrations_have_a_lower_bound(tmp_path, option, value, match):
+    with pytest.raises(ParameterError, match=match):
+        load_instrument(_curve_csv(tmp_path / "c.csv"), **{option: value})
+
+
+# ── 6. UFF: the calibration ranges of the JPK reader, checked channels and times ───────────
+
+
+def test_uff_spring_constant_1e_308_is_refused_with_its_range(capsys, tmp_path):
+    path = _uff(tmp_path / "k.uff", {"Cantilever_springK_used(N/m)": "1.0E-308"})
+    code, err = _cli(capsys, "fit", path, "--model", "hertz")
+    assert code == 2
+    assert ("the header's spring constant Cantilever_springK_used(N/m) = 1.0E-308 is outside "
+            "the plausible range [1e-05, 1000] N/m (spring_constant): a corrupt header") in err
+    assert "--spring-constant" in err
+
+
+@pytest.mark.parametrize(("header", "velocity", "match"), [
+    ({"Cantilever_springK_used(N/m)": "1E308"}, "1E-06",
+     r"spring constant .* = 1E308 is outside the plausible range \[1e-05, 1000\] N/m"),
+    ({"Recording_inv_optical_lever_sens_used(m/V)": "4.9E-324"}, "1E-06",
+     r"inverse optical lever sensitivity .* is outside the plausible range \[1e-12, 0.001\] m/V"),
+    ({}, "1E308", r"Recording_segment_0_velocity\(m/s\) = 1E308 gives a sample interval of .* s "
+                  r".*outside \[1e-12 s,"),
+    ({"Recording_xposition(m)": "1E308"}, "1E-06",
+     r"Recording_xposition\(m\) = 1e\+308 m is beyond the physical range -1 <= x <= 1 m"),
+])
+def test_uff_header_values_outside_their_ranges_are_refused(tmp_path, header, velocity, match):
+    with pytest.raises(InstrumentFormatError, match=match):
+        read_uff(_uff(tmp_path / "h.uff", header, velocity=velocity))
+
+
+@pytest.mark.parametrize(("options", "match"), [
+    ({"spring_constant": 1e300}, r"spring_constant must be within the plausible range "
+                                 r"\[1e-05, 1000\] N/m, got 1e\+300 N/m"),
+    ({"sensitivity": "1e-300m/V"}, r"sensitivity must be within the plausible range"),
+])
+def test_uff_options_outside_their_ranges_are_refused(tmp_path, options, match):
+    with pytest.raises(ParameterError, match=match):
+        read_uff(_uff(tmp_path / "o.uff"), **options)
+
+
+@pytest.mark.parametrize(("kwargs", "match"), [
+    ({"scale": 1e-300}, r"the deflection: it is at most .* below the smallest scale of a measured "
+                        r"deflection, 1e-13 m"),
+    ({"scale": 1e300}, r"the deflection: sample \d is .* beyond the physical range"),
+    ({"approach": [(0.0, 1.0), (1e-308, 0.6), (2e-308, 0.2)]},
+     r"column 'Displacement' is at most 2e-308 m in magnitude"),
+])
+def test_uff_channels_outside_physics_are_refused(tmp_path, kwargs, match):
+    with pytest.raises(InstrumentFormatError, match=match):
+        read_uff(_uff(tmp_path / "c.uff", **kwargs))
+
+
+def test_uff_tip_outside_the_tip_ranges_is_not_recorded(tmp_path):
+    ds = read_uff(_uff(tmp_path / "t.uff", {"Tip_half_angle(deg)": "1E-300"}))
+    assert "tip_shape" not in ds.attrs
+    assert "without a half angle in [0.1, 89.9] degrees" in ds.attrs["tip_note"]
+
+
+def test_a_dataset_from_elsewhere_is_checked_against_the_same_ranges():
+    """The check every reader's dataset passes, ready for a netCDF file before it is fitted."""
+    from viscoforce.io import quality
+
+    spectrum = load_instrument(SPECTRUM)
+    quality.check_measured(spectrum, "s.nc")
+    with pytest.raises(ParameterError, match=r"s\.nc: stiffness holds 2\.\d+e\+302 N/m \(entry "
+                                             r"0\), beyond the physical range 0 < stiffness <= "
+                                             r"1e\+10 N/m"):
+        quality.check_measured(spectrum.assign(stiffness=spectrum["stiffness"] * 1e300), "s.nc")
+    with pytest.raises(ParameterError, match=r"omega is at most .* rad/s in magnitude .* below the "
+                                             r"smallest scale of a measured omega"):
+        quality.check_measured(spectrum.assign_coords(omega=spectrum["omega"] * 1e-300), "s.nc")
+
+
+# ── 6. hunted: positions, loads and drags beyond what the solvers can compute ──────────────
+
+
+def test_exact_fit_where_the_surfaces_do_not_interact_is_refused(capsys):
+    code, err = _cli(capsys, "fit", SPECTRUM, "--model", "exact", "--h0=1e30m")
+    assert code == 2
+    assert "--h0 1e30m: the position must be where the surfaces interact" in err
+    assert "p'(h) is 0 at every node of the grid" in err
+
+
+def test_a_subnormal_mean_force_is_refused_with_its_range(capsys):
+    code, err = _cli(capsys, "fit", SPECTRUM, "--model", "exact", "--mean-force=5e-320N")
+    assert code == 2
+    assert ("--mean-force 5e-320N: the mean force must be within the plausible range "
+            "[1e-18, 1000] N, got 5e-320 N") in err
+
+
+def test_a_drag_beyond_physics_is_refused_by_load(capsys, tmp_path):
+    code, err = _cli(capsys, "load", MODULATION, "--out", tmp_path / "o.nc",
+                     "--drag=1e300N*s/m")
+    assert code == 2
+    assert "drag must be within the plausible range [0, 1e+06] N·s/m" in err
+    assert not (tmp_path / "o.nc").exists()
+
+
+def test_a_tip_beyond_its_range_is_refused_by_load(capsys, tmp_path):
+    code, err = _cli(capsys, "load", MODULATION, "--out", tmp_path / "o.nc", "--tip",
+                     "sphere:1e300m")
+    assert code == 2 and "radius must be within the plausible range [1e-09, 1] m" in err
+
+
+# ── 7. curves=[0, 0] and an unknown height_channel, refused before any decoding ────────────
+
+
+@pytest.mark.parametrize(("curves", "match"), [
+    ([0, 0], r"curves selects curve 0 twice, at positions 0 and 1 of \[0, 0\]; give each curve "
+             r"once"),
+    ([1, -3], r"curves selects curve 1 twice \(as 1 and -3\)"),
+    (np.array([2, 3, 2]), r"curves selects curve 2 twice, at positions 0 and 2"),
+])
+def test_a_curve_selected_twice_is_refused(curves, match):
+    with read_jpk(MAP) as archive, pytest.raises(ParameterError, match=match):
+        jpk_to_curves(archive, curves=curves)
+    with pytest.raises(ParameterError, match=match):
+        load_instrument(MAP, curves=curves)
+
+
+def _no_decoding(monkeypatch):
+    from viscoforce.io.jpk import JPKArchive
+
+    def refuse(*args, **kwargs):
+        raise AssertionError("a curve was decoded before the options were checked")
+
+    monkeypatch.setattr(JPKArchive, "_decode", refuse)
+    monkeypatch.setattr(JPKArchive, "_units", refuse)
+
+
+@pytest.mark.parametrize("height_channel", ["bogus", "HEIGHT", 5, ["height"]])
+def test_an_unknown_height_channel_is_refused_before_decoding(monkeypatch, height_channel):
+    _no_decoding(monkeypatch)
+    match = (r"height_channel must be None \(the first of strainGaugeHeight, measuredHeight, "
+             r"capacitiveSensorHeight, height present in every segment\) or one of them, got ")
+    with pytest.raises(ParameterError, match=match):
+        load_instrument(MAP, height_channel=height_channel)
+    from viscoforce.experiments.modulation import modulation_spectrum
+    from viscoforce.experiments.stream import stream_spectrum
+
+    with pytest.raises(ParameterError, match=match):
+        modulation_spectrum(MODULATION, height_channel=height_channel)
+    with pytest.raises(ParameterError, match=match):
+        stream_spectrum(MODULATION, height_channel=height_channel, chunk=1)
+
+
+def test_a_height_channel_missing_from_the_file_is_refused_from_the_headers(monkeypatch):
+    from viscoforce.io.jpk import JPKArchive
+
+    monkeypatch.setattr(JPKArchive, "_decode", lambda *a, **k: pytest.fail("decoded"))
+    with pytest.raises(ParameterError, match=r"height_channel 'strainGaugeHeight' is missing in "
+                                             r"curve 0 segment 0"):
+        load_instrument(MAP, height_channel="strainGaugeHeight")
+
+
+def test_modulation_of_a_dataset_refuses_repeats_and_another_height():
+    from viscoforce.experiments.modulation import modulation_spectrum
+
+    ds = load_instrument(MODULATION, height_channel="measuredHeight")
+    with pytest.raises(ParameterError, match=r"curves selects curve 0 twice"):
+        modulation_spectrum(ds, curves=[0, -1])
+    with pytest.raises(ParameterError, match=r"height_channel 'height' chooses the height of a "
+                                             r"JPK archive; this curves dataset was made with "
+                                             r"'measuredHeight'"):
+        modulation_spectrum(ds, height_channel="height")
+
+
+# ── 7. a JPK archive inside a zip of archives: held once, refused with the estimate ────────
+
+
+def _zip_of_archives(path: Path, padding: int) -> int:
+    """A deflated zip holding one JPK archive that carries ``padding`` incompressible bytes."""
+    inner = io.BytesIO()
+    with zipfile.ZipFile(JPK) as src, zipfile.ZipFile(inner, "w", zipfile.ZIP_STORED) as dst:
+        for info in src.infolist():
+            dst.writestr(info, src.read(info))
+        dst.writestr("padding.bin", np.random.default_rng(40).bytes(padding))
+    data = inner.getvalue()
+    with zipfile.ZipFile(path, "w", zipfile.ZIP_DEFLATED) as outer:
+        outer.writestr("a.jpk-force", data)
+    return len(data)
+
+
+def _peak(work) -> int:
+    tracemalloc.start()
+    try:
+        work()
+        return tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+
+
+def test_a_member_archive_is_held_once_not_three_times(tmp_path):
+    path = tmp_path / "archives.zip"
+    size = _zip_of_archives(path, 24 * MiB)
+
+    def read():
+        with read_jpk(path) as archive:
+            archive.curve(0)
+
+    peak = _peak(read)
+    assert peak < 1.3 * size, f"peak {peak / MiB:.0f} MiB for a {size / MiB:.0f} MiB member"
+
+
+def test_a_member_archive_beyond_the_memory_budget_is_refused_before_decompressing(
+        tmp_path, monkeypatch):
+    path = tmp_path / "archives.zip"
+    size = _zip_of_archives(path, 8 * MiB)
+    monkeypatch.setattr(_limits, "MAX_MEMORY_BYTES", 4 * MiB)
+    error = []
+
+    def read():
+        with pytest.raises(EffortError) as info:
+            read_jpk(path)
+        error.append(info.value)
+
+    peak = _peak(read)
+    assert str(error[0]).startswith(
+        f"{path}: a.jpk-force: holding this JPK archive in memory (a member of a zip of archives "
+        f"is read whole): about {size + 2 * MiB:.3g} bytes needed, beyond the limit of "
+        f"{4 * MiB:.3g} bytes")
+    assert peak < MiB  # nothing was decompressed
+
+
+# ── 7. slow refusals: the first bad line, before the rest of the file is parsed ────────────
+
+
+def test_a_uff_segment_with_more_rows_than_it_declares_is_refused_at_the_first_extra(tmp_path):
+    # damage far below the first row too many: it used to be reported, after every line of the
+    # file had been split into tokens
+    path = _uff(tmp_path / "long.uff", extra_rows=20_000, tail=("AP 0 x y",))
+    peak = []
+
+    def read():
+        with pytest.raises(InstrumentFormatError, match=r"segment 0 \(AP\) declares 3 points "
+                                                         r"\(Recording_segment_0_nb_point\), the "
+                                                         r"file has more: line \d+ is its data "
+                                                         r"line 4; refused there"):
+            read_uff(path)
+
+    peak.append(_peak(read))
+    assert peak[0] < 4 * path.stat().st_size  # the text, not a list of every line's tokens
+
+
+def test_a_csv_of_text_is_refused_from_its_first_rows(tmp_path):
+    path = tmp_path / "text.csv"
+    path.write_text("time (s),force (N),height (m)\n" + "abc,def,ghi\n" * 400_000)
+    peak = []
+
+    def read():
+        with pytest.raises(ParameterError, match=r"column 'time \(s\)' data row 1 \(line 2\) is "
+                                                 r"not a finite number \('abc'\)"):
+            load_instrument(path)
+
+    peak.append(_peak(read))
+    assert peak[0] < 5 * MiB  # 1000 rows parsed, not 400 000 rows of strings (25 MiB)
+
+
+def test_text_at_the_end_of_a_csv_is_found_chunk_by_chunk(tmp_path, monkeypatch):
+    monkeypatch.setattr(csv_formats, "_CHUNK_ROWS", 5_000, raising=False)
+    path = tmp_path / "late.csv"
+    rows = "".join(f"{k * 1e-3!r},1e-9,{1e-6 + k * 1e-12!r}\n" for k in range(300_000))
+    path.write_text("time (s),force (N),height (m)\n" + rows + "x,1e-9,1e-6\n")
+    peak = []
+
+    def read():
+        with pytest.raises(ParameterError, match=r"column 'time \(s\)' data row 300001 "
+                                                 r"\(line 300002\) is not a finite number"):
+            load_instrument(path)
+
+    peak.append(_peak(read))
+    assert peak[0] < 12 * MiB  # not a column of 300 000 Python objects (37 MiB)
+
+
+@pytest.mark.parametrize(("header", "row", "match"), [
+    ("time (s),force (N),height (m),junk (1)", "0,1e-9,1e-6,0", r"line 200002 has 5 fields, "
+                                                                r"expected 4"),
+    ("time (s),force (N),height (m)", "0,1e-9,1e-6", r"line 200002 has 4 fields, expected 3"),
+])
+def test_a_line_with_an_extra_field_is_found_without_parsing_every_line(tmp_path, monkeypatch,
+                                                                        header, row, match):
+    """NumPy counts the delimiters; Python parses only the lines whose count differs."""
+    calls = []
+    split = csv_formats._split
+    monkeypatch.setattr(csv_formats, "_split", lambda *a: calls.append(1) or split(*a))
+    path = tmp_path / "extra.csv"
+    rows = [row.replace("0,", f"{k * 1e-3!r},", 1) for k in range(200_000)]
+    path.write_text("\n".join([header, *rows, rows[-1] + ",5"]) + "\n")
+    with pytest.raises(ParameterError, match=match):
+        load_instrument(path)
+    assert len(calls) < 100  # was one csv split per line: 200 000
+
+
+def test_a_refusal_reaches_the_command_line_as_one_message(capsys, tmp_path):
+    path = _curve_csv(tmp_path / "tiny.csv", force=1e-300)
+    code = main(["load", str(path), "--out", str(tmp_path / "o.nc"), "--json"])
+    out, err = capsys.readouterr()
+    assert code == 2 and not out and err.count("\n") == 1 and "Traceback" not in err
+    assert not (tmp_path / "o.nc").exists()
