@@ -287,7 +287,7 @@ def test_exact_fit_where_the_surfaces_do_not_interact_is_refused(capsys):
 def test_a_subnormal_mean_force_is_refused_with_its_range(capsys):
     code, err = _cli(capsys, "fit", SPECTRUM, "--model", "exact", "--mean-force=5e-320N")
     assert code == 2
-    assert ("--mean-force 5e-320N: the mean force must be within the plausible range "
+    assert ("--mean-force 5e-320N: mean_force must be within the plausible range "
             "[1e-18, 1000] N, got 5e-320 N") in err
 
 
@@ -500,3 +500,257 @@ def test_a_refusal_reaches_the_command_line_as_one_message(capsys, tmp_path):
     out, err = capsys.readouterr()
     assert code == 2 and not out and err.count("\n") == 1 and "Traceback" not in err
     assert not (tmp_path / "o.nc").exists()
+
+
+# ── fitting and theory inputs: fixed inputs, netCDF data, spans, surface-force laws ────────
+
+
+CONTACT = ("fit", SPECTRUM, "--model", "contact", "--tip", "sphere:5um")
+
+
+@pytest.mark.parametrize(("argv", "message"), [
+    ((*CONTACT, "--indentation", "5nm", "--drag=1e300N*s/m"),
+     "--drag 1e300N*s/m: drag must be within the plausible range [0, 1e+06] N*s/m"),
+    ((*CONTACT, "--indentation", "5nm", "--material", "structural", "--reference-frequency",
+      "5e-320Hz"),
+     "--reference-frequency 5e-320Hz: the reference frequency must be within the plausible "
+     "range [1e-06, 1e+09] Hz"),
+    ((*CONTACT, "--indentation", "5e-320m"),
+     "--indentation 5e-320m: indentation must be within the plausible range [1e-12, 1] m"),
+    ((*CONTACT, "--indentation=1e300m"),
+     "--indentation 1e300m: indentation must be within the plausible range [-1, 1] m"),
+    (("fit", SPECTRUM, "--model", "svda", "--mean-force=5e-320N"),
+     "--mean-force 5e-320N: mean_force must be within the plausible range [1e-18, 1000] N"),
+])
+def test_fixed_inputs_of_spectrum_models_have_ranges(capsys, argv, message):
+    code, err = _cli(capsys, *argv)
+    assert code == 2 and message in err, err
+
+
+@pytest.mark.parametrize(("extra", "message"), [
+    (("--contact-point=1e300m",),
+     "--contact-point 1e300m: contact_point must be within the plausible range [-1, 1] m"),
+    (("--drag=1e300N*s/m",), "drag must be within the plausible range [0, 1e+06] N*s/m"),
+    (("--material", "structural", "--reference-frequency", "5e-320Hz"),
+     "--reference-frequency 5e-320Hz: the reference frequency must be within the plausible "
+     "range [1e-06, 1e+09] Hz"),
+])
+def test_fixed_inputs_of_the_ting_model_have_ranges(capsys, tmp_path, extra, message):
+    code, err = _cli(capsys, "fit", _curve_csv(tmp_path / "c.csv"), "--model", "ting", "--tip",
+                     "sphere:5um", *extra)
+    assert code == 2 and message in err, err
+
+
+@pytest.mark.parametrize(("name", "fixed", "match"), [
+    ("contact", {"radius": 1e-5, "indentation": 5e-9, "drag": 1e300},
+     r"drag must be within the plausible range \[0, 1e\+06\] N\*s/m, got 1e\+300"),
+    ("contact", {"radius": 1e-5, "indentation": 5e-320},
+     r"indentation must be within the plausible range \[1e-12, 1\] m"),
+    ("contact", {"radius": 1e-5, "indentation": 5e-9, "material": "structural",
+                 "reference_frequency": 5e-320},
+     r"reference_frequency must be within the plausible range \[1e-06, 1e\+09\] Hz"),
+    ("svda", {"radius": 1e-5, "P": 1e7, "debye_length": 1e-9, "mean_force": 5e-320},
+     r"mean_force must be within the plausible range \[1e-18, 1000\] N"),
+    ("svda", {"radius": 1e300, "P": 1e7, "debye_length": 1e-9, "position": 2e-9},
+     r"radius must be within the plausible range \[1e-09, 1\] m"),
+    ("svda", {"radius": 1e-5, "P": 1e300, "debye_length": 1e-9, "position": 2e-9},
+     r"P must be within the plausible range \[0.001, 1e\+12\] Pa"),
+    ("svda", {"radius": 1e-5, "P": 1e7, "debye_length": 5e-320, "position": 2e-9},
+     r"debye_length must be within the plausible range \[1e-12, 1\] m"),
+])
+def test_make_model_refuses_fixed_inputs_beyond_their_ranges(name, fixed, match):
+    from viscoforce.fitting.models import make_model
+
+    with pytest.raises(ParameterError, match=match):
+        make_model(name, **fixed)
+
+
+def test_ting_solve_refuses_a_drag_a_contact_point_and_a_reference_frequency_beyond_physics():
+    from viscoforce.physics.ting import PowerLawRelaxation, PronyRelaxation, ting_solve
+
+    t = np.linspace(0.0, 1.0, 50)
+    z = 1e-6 * np.sin(np.pi * t)
+    kernel = PronyRelaxation(1e3, (1e3,), (0.1,))
+    with pytest.raises(ParameterError, match=r"drag must be within the plausible range "
+                                             r"\[0, 1e\+06\] N\*s/m"):
+        ting_solve(t, z, 0.0, Sphere(5e-6), kernel, drag=1e300)
+    with pytest.raises(ParameterError, match=r"contact_point must be within the plausible range "
+                                             r"\[-1, 1\] m, got 1e\+300 m"):
+        ting_solve(t, z, 1e300, Sphere(5e-6), kernel)
+    with pytest.raises(ParameterError, match=r"reference_frequency must be within the plausible "
+                                             r"range \[1e-06, 1e\+09\] Hz, got 5e-320 Hz"):
+        PowerLawRelaxation.from_structural(1e3, 0.2, reference_frequency=5e-320)
+
+
+def _spectrum_nc(path: Path, scale: float, *, source: str | None = "csv-spectrum",
+                 omega_scale: float = 1.0) -> Path:
+    ds = load_instrument(SPECTRUM)
+    ds = ds.assign(stiffness=ds["stiffness"] * scale,
+                   stiffness_stderr=ds["stiffness_stderr"] * scale)
+    ds = ds.assign_coords(omega=ds["omega"] * omega_scale)
+    if source is None:
+        del ds.attrs["source"]
+    else:
+        ds.attrs["source"] = source
+    ds.to_netcdf(path)
+    return path
+
+
+@pytest.mark.parametrize("model", [("contact", "--tip", "sphere:5um", "--indentation", "5nm"),
+                                   ("exact", "--h0=-5nm"), ("svda", "--h0=5nm")])
+@pytest.mark.parametrize(("scale", "message"), [
+    (1e300, r"x\.nc: stiffness holds 2\.\d+e\+302 N/m \(entry 0\), beyond the physical range "
+            r"0 < stiffness <= 1e\+10 N/m"),
+    (1e-300, r"x\.nc: stiffness is at most \S+ N/m in magnitude .* below the smallest scale of a "
+             r"measured stiffness"),
+])
+def test_a_measured_netcdf_spectrum_is_checked_before_it_is_fitted(capsys, tmp_path, model,
+                                                                    scale, message):
+    path = _spectrum_nc(tmp_path / "x.nc", scale)
+    code, err = _cli(capsys, "fit", path, "--model", *model)
+    assert code == 2 and re.search(message, err), err
+
+
+def test_a_simulated_netcdf_spectrum_is_fitted_as_before(capsys, tmp_path):
+    """Beyond a measured range (ω up to 1.9e10 rad/s) but simulated: fitted, not refused."""
+    measured = _spectrum_nc(tmp_path / "m.nc", 1.0, omega_scale=1e6)
+    code, err = _cli(capsys, "fit", measured, "--model", "prony")
+    assert code == 2 and "omega holds" in err and "beyond the physical range" in err
+    for source in ("simulation", None):
+        path = _spectrum_nc(tmp_path / f"{source}.nc", 1.0, source=source, omega_scale=1e6)
+        code, err = _cli(capsys, "fit", path, "--model", "prony")
+        assert code == 0, err
+
+
+def test_the_bundled_netcdf_example_is_still_fitted(capsys):
+    import viscoforce as vf
+
+    code, err = _cli(capsys, "fit", vf.example_path("sls_spectrum_map.nc"), "--model", "prony",
+                     "--curve", "0")
+    assert code == 0, err
+
+
+def test_equilibrium_at_a_subnormal_load_is_refused_with_its_range(make_problem):
+    from viscoforce.physics.materials import Elastic
+    from viscoforce.solvers.static import equilibrium_at_load, position_at_load
+
+    problem = make_problem(Elastic(1e9), -5e-9)
+    for solve in (equilibrium_at_load, position_at_load):
+        with pytest.raises(ParameterError, match=r"load must be within the plausible range "
+                                                 r"\[1e-18, 1000\] N, got 5e-320 N"):
+            solve(problem, 5e-320, 1e9)
+
+
+def _approach_curves(*, z_scale=1.0, f_scale=1.0):
+    from viscoforce.schema import make_curves
+
+    z = np.linspace(0.0, 2e-6, 80) * z_scale
+    f = 1e-9 * np.clip(z / z_scale - 1e-6, 0, None) ** 1.5 / 1e-9 * f_scale + 1e-9 * f_scale
+    return make_curves(np.linspace(0, 1, z.size), f, -z, np.zeros_like(z), tip_position=z,
+                       segment=0, segment_names=("approach",), source="synthetic")
+
+
+@pytest.mark.parametrize(("kwargs", "match"), [
+    ({"z_scale": 5e-9}, r"the approach spans 1e-14 m of tip position \(from 0 m to 1e-14 m\), "
+                        r"below the smallest span a fit can bound, 1e-12 m"),
+    ({"f_scale": 1e-8}, r"the approach spans \S+ N of force .*, below the smallest span a fit "
+                        r"can bound, 1e-13 N"),
+])
+def test_a_curve_with_a_tiny_span_is_refused_naming_the_span(kwargs, match):
+    from viscoforce.fitting.curves import fit_curve
+
+    with pytest.raises(ParameterError, match=match):
+        fit_curve(_approach_curves(**kwargs), "hertz", tip="sphere:5um")
+
+
+@pytest.mark.parametrize("window", [(0.0, 1e-14), (0.0, 1e300)])
+def test_a_contact_window_beyond_its_range_or_too_narrow_is_refused(window):
+    from viscoforce.fitting.models import make_model
+
+    with pytest.raises(ParameterError, match=r"contact_window must lie within the plausible "
+                                             r"range \[-1, 1\] m and be at least 1e-12 m wide"):
+        make_model("hertz", tip="sphere:5um", contact_window=window)
+
+
+def test_a_parameter_window_narrower_than_lmfits_resolution_is_a_parameter_error():
+    from viscoforce.fitting._params import Internal
+
+    with pytest.raises(ParameterError, match=r"parameter 'contact_point' needs min < max by more "
+                                             r"than 1e-13 \(lmfit's resolution of bounds\), got "
+                                             r"\[0.0, 1e-14\]"):
+        Internal("contact_point", 0.0, 0.0, 1e-14)
+
+
+def test_load_refuses_a_bad_tip_before_reading_the_file(capsys, tmp_path):
+    code, err = _cli(capsys, "load", tmp_path / "absent.jpk-force", "--tip", "sphere:1e300m")
+    assert code == 2
+    assert ("argument --tip: tip 'sphere:1e300m': the radius after ':' is wrong: radius must be "
+            "within the plausible range [1e-09, 1] m") in err
+    assert "absent" not in err
+
+
+def test_streamed_curves_refuse_an_unknown_height_channel_before_decoding(monkeypatch, tmp_path):
+    from viscoforce.io.stream import iter_curves, write_curves_netcdf
+
+    _no_decoding(monkeypatch)
+    match = r"height_channel must be None .* got 'bogus'"
+    with read_jpk(MAP) as archive:
+        with pytest.raises(ParameterError, match=match):
+            list(iter_curves(archive, height_channel="bogus"))
+        with pytest.raises(ParameterError, match=match):
+            write_curves_netcdf(archive, tmp_path / "o.nc", height_channel="bogus")
+    assert not list(tmp_path.iterdir())
+
+
+SPECTRUM_RUN = ("spectrum", "--h0=5nm", "--eta", "0.1nm", "--omega", "1Hz")
+
+
+@pytest.mark.parametrize(("flag", "value", "message"), [
+    ("--debye-length", "5e-320m",
+     "--debye-length 5e-320m: debye_length must be within the plausible range [1e-12, 1] m"),
+    ("--debye-length", "1e300m", "debye_length must be within the plausible range [1e-12, 1] m"),
+    ("--z0", "1e300m",
+     "--z0 1e300m: z0 (soft-wall length) must be within the plausible range [1e-12, 1] m"),
+    ("--z0", "5e-320m", "z0 (soft-wall length) must be within the plausible range"),
+    ("--P", "1e300Pa", "--P 1e300Pa: P (double-layer pressure scale) must be within the "
+                       "plausible range [0.001, 1e+12] Pa"),
+    ("--P", "5e-320Pa", "P (double-layer pressure scale) must be within the plausible range"),
+    ("--Pw", "1e300Pa", "--Pw 1e300Pa: Pw (soft-wall pressure) must be within the plausible "
+                        "range [0.001, 1e+12] Pa"),
+    ("--R", "1e300m", "--R 1e300m: the radius (R) must be within the plausible range "
+                      "[1e-09, 1] m"),
+    ("--R", "5e-320m", "the radius (R) must be within the plausible range [1e-09, 1] m"),
+])
+def test_theory_parameters_beyond_their_ranges_are_refused_naming_the_flag(capsys, flag, value,
+                                                                          message):
+    code, err = _cli(capsys, *SPECTRUM_RUN, flag, value)
+    assert code == 2 and message in err, err
+
+
+@pytest.mark.parametrize(("make", "match"), [
+    (lambda vf: vf.DoubleLayer(1e7, 5e-320), r"debye_length must be within the plausible range "
+                                             r"\[1e-12, 1\] m, got 5e-320 m"),
+    (lambda vf: vf.DoubleLayer(1e300, 1e-9), r"P \(double-layer pressure scale\) must be within "
+                                             r"the plausible range \[0.001, 1e\+12\] Pa"),
+    (lambda vf: vf.SoftWall(1e7, 1e300), r"z0 \(soft-wall length\) must be within the plausible "
+                                         r"range \[1e-12, 1\] m"),
+    (lambda vf: vf.SoftWall(5e-320, 5e-10), r"Pw \(soft-wall pressure\) must be within the "
+                                            r"plausible range"),
+    (lambda vf: vf.ContactProblem.create(sphere=vf.Sphere(1e300), surface_force=vf.DoubleLayer(),
+                                         material=vf.Elastic(1e9), deepest_position=0.0),
+     r"radius \(R\) must be within the plausible range \[1e-09, 1\] m"),
+])
+def test_surface_force_laws_and_the_sphere_refuse_values_beyond_their_ranges(make, match):
+    import viscoforce as vf
+
+    with pytest.raises(ParameterError, match=match):
+        make(vf)
+
+
+def test_the_papers_defaults_lie_inside_the_theory_ranges():
+    import viscoforce as vf
+
+    law = vf.DoubleLayer(vf.PAPER.P, vf.PAPER.debye_length) + vf.SoftWall(vf.PAPER.Pw, vf.PAPER.z0)
+    problem = vf.ContactProblem.create(sphere=vf.PAPER.sphere(), surface_force=law,
+                                       material=vf.Elastic(vf.PAPER.E_inf), deepest_position=-5e-9)
+    assert problem.sphere.radius == vf.PAPER.R

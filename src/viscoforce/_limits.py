@@ -59,6 +59,34 @@ MEAN_FORCE_RANGE = (1e-18, 1e3)
 #: Shortest sample interval of a measured time series [s] (no instrument samples at a THz); a
 #: shorter step is a wrong time unit or a damaged column, and its reciprocal overflows downstream.
 MIN_TIME_STEP = 1e-12
+#: A position a fit holds fixed [m] (``contact_point``, ``indentation``): no piezo, stage or
+#: cantilever moves a metre (the readers' range of a measured position).
+POSITION_RANGE = (-1.0, 1.0)
+#: Operating indentation δ0 of the contact model [m]: a picometre (far below any detectable
+#: indentation; at 5e-320 m the contact stiffness √(Rδ0) underflows to 0) to a metre.
+INDENTATION_RANGE = (1e-12, 1.0)
+#: Reference frequency f_ref of the structural (power-law) material [Hz]: a period of 12 days
+#: (the readers' smallest measured frequency) to a GHz (beyond any mechanical drive).
+REFERENCE_FREQUENCY_RANGE = (1e-6, 1e9)
+#: Radius R of the paper's sphere (contact problem, svda) [m]: that of a tip.
+SPHERE_RADIUS_RANGE = TIP_RADIUS_RANGE
+#: Lengths of the surface-force laws [m]: the Debye length λ_D and the soft-wall length z0. A
+#: picometre (far below an atom) to a metre (pure water's Debye length is ~1 µm); the paper's are
+#: 1 nm and 0.5 nm.
+SURFACE_FORCE_LENGTH_RANGE = (1e-12, 1.0)
+#: Pressure scales of the surface-force laws [Pa]: the double layer's P and the soft wall's Pw.
+#: A millipascal to a terapascal (beyond any material's strength); the paper's are 1e7 Pa.
+SURFACE_PRESSURE_RANGE = (1e-3, 1e12)
+#: Smallest span of the tip position over a fitted force curve [m] (a picometre, the readers'
+#: smallest scale of a height): a fit bounds the contact point within it, and lmfit refuses
+#: bounds closer than 1e-13.
+MIN_POSITION_SPAN = 1e-12
+#: Smallest span of the force over a fitted force curve [N] (0.1 pN, below the thermal noise of
+#: any force probe but optical tweezers): a fit bounds the force baseline within a few spans.
+MIN_FORCE_SPAN = 1e-13
+#: Smallest span of a fitted curve relative to its largest magnitude (a 30-bit converter): below
+#: it the windows a fit bounds its parameters with are narrower than lmfit's 1e-13 relative.
+MIN_RELATIVE_SPAN = 1e-9
 
 
 def check_effort(what: str, estimate: float, limit: float, *, unit: str = "",

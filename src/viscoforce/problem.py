@@ -14,12 +14,14 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from viscoforce import kernel
+from viscoforce._limits import SPHERE_RADIUS_RANGE
 from viscoforce._typing import FloatArray
 from viscoforce._validation import (
     as_float_array,
     require_finite,
     require_instance,
     require_int,
+    require_plausible,
     require_positive,
 )
 from viscoforce.exceptions import (
@@ -57,6 +59,9 @@ _MATERIAL_KIND = "ViscoelasticMaterial (Elastic, StandardLinearSolid or PronySer
 
 def _check_geometry(sphere: Sphere, law: SurfaceForceLaw) -> None:
     require_instance("sphere", sphere, Sphere)
+    # a subnormal R gave an outer radius of 0, 1e300 m a Newton solve that cannot converge
+    require_plausible("radius (R)", sphere.radius, SPHERE_RADIUS_RANGE, "m",
+                      why="the sphere of the contact problem")
     require_instance("surface_force", law, SurfaceForceLaw, what=_SURFACE_FORCE_KIND)
 
 
@@ -126,7 +131,7 @@ class ContactProblem:
     Parameters
     ----------
     sphere : Sphere
-        Geometry (radius R).
+        Geometry (radius R, within :data:`~viscoforce._limits.SPHERE_RADIUS_RANGE`).
     surface_force : SurfaceForceLaw
         Pressure law p(h).
     material : ViscoelasticMaterial

@@ -55,6 +55,13 @@ def phase_lag_type(text: str) -> float | tuple[float, float]:
             f"{text!r}") from None
 
 
+def _tip_type(text: str):
+    """``--tip``: parsed with the flags (a bad tip is refused before the file is read)."""
+    from viscoforce.physics.tips import parse_tip
+
+    return parse_tip(text)
+
+
 LOAD_FLAGS = FlagGroup(None, (
     Flag("--format", None, None, "NAME",
          f"file format: {format_names()} (default: detected from the content)"),
@@ -64,7 +71,7 @@ LOAD_FLAGS = FlagGroup(None, (
          "deflection sensitivity, e.g. 50nm/V (for files without calibration)"),
     Flag("--drag", "drag", None, "DRAG",
          "hydrodynamic drag B, subtracted from the spectrum as i*omega*B, e.g. 1e-6N*s/m"),
-    Flag("--tip", None, None, "SHAPE:SIZE",
+    Flag("--tip", _tip_type, None, "SHAPE:SIZE",
          "tip (sphere:R | paraboloid:R | cone:ANGLE | pyramid:ANGLE | flat:RADIUS): adds "
          "E_storage, E_loss, G_storage, G_loss per point to a spectrum"),
     Flag("--poisson", None, None, "NU",
@@ -163,7 +170,6 @@ _MODULI_NEED_SPECTRUM = ("--tip and --poisson give the complex modulus of a spec
 def _with_moduli(ds, args: argparse.Namespace):
     """The spectrum with E′, E″, G′, G″ per point (``--tip``, ``--poisson``)."""
     from viscoforce.experiments.moduli import add_complex_modulus
-    from viscoforce.physics.tips import parse_tip
 
     if "omega" not in ds.dims:
         raise UsageError(_MODULI_NEED_SPECTRUM)
@@ -176,7 +182,7 @@ def _with_moduli(ds, args: argparse.Namespace):
         except ValueError:
             raise UsageError(f"--poisson must be a number in [0, 0.5], got {args.poisson!r}"
                              ) from None
-    return add_complex_modulus(ds, parse_tip(args.tip), poisson=poisson)
+    return add_complex_modulus(ds, args.tip, poisson=poisson)  # a Tip: parsed with the flags
 
 
 def has_modulation(ds) -> bool:

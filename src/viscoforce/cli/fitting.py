@@ -226,23 +226,32 @@ def add_bode(parser: argparse.ArgumentParser) -> None:
 # ── data ────────────────────────────────────────────────────────────────────────────────────────
 
 def read_data(path: str, fmt: str | None = None):
-    """The dataset of DATA: netCDF as written, instrument files through ``load``'s route."""
+    """The dataset of DATA: netCDF as written, instrument files through ``load``'s route.
+
+    Measured data in a netCDF file (``source`` an instrument format, not "simulation" or absent)
+    pass the checks the instrument readers apply (:func:`viscoforce.io.quality.check_measured`):
+    a file written elsewhere, or edited, may hold values no measurement gives.
+    """
     from pathlib import Path
 
     from viscoforce.cli.analysis import has_modulation, streamed_spectrum
     from viscoforce.exceptions import EffortError
     from viscoforce.io.instruments import load_instrument
     from viscoforce.io.netcdf import open_netcdf
+    from viscoforce.io.quality import check_measured
 
     if Path(path).suffix.lower() == ".nc" and fmt is None:
         if not Path(path).is_file():
             raise UsageError(f"DATA {path}: no such file")
         try:
-            return one_curve_squeezed(open_netcdf(path))
+            ds = open_netcdf(path)
         except EffortError:
             raise
         except (OSError, ValueError) as exc:
             raise UsageError(f"DATA {path}: not a readable netCDF file ({exc})") from None
+        if str(ds.attrs.get("source", "simulation")) != "simulation":  # measured
+            check_measured(ds, str(path))
+        return one_curve_squeezed(ds)
     streamed = streamed_spectrum(path, fmt)  # a JPK map: demodulated in chunks of curves
     if streamed is not None:
         return one_curve_squeezed(streamed)

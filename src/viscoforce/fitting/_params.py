@@ -21,6 +21,10 @@ from dataclasses import dataclass
 
 import lmfit
 
+from viscoforce.exceptions import ParameterError
+
+#: Closest bounds of a parameter (absolute and relative), as lmfit's ``Parameter`` refuses them.
+BOUNDS_RESOLUTION = 1e-13
 #: Widest decade window of a positive parameter around its guess (bounds: guess·10^±WINDOW).
 WINDOW_DECADES = 6.0
 
@@ -71,8 +75,9 @@ class Internal:
 
     Unlike lmfit's: assigning ``value`` directly does not clip it (:meth:`set` does; the fitting
     engine assigns values its bound transforms keep inside the window), and bounds out of order
-    or NaN are refused rather than swapped. Bounds closer than lmfit's 1e-13 are refused, as
-    lmfit refuses them.
+    or NaN are refused rather than swapped. Bounds closer than lmfit's 1e-13
+    (:data:`BOUNDS_RESOLUTION`) are refused, as lmfit refuses them: a ParameterError, since
+    such a window comes from data that span too little (a contact point within 1e-14 m).
     """
 
     name: str
@@ -85,10 +90,17 @@ class Internal:
     expr: None = None  # never an expression (lmfit's attribute, read by the engine)
 
     def __post_init__(self) -> None:
-        if not self.min < self.max or math.isclose(self.min, self.max, rel_tol=1e-13,
-                                                    abs_tol=1e-13):
+        if not self.min < self.max:
             raise ValueError(f"parameter {self.name!r} needs min < max, got [{self.min!r}, "
                              f"{self.max!r}]")
+        if math.isclose(self.min, self.max, rel_tol=BOUNDS_RESOLUTION,
+                        abs_tol=BOUNDS_RESOLUTION):
+            # a window the data set (a contact point within a 1e-14 m approach): the data's
+            # span is below what the fit can bound (lmfit refuses it too, in SI)
+            raise ParameterError(
+                f"parameter {self.name!r} needs min < max by more than {BOUNDS_RESOLUTION:g} "
+                f"(lmfit's resolution of bounds), got [{self.min!r}, {self.max!r}]: the data "
+                "span too little of it to fit (check their units and spans)")
         self.value = min(max(float(self.value), self.min), self.max)  # as lmfit: clipped
 
     def set(self, *, value: float | None = None, vary: bool | None = None) -> None:

@@ -204,11 +204,76 @@ CURVE_DATA = {"relaxation": hold_data, "creep": creep_data, "hertz": approach_da
 
 def curve_data(curves: xr.Dataset, model: str, *, curve: int = 0,
                segment: int | None = None) -> FitData:
-    """What curve model ``model`` (relaxation, hertz, creep) fits on curve ``curve``."""
+    """What curve model ``model`` (relaxation, hertz, creep, ting) fits on curve ``curve``.
+
+    Raises
+    ------
+    ParameterError
+        As the model's data function; for hertz and ting also a tip position or force whose
+        span is below what the fit can bound (:func:`check_spans`).
+    """
     if model not in CURVE_DATA:
         raise ParameterError(f"model must be one of {', '.join(CURVE_DATA)} for force curves, "
                              f"got {model!r}")
-    return CURVE_DATA[model](curves, curve=curve, segment=segment)
+    data = CURVE_DATA[model](curves, curve=curve, segment=segment)
+    if model == "hertz":
+        check_spans("the approach", data.x, data.y)
+    elif model == "ting":
+        check_spans("the approach-retract", getattr(data, "position", None), data.y)
+    return data
+
+
+def check_spans(what: str, position: np.ndarray | None, force: np.ndarray) -> None:
+    """Refuse a curve whose tip position or force spans too little for a fit to bound.
+
+    The hertz and ting models bound the contact point within the tip positions and the force
+    baseline within a few force spans (the largest magnitude where the force is constant);
+    lmfit refuses bounds closer than 1e-13 (absolute or relative), so a span below
+    :data:`~viscoforce._limits.MIN_POSITION_SPAN`, :data:`~viscoforce._limits.MIN_FORCE_SPAN`
+    or :data:`~viscoforce._limits.MIN_RELATIVE_SPAN` of its magnitude is refused here, naming
+    it (a force or height in the wrong unit, values scaled by a tiny factor). A force of zeros
+    is left to the fit (no contact).
+
+    Parameters
+    ----------
+    what : str
+        The segment named in the message (``"the approach"``).
+    position : array_like or None
+        Tip positions [m] (None: not checked).
+    force : array_like
+        Forces [N].
+
+    Raises
+    ------
+    ParameterError
+        Naming the span, its ends and the floor.
+    """
+    from viscoforce._limits import MIN_FORCE_SPAN, MIN_POSITION_SPAN, MIN_RELATIVE_SPAN
+
+    for name, unit, values, floor in (("tip position", "m", position, MIN_POSITION_SPAN),
+                                      ("force", "N", force, MIN_FORCE_SPAN)):
+        if values is None:
+            continue
+        v = np.asarray(values, dtype=float)
+        v = v[np.isfinite(v)]
+        if v.size == 0:
+            continue
+        low, high = float(np.min(v)), float(np.max(v))
+        largest = max(abs(low), abs(high))
+        span = high - low
+        if name == "force" and span == 0.0:  # the baseline window spans the magnitude
+            if largest == 0.0:
+                continue
+            span = largest
+        ends = f"(from {low:g} {unit} to {high:g} {unit})"
+        if span < floor:
+            raise ParameterError(
+                f"{what} spans {span:g} {unit} of {name} {ends}, below the smallest span a fit "
+                f"can bound, {floor:g} {unit}; check the unit of the {name} and its values")
+        if span < MIN_RELATIVE_SPAN * largest:
+            raise ParameterError(
+                f"{what} spans {span:g} {unit} of {name} {ends}, below {MIN_RELATIVE_SPAN:g} of "
+                f"its magnitude: a fit cannot bound it; check the {name}'s values")
 
 
 def _free_baseline(one: xr.Dataset, row: int) -> float | None:

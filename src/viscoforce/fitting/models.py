@@ -72,6 +72,15 @@ def check_fixed(name: str, fixed: Mapping[str, Any]) -> dict[str, Any]:
     ParameterError
         A value out of range (the message names it and the range).
     """
+    from viscoforce._limits import (
+        DRAG_RANGE,
+        MEAN_FORCE_RANGE,
+        POSITION_RANGE,
+        REFERENCE_FREQUENCY_RANGE,
+        SPHERE_RADIUS_RANGE,
+        SURFACE_FORCE_LENGTH_RANGE,
+        SURFACE_PRESSURE_RANGE,
+    )
     from viscoforce._validation import (
         require_finite,
         require_instance,
@@ -84,17 +93,31 @@ def check_fixed(name: str, fixed: Mapping[str, Any]) -> dict[str, Any]:
         raise TypeError(f"model {name!r} takes no input {', '.join(unknown)}; its inputs: "
                         f"{', '.join(_FIXED[name]) or 'none'}")
     checks: dict[str, Callable[[str, Any], Any]] = {
-        "position": require_finite, "mean_force": require_positive, "radius": require_positive,
-        "P": require_positive, "debye_length": require_positive, "indentation": require_finite,
-        "drag": require_nonnegative,
+        "position": require_finite,
+        "mean_force": _plausible(require_positive, MEAN_FORCE_RANGE, "N"),
+        "radius": _plausible(require_positive, SPHERE_RADIUS_RANGE, "m"),
+        "P": _plausible(require_positive, SURFACE_PRESSURE_RANGE, "Pa"),
+        "debye_length": _plausible(require_positive, SURFACE_FORCE_LENGTH_RANGE, "m"),
+        # the contact model's floor (INDENTATION_RANGE) where it needs the indentation > 0
+        "indentation": _plausible(require_finite, POSITION_RANGE, "m"),
+        "drag": _plausible(require_nonnegative, DRAG_RANGE, "N*s/m"),
         "problem": lambda n, v: require_instance(n, v, ContactProblem),
         "material": lambda n, v: v if v in CONTACT_MATERIALS else _bad_material(v),
-        "newtonian": _require_bool, "reference_frequency": require_positive,
+        "newtonian": _require_bool,
+        "reference_frequency": _plausible(require_positive, REFERENCE_FREQUENCY_RANGE, "Hz"),
         "tip": lambda n, v: _as_tip(v), "contact_window": _window,
         "position_trace": lambda n, v: v, "fit_drag": _require_bool,
         "tol": require_positive, "start": _step_start,
-        "contact_point": require_finite}
+        "contact_point": _plausible(require_finite, POSITION_RANGE, "m")}
     return {k: (None if v is None else checks[k](k, v)) for k, v in fixed.items()}
+
+
+def _plausible(first: Callable[[str, Any], float], bounds: tuple[float, float], unit: str
+               ) -> Callable[[str, Any], float]:
+    """A check: ``first`` (its message for a sign or a non-number), then the plausible range."""
+    from viscoforce._validation import require_plausible
+
+    return lambda name, value: require_plausible(name, first(name, value), bounds, unit)
 
 
 def _step_start(name: str, value: Any) -> dict[str, float]:
@@ -113,6 +136,9 @@ def _as_tip(value: Any):
 
 
 def _window(name: str, value: Any) -> tuple[float, float]:
+    """(low, high) tip positions [m] within POSITION_RANGE, at least MIN_POSITION_SPAN apart."""
+    from viscoforce._limits import MIN_POSITION_SPAN, POSITION_RANGE
+
     try:
         lo, hi = (float(v) for v in value)
     except (TypeError, ValueError):
@@ -121,6 +147,11 @@ def _window(name: str, value: Any) -> tuple[float, float]:
     if not (math.isfinite(lo) and math.isfinite(hi) and lo < hi):
         raise ParameterError(f"{name} must be finite (low, high) with low < high [m], got "
                              f"{value!r}")
+    if not POSITION_RANGE[0] <= lo < hi <= POSITION_RANGE[1] or hi - lo < MIN_POSITION_SPAN:
+        raise ParameterError(
+            f"{name} must lie within the plausible range [{POSITION_RANGE[0]:g}, "
+            f"{POSITION_RANGE[1]:g}] m and be at least {MIN_POSITION_SPAN:g} m wide (the fit "
+            f"bounds the contact point within it), got {value!r}")
     return lo, hi
 
 

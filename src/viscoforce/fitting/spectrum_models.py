@@ -14,6 +14,8 @@ from typing import Any
 import numpy as np
 from scipy.special import gamma
 
+from viscoforce._limits import INDENTATION_RANGE
+from viscoforce._validation import require_plausible
 from viscoforce.exceptions import ModelValidityError, ParameterError
 from viscoforce.fitting import _params as P
 from viscoforce.fitting.base import (
@@ -212,6 +214,9 @@ def _contact_model(spec: ModelSpec) -> FitModel:
         raise ModelValidityError(
             f"the contact model needs a positive operating indentation, got {depth!r} m: this "
             "spectrum is pre-contact (use --model svda or exact), or give --indentation D0")
+    # a positive but subnormal δ0 makes S(δ0) underflow to 0: no modulus to fit
+    depth = require_plausible("indentation", depth, INDENTATION_RANGE, "m",
+                              why="the operating indentation of the contact model")
     root = float(tip.contact_stiffness_factor(depth))  # S(δ0) = (dF/dδ)/E: √(Rδ0) for Hertz
     modes = spec.modes if kind == "prony" else 1
     moduli = _contact_modulus_function(kind, modes, newtonian, f_ref)

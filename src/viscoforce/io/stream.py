@@ -26,7 +26,7 @@ import xarray as xr
 
 from viscoforce._files import write_netcdf_stream
 from viscoforce.exceptions import ParameterError
-from viscoforce.io.curves import _default_height, _select, jpk_to_curves
+from viscoforce.io.curves import _default_height, _select, check_height_channel, jpk_to_curves
 from viscoforce.io.jpk import JPKArchive
 
 __all__ = ["BYTES_PER_SAMPLE", "CURVE_DIMS", "DEFAULT_CHUNK_BYTES", "MAX_CHUNK", "chunk_size",
@@ -147,18 +147,31 @@ def iter_curves(archive: JPKArchive, *, curves: int | Iterable[int] | None = Non
     memory_bytes : int
         Memory budget of one chunk when ``chunk`` is not given [bytes].
 
-    Yields
+    Returns
+    -------
+    iterator of xarray.Dataset
+        Valid curves datasets, each read as the iteration reaches it; along ``sample``,
+        ``curve`` and ``segment_table`` their concatenation equals
+        ``jpk_to_curves(archive, curves=curves)``: ``segment`` and ``segment_curve`` count from
+        the start of the selection, and every chunk has the selection's height channel.
+
+    Raises
     ------
-    xarray.Dataset
-        Valid curves datasets; along ``sample``, ``curve`` and ``segment_table`` their
-        concatenation equals ``jpk_to_curves(archive, curves=curves)``: ``segment`` and
-        ``segment_curve`` count from the start of the selection, and every chunk has the
-        selection's height channel.
+    ParameterError
+        A bad archive, selection, chunk or ``height_channel``: when called, before any curve
+        is decoded (not at the first chunk).
     """
     archive = _check_archive(archive)
+    height_channel = check_height_channel(height_channel)  # before chunk_size decodes curve 0
     picked = _select(archive, curves)
     size = chunk_size(archive, memory_bytes=memory_bytes) if chunk is None else _check_chunk(chunk)
     height = height_channel if height_channel is not None else selection_height(archive, picked)
+    return _chunks(archive, picked, size, height_channel, height)
+
+
+def _chunks(archive: JPKArchive, picked: list[int], size: int, height_channel: str | None,
+            height: str) -> Iterator[xr.Dataset]:
+    """The chunks of :func:`iter_curves`, its options checked."""
     rows = segments = 0
     for indices in curve_chunks(picked, size):
         ds = jpk_to_curves(archive, curves=indices, height_channel=height_channel)
@@ -209,6 +222,7 @@ def write_curves_netcdf(archive: JPKArchive, path: str | os.PathLike[str], *,
     OSError
         The file cannot be written (disk full, a file-size limit): ``filename`` is ``path``.
     """
+    # the options are checked here, before the file is opened (iter_curves checks when called)
     chunks = iter_curves(archive, curves=curves, chunk=chunk, height_channel=height_channel,
                          memory_bytes=memory_bytes)
     if attrs:

@@ -16,11 +16,13 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike
 
+from viscoforce._limits import SURFACE_FORCE_LENGTH_RANGE, SURFACE_PRESSURE_RANGE
 from viscoforce._typing import FloatArray
 from viscoforce._validation import (
     as_float_array,
     as_real_array,
     require_in_range,
+    require_plausible,
     require_positive,
 )
 from viscoforce.exceptions import ParameterError
@@ -41,6 +43,20 @@ def _as_gap(gap: ArrayLike) -> FloatArray:
 def _reject_nan(h: FloatArray) -> None:
     """Raise the standard message if ``h`` holds a NaN (+inf is allowed: p(∞) = 0)."""
     as_float_array("gap", h, allow_inf=True)
+
+
+def _length(name: str, value: float) -> float:
+    """A decay length of a law [m]: > 0, in :data:`~viscoforce._limits.SURFACE_FORCE_LENGTH_RANGE`.
+
+    A subnormal Debye length made 1/λ overflow (NaN pressures downstream); 1e300 m, a law that
+    never decays (no grid can hold it).
+    """
+    return require_plausible(name, require_positive(name, value), SURFACE_FORCE_LENGTH_RANGE, "m")
+
+
+def _pressure(name: str, value: float) -> float:
+    """A pressure scale of a law [Pa]: > 0, in :data:`~viscoforce._limits.SURFACE_PRESSURE_RANGE`."""
+    return require_plausible(name, require_positive(name, value), SURFACE_PRESSURE_RANGE, "Pa")
 
 
 def _as_rtol(rtol: float) -> float:
@@ -104,18 +120,19 @@ class DoubleLayer(SurfaceForceLaw):
     Parameters
     ----------
     P : float
-        Pressure scale P [Pa], > 0 (the paper's 1e7 Pa ≈ 85 mV surface potential).
+        Pressure scale P [Pa], > 0 (the paper's 1e7 Pa ≈ 85 mV surface potential), within
+        :data:`~viscoforce._limits.SURFACE_PRESSURE_RANGE`.
     debye_length : float
-        λ_D = 1/κ [m], > 0 (1 nm ≈ 0.1 M monovalent salt).
+        λ_D = 1/κ [m], > 0 (1 nm ≈ 0.1 M monovalent salt), within
+        :data:`~viscoforce._limits.SURFACE_FORCE_LENGTH_RANGE`.
     """
 
     P: float = 1e7  # noqa: N815
     debye_length: float = 1e-9
 
     def __post_init__(self):
-        object.__setattr__(self, "P", require_positive("P (double-layer pressure scale)", self.P))
-        object.__setattr__(self, "debye_length",
-                           require_positive("debye_length", self.debye_length))
+        object.__setattr__(self, "P", _pressure("P (double-layer pressure scale)", self.P))
+        object.__setattr__(self, "debye_length", _length("debye_length", self.debye_length))
         object.__setattr__(self, "_minus_kappa", -1.0 / self.debye_length)
 
     def pressure(self, gap):
@@ -158,17 +175,17 @@ class SoftWall(SurfaceForceLaw):
     Parameters
     ----------
     Pw : float
-        Wall pressure P_w [Pa], > 0.
+        Wall pressure P_w [Pa], > 0, within :data:`~viscoforce._limits.SURFACE_PRESSURE_RANGE`.
     z0 : float
-        Wall length z0 [m], > 0.
+        Wall length z0 [m], > 0, within :data:`~viscoforce._limits.SURFACE_FORCE_LENGTH_RANGE`.
     """
 
     Pw: float = 1e7  # noqa: N815
     z0: float = 0.5e-9
 
     def __post_init__(self):
-        object.__setattr__(self, "Pw", require_positive("Pw (soft-wall pressure)", self.Pw))
-        object.__setattr__(self, "z0", require_positive("z0 (soft-wall length)", self.z0))
+        object.__setattr__(self, "Pw", _pressure("Pw (soft-wall pressure)", self.Pw))
+        object.__setattr__(self, "z0", _length("z0 (soft-wall length)", self.z0))
 
     def _evaluate(self, gap, formula: Callable[[FloatArray], FloatArray]) -> FloatArray:
         """``formula(h)`` for gaps [m] that must be > 0; overflow near h = 0 gives +inf quietly."""

@@ -84,16 +84,17 @@ from numpy.typing import ArrayLike
 from scipy.signal import fftconvolve
 from scipy.special import gamma
 
+from viscoforce._limits import DRAG_RANGE, POSITION_RANGE, REFERENCE_FREQUENCY_RANGE
 from viscoforce._typing import FloatArray
 from viscoforce._validation import (
     as_float_1d,
     as_real_array,
     describe_value,
-    require_finite,
     require_in_range,
     require_increasing,
     require_instance,
     require_nonnegative,
+    require_plausible,
     require_positive,
 )
 from viscoforce.exceptions import ParameterError
@@ -289,6 +290,16 @@ class PronyRelaxation(RelaxationKernel):
                             1.0 / np.array(self.times, dtype=float))
 
 
+def _reference_frequency(value: float) -> float:
+    """f_ref [Hz]: > 0, within :data:`~viscoforce._limits.REFERENCE_FREQUENCY_RANGE`.
+
+    5e-320 Hz made (2π f_ref t0)^α underflow: a power law fitted to nothing.
+    """
+    return require_plausible("reference_frequency",
+                             require_positive("reference_frequency", value),
+                             REFERENCE_FREQUENCY_RANGE, "Hz")
+
+
 @dataclass(frozen=True)
 class PowerLawRelaxation(RelaxationKernel):
     """Ting's power law E(t) = E0 (t/t0)^(−β), plus a Newtonian μ δ_D(t).
@@ -334,7 +345,7 @@ class PowerLawRelaxation(RelaxationKernel):
         mu : float
             Newtonian coefficient μ [Pa·s], ≥ 0.
         reference_frequency : float
-            f_ref [Hz], > 0.
+            f_ref [Hz], > 0, within :data:`~viscoforce._limits.REFERENCE_FREQUENCY_RANGE`.
         t0 : float
             Ting's reference time [s], > 0.
 
@@ -345,14 +356,14 @@ class PowerLawRelaxation(RelaxationKernel):
         """
         e_ref = require_positive("E_ref", E_ref)
         a = require_in_range("alpha", alpha, 0.0, 1.0, inclusive=(False, False))
-        f_ref = require_positive("reference_frequency", reference_frequency)
+        f_ref = _reference_frequency(reference_frequency)
         t0 = require_positive("t0", t0)
         e0 = e_ref / (gamma(1.0 - a) * (2.0 * math.pi * f_ref * t0) ** a)
         return cls(float(e0), a, t0, mu)
 
     def reference_modulus(self, reference_frequency: float = 1.0) -> float:
         """E_ref = E0 Γ(1 − β)(2π f_ref t0)^β [Pa] of the structural form at f_ref [Hz]."""
-        f_ref = require_positive("reference_frequency", reference_frequency)
+        f_ref = _reference_frequency(reference_frequency)
         return float(self.E0 * gamma(1.0 - self.beta)
                      * (2.0 * math.pi * f_ref * self.t0) ** self.beta)
 
@@ -534,10 +545,12 @@ def _inputs(t: ArrayLike, position: ArrayLike, contact_point: float, tip: Tip,
     if z.size != t.size:
         raise ParameterError(f"position (tip position) must have one value per time sample "
                              f"({t.size}), got {z.size}")
-    c = require_finite("contact_point", contact_point)
+    # 1e300 m: every sample off contact, a fit of nothing (POSITION_RANGE: no piezo moves a metre)
+    c = require_plausible("contact_point", contact_point, POSITION_RANGE, "m")
     require_instance("tip", tip, Tip)
     require_instance("kernel", kernel, RelaxationKernel)
-    b = require_nonnegative("drag", drag)
+    b = require_plausible("drag", require_nonnegative("drag", drag), DRAG_RANGE, "N*s/m",
+                          why="a hydrodynamic drag B")
     v = None
     if velocity is not None:
         v = as_float_1d("velocity", velocity)
@@ -560,15 +573,17 @@ def ting_solve(t: ArrayLike, position: ArrayLike, contact_point: float, tip: Tip
     position : array_like
         Tip position z(t) [m] toward the sample (``tip_position`` of a curves dataset), finite.
     contact_point : float
-        z_c [m]: the indentation is δ = max(z − z_c, 0). A trace that starts in contact is taken
-        as indented from 0 over the sample interval before t[0].
+        z_c [m], within :data:`~viscoforce._limits.POSITION_RANGE`: the indentation is
+        δ = max(z − z_c, 0). A trace that starts in contact is taken as indented from 0 over
+        the sample interval before t[0].
     tip : Tip
         The indenter (:mod:`viscoforce.physics.tips`); g = ``tip.force_shape``.
     kernel : RelaxationKernel
         The relaxation modulus (:class:`PronyRelaxation`, :class:`PowerLawRelaxation`), paper
         convention.
     drag : float
-        Viscous drag coefficient B [N·s/m], ≥ 0 (load B·dz/dt).
+        Viscous drag coefficient B [N·s/m], ≥ 0 and within
+        :data:`~viscoforce._limits.DRAG_RANGE` (load B·dz/dt).
     velocity : array_like, optional
         dz/dt [m/s] for the drag (default the central differences of ``position``; give a
         smoothed one for noisy traces).

@@ -5,7 +5,13 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 
-from viscoforce._validation import require_finite, require_instance, require_positive
+from viscoforce._limits import MEAN_FORCE_RANGE
+from viscoforce._validation import (
+    require_finite,
+    require_instance,
+    require_plausible,
+    require_positive,
+)
 from viscoforce.exceptions import ConvergenceError, ParameterError
 from viscoforce.problem import ContactProblem, _bracketed_root, check_half_space, contact_radius
 from viscoforce.schema import SIGN_CONVENTION, make_equilibrium
@@ -123,7 +129,7 @@ def position_at_load(problem: ContactProblem, load: float, modulus: float, *,
         System and grid; the grid must reach the position sought (see
         :meth:`~viscoforce.problem.ContactProblem.check_covers`).
     load : float
-        Static load F [N], > 0 (finite).
+        Static load F [N], > 0 and within :data:`~viscoforce._limits.MEAN_FORCE_RANGE`.
     modulus : float
         Elastic modulus E [Pa], > 0 (the relaxed modulus E_inf for a linearisation).
     guess : float, optional
@@ -138,7 +144,8 @@ def position_at_load(problem: ContactProblem, load: float, modulus: float, *,
     Raises
     ------
     ParameterError
-        ``load`` ≤ 0 or not finite, ``modulus`` ≤ 0, ``guess`` not finite.
+        ``load`` ≤ 0, not finite or outside :data:`~viscoforce._limits.MEAN_FORCE_RANGE`,
+        ``modulus`` ≤ 0, ``guess`` not finite.
     ConvergenceError
         The load cannot be bracketed within the positions the grid covers (build the problem
         with a deeper ``deepest_position``), or a static solve fails.
@@ -178,6 +185,8 @@ def equilibrium_at_load(problem: ContactProblem, load: float, modulus: float, *,
         load = require_positive("load", load)
     except ParameterError:
         raise ParameterError(f"load must be > 0 [N] (finite), got {load!r}") from None
+    # a subnormal load made the bracketing's scale 1e-6·load underflow to 0 (a division by it)
+    load = require_plausible("load", load, MEAN_FORCE_RANGE, "N")
     modulus = require_positive("modulus (E)", modulus)
     x0 = 0.0 if guess is None else require_finite("guess", guess)
     decay = problem.surface_force.decay_length
