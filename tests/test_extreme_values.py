@@ -754,3 +754,14 @@ def test_the_papers_defaults_lie_inside_the_theory_ranges():
     problem = vf.ContactProblem.create(sphere=vf.PAPER.sphere(), surface_force=law,
                                        material=vf.Elastic(vf.PAPER.E_inf), deepest_position=-5e-9)
     assert problem.sphere.radius == vf.PAPER.R
+
+
+@pytest.mark.parametrize("h0", ["100nm", "1um", "1e300m"])
+def test_svda_far_from_the_surface_is_refused_not_a_traceback(capsys, h0):
+    """k* does not depend on the moduli there (its sensitivity 0 or NaN): was ZeroDivisionError."""
+    from viscoforce.data import example_path
+
+    assert main(["fit", str(example_path("sls_spectrum.csv")), "--model", "svda",
+                 f"--h0={h0}"]) == 2
+    err = capsys.readouterr().err
+    assert "does not depend on the moduli" in err and "Traceback" not in err

@@ -17,7 +17,7 @@ import numpy as np
 import xarray as xr
 
 from viscoforce.choice import WARN_ERROR, hertz_error
-from viscoforce.exceptions import ApproximationWarning
+from viscoforce.exceptions import ApproximationWarning, ModelValidityError
 from viscoforce.fitting.base import material_from
 from viscoforce.fitting.verdict import scalar_value
 from viscoforce.schema import index_values, parameter_names
@@ -47,6 +47,9 @@ VALIDITY = {
 
 #: Relative step of the moduli sensitivity of an svda fit (its bias estimate).
 SENSITIVITY_STEP = 1e-4
+#: Smallest moduli sensitivity |dln k*/dln E| of an svda fit that can determine a modulus: below
+#: it (far from the surface) a relative change of E moves k* by less than float64 resolves.
+MIN_SENSITIVITY = 1e-10
 
 
 def validity_note(model: str, ds: xr.Dataset) -> str:
@@ -76,7 +79,15 @@ def svda_bias(ds: xr.Dataset, spectrum: xr.Dataset, position: float, radius: flo
     k = svda_stiffness_kernel(omega, *kernel, 1.0 / debye_length)
     scaled = (position, *(v * (1 + SENSITIVITY_STEP) for v in kernel[1:3]), *kernel[3:])
     k_up = svda_stiffness_kernel(omega, *scaled, 1.0 / debye_length)
-    sensitivity = float(np.max(np.abs(k_up / k - 1.0))) / SENSITIVITY_STEP
+    with np.errstate(invalid="ignore", divide="ignore"):
+        sensitivity = float(np.max(np.abs(k_up / k - 1.0))) / SENSITIVITY_STEP
+    if not sensitivity > MIN_SENSITIVITY:  # also NaN: k* underflows far from the surface
+        raise ModelValidityError(
+            f"at h0 = {position:.3g} m the svda stiffness does not depend on the moduli "
+            f"(|dln k*/dln E| = {sensitivity:.2g} at E_inf = {values['E_inf']:.3g} Pa): the "
+            f"surfaces are {position / debye_length:.3g} decay lengths apart and do not deform, "
+            "so no modulus can be measured there; give the position of the measurement (--h0), "
+            "closer to contact, or fit --model prony (no geometry)")
     return error / sensitivity, (
         f"stiffness error 0.6 kappa|u0| ~{error:.1e} over the moduli sensitivity "
         f"|dln k*/dln E| = {sensitivity:.2g} at the fitted E_inf = {values['E_inf']:.3g} Pa")
