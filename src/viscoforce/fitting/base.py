@@ -1,9 +1,10 @@
-"""What every fit model shares: the model tables, :class:`ModelSpec`, :class:`FitModel`, the names.
+"""What every fit model shares: :class:`ModelSpec`, :class:`FitModel`, the parameter names.
 
 :class:`FitModel` is an lmfit Model with a SPEC parameter layout; :func:`moduli_names`,
 :func:`tau_names` and :func:`material_from` name a material's parameters and rebuild it.
 
-The models themselves are built by :func:`viscoforce.fitting.models.make_model`.
+The models themselves are registered in :mod:`viscoforce.fitting.models` (one module each,
+:mod:`viscoforce.fitting.registry`) and built by :func:`viscoforce.fitting.models.make_model`.
 """
 
 from __future__ import annotations
@@ -21,11 +22,6 @@ from viscoforce.exceptions import ParameterError
 from viscoforce.fitting import _params as P
 from viscoforce.physics.materials import PronySeries, StandardLinearSolid, ViscoelasticMaterial
 
-#: Model names of the SPEC table (``--model``).
-MODEL_NAMES = ("svda", "exact", "contact", "prony", "relaxation", "step", "hertz", "creep",
-               "ting")
-
-
 #: Materials of the ``contact`` model (``--material``).
 CONTACT_MATERIALS = ("sls", "prony", "power-law", "structural")
 
@@ -36,18 +32,6 @@ REFERENCE_FREQUENCY = 1.0
 
 #: Window of the power-law exponents (alpha, m): open (0, 1), kept off the singular ends.
 EXPONENT_BOUNDS = (1e-3, 0.999)
-
-
-#: Models whose data are spectra (the others fit force curves over time).
-SPECTRUM_MODELS = ("svda", "exact", "contact", "prony")
-
-
-#: Models with a number of relaxation modes (``--modes``).
-MODAL_MODELS = ("exact", "contact", "prony", "relaxation", "creep", "ting")
-
-
-#: Models of force curves measured on an instrument (a curves dataset: one segment of a curve).
-CURVE_MODELS = ("relaxation", "hertz", "creep", "ting")
 
 
 #: Largest number of modes tried by ``modes="auto"``.
@@ -189,6 +173,14 @@ def moduli_names(modes: int) -> list[str]:
 def tau_names(modes: int, *, single: str = "tau") -> list[str]:
     """``tau`` for one mode (``single``), else tau_1 … tau_n (ascending)."""
     return [single] if modes == 1 and single else [f"tau_{i}" for i in range(1, modes + 1)]
+
+
+def material_names(modes: int, material: str | None = None) -> list[str]:
+    """The reported names of an n-mode material (``material``: unused, the registry's signature).
+
+    tau, E0, E_inf for one mode; E0, E_1 … E_inf, tau_1 … tau_n for n modes.
+    """
+    return ["tau", "E0", "E_inf"] if modes == 1 else [*moduli_names(modes), *tau_names(modes)]
 
 
 def material_layout(modes: int) -> list[P.Item]:

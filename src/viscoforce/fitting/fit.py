@@ -44,7 +44,7 @@ import xarray as xr
 
 from viscoforce.exceptions import ConvergenceError, ParameterError
 from viscoforce.fitting import _params
-from viscoforce.fitting.base import MAX_AUTO_MODES, MAX_MODES, MODAL_MODELS, MODEL_NAMES, SPECTRUM_MODELS
+from viscoforce.fitting.base import MAX_AUTO_MODES, MAX_MODES
 from viscoforce.fitting.data import FitData, _data_indentation, spectrum_data
 from viscoforce.fitting.identify import (
     IDENTIFIABILITY,
@@ -54,9 +54,10 @@ from viscoforce.fitting.identify import (
     quadratic_limits,
 )
 from viscoforce.fitting.model_error import _warn_model_bias, contact_bias, svda_bias, validity_note
-from viscoforce.fitting.models import check_fixed, make_model
+from viscoforce.fitting.models import MODELS, check_fixed, make_model
 from viscoforce.fitting.moduli import add_derived_moduli, derived_attrs, derived_variables
 from viscoforce.fitting.outcome import Outcome, fit_once, summary_stderr
+from viscoforce.fitting.registry import entries
 from viscoforce.fitting.report import attach
 from viscoforce.fitting.spectrum_models import svda_position
 from viscoforce.fitting.verdict import warn_fit
@@ -293,9 +294,9 @@ def _fixed_attrs(fixed: Mapping[str, Any]) -> dict[str, Any]:
 
 def _check_modes(name: str, modes: Any) -> int | str:
     if isinstance(modes, str) and modes == "auto":
-        if name not in MODAL_MODELS:
+        if name in MODELS and not MODELS[name].modal:
             raise ParameterError(f"modes='auto' needs a model with several modes "
-                                 f"({', '.join(MODAL_MODELS)}), got {name!r}")
+                                 f"({', '.join(entries(modal=True))}), got {name!r}")
         return "auto"
     if isinstance(modes, bool) or not isinstance(modes, int | np.integer) or not (
             1 <= modes <= MAX_MODES):
@@ -374,7 +375,7 @@ def fit_data(data: FitData, name: str, *, modes: int | str = 1, criterion: str =
         What the fit sees (:func:`~viscoforce.fitting.data.spectrum_data`,
         :func:`viscoforce.fitting.curves.hold_data`).
     name : str
-        A model of :data:`viscoforce.fitting.base.MODEL_NAMES`.
+        A model of :data:`viscoforce.fitting.registry.MODELS`.
     modes : int or "auto"
         Relaxation modes; "auto" tries 1, 2, … (:func:`select`).
     criterion : {"bic", "aic"}
@@ -473,14 +474,14 @@ def fit_spectrum(spectrum: xr.Dataset, model: str, *, modes: int | str | None = 
         return add_derived_moduli(fit_spectrum_auto(
             spectrum, modes=1 if modes is None else modes, criterion=criterion,
             accuracy=accuracy, weights=weights, profile=profile, **fixed), poisson)
-    modes = _check_modes(model, 1 if modes is None else modes) if model in MODEL_NAMES else 1
+    modes = _check_modes(model, 1 if modes is None else modes) if model in MODELS else 1
     if criterion not in CRITERIA:
         raise ParameterError(f"criterion must be one of {', '.join(CRITERIA)}, got {criterion!r}")
     if accuracy is not None:
         raise ParameterError(f"accuracy applies to model 'auto' only, not {model!r}")
-    if model not in SPECTRUM_MODELS:
+    if model not in entries(data="spectrum"):
         raise ParameterError(f"model {model!r} fits force curves, not spectra; spectrum models: "
-                             f"{', '.join(SPECTRUM_MODELS)} (or auto)")
+                             f"{', '.join(entries(data='spectrum'))} (or auto)")
     fixed = check_fixed(model, fixed)
     data = spectrum_data(spectrum, weights=weights)
     if model == "contact" and fixed.get("indentation") is None:

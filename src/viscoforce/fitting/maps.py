@@ -48,7 +48,6 @@ import numpy as np
 import xarray as xr
 
 from viscoforce.exceptions import ClusterError, ParameterError, ViscoforceError
-from viscoforce.fitting.base import SPECTRUM_MODELS
 from viscoforce.fitting.data import FitData
 from viscoforce.fitting.map_cost import (
     OVERLAP_METHODS,
@@ -61,6 +60,7 @@ from viscoforce.fitting.map_cost import (
 )
 from viscoforce.fitting.moduli import add_derived_moduli
 from viscoforce.fitting.pixels import assemble_map, fit_block, pixel_data
+from viscoforce.fitting.registry import entry
 
 #: Seconds to wait for a scheduler before giving up.
 CONNECT_TIMEOUT = 10.0
@@ -170,7 +170,7 @@ def fit_map(ds: xr.Dataset, model: str, *, modes: int | str = 1, criterion: str 
         A spectrum with extra dims (any variable but ``stiffness`` and ``phase`` may span a
         subset of them: scalar, per pixel or per frequency), or a curves dataset.
     model : str
-        Model name (:data:`~viscoforce.fitting.base.MODEL_NAMES`).
+        Model name (:data:`~viscoforce.fitting.registry.MODELS`).
     modes : int or "auto"
         Relaxation modes; ``"auto"`` chooses per pixel by ``criterion``.
     criterion : {"bic", "aic"}
@@ -227,11 +227,9 @@ def fit_map(ds: xr.Dataset, model: str, *, modes: int | str = 1, criterion: str 
         An unknown model or option value (the message names the allowed values), an
         unreachable scheduler, or no pixel that could be fitted.
     """
-    from viscoforce.fitting.base import MODEL_NAMES
     from viscoforce.fitting.models import check_fixed
 
-    if not isinstance(model, str) or model not in MODEL_NAMES:
-        raise ParameterError(f"model must be one of {', '.join(MODEL_NAMES)}, got {model!r}")
+    entry(model)  # a registered model, or ParameterError listing them
     if scheduler is not None and not isinstance(scheduler, str):
         raise ParameterError(f"scheduler must be a scheduler address (str, e.g. "
                              f"'tcp://host:8786'), 'synchronous' or None, got {scheduler!r}")
@@ -249,7 +247,7 @@ def fit_map(ds: xr.Dataset, model: str, *, modes: int | str = 1, criterion: str 
     items, dims, layout = pixel_data(ds, model, segment=segment)
     n = len(items)
     run = _Run(items, model, modes, criterion, fixed, profile)
-    if model in SPECTRUM_MODELS:  # the best-fit spectra come with the map (viscoforce view)
+    if entry(model).data == "spectrum":  # the best-fit spectra come with the map (viscoforce view)
         run.omega = np.asarray(ds["omega"].values, dtype=float)
     run.reports = reports
     with _progress_bar(n, model, progress) as bar:

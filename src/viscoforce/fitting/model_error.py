@@ -3,7 +3,8 @@
 An svda fit's bias comes from the SVDA's stiffness error over the moduli's sensitivity
 (:func:`svda_bias`); a contact fit's from Hertz contact's error against the exact model
 (:func:`contact_bias`). Above 1 % the fit warns; :func:`validity_note` is the sentence each
-result carries in ``attrs["validity"]``.
+result carries in ``attrs["validity"]`` (where no estimate is made, the model entry's
+:attr:`~viscoforce.fitting.registry.ModelEntry.validity`).
 """
 
 from __future__ import annotations
@@ -19,6 +20,7 @@ import xarray as xr
 from viscoforce.choice import WARN_ERROR, hertz_error
 from viscoforce.exceptions import ApproximationWarning, ModelValidityError
 from viscoforce.fitting.base import material_from
+from viscoforce.fitting.registry import MODELS
 from viscoforce.fitting.verdict import scalar_value
 from viscoforce.schema import index_values, parameter_names
 from viscoforce.svda import (
@@ -26,24 +28,6 @@ from viscoforce.svda import (
     svda_deformation_kernel,
     svda_stiffness_kernel,
 )
-
-#: What the validity of each model rests on when no estimate is made (``attrs["validity"]``).
-VALIDITY = {
-    "exact": "the exact small-amplitude model: its error is the grid's (~1e-9 on the default "
-             "grid) and the finite-amplitude bias of the measurement",
-    "prony": "phenomenological (no geometry, no surface force): no model error to estimate",
-    "relaxation": "phenomenological sum of exponentials: no model error to estimate",
-    "step": "the exact model along the measured drive: its error is the stepper's",
-    "contact": "not estimated: Hertz contact's bias needs the surface force's decay length "
-               "(debye_length, --debye-length)",
-    "svda": "not estimated",
-    "hertz": "elastic contact of the tip's shape on a half-space (Sneddon/Hertz/Bilodeau): "
-             "valid for indentations small against the sample's thickness, with no adhesion; a "
-             "viscoelastic sample's E is an effective modulus at the approach speed",
-    "creep": "phenomenological sum of exponentials of the tip position: its times are the creep "
-             "compliance's exactly for a flat punch, to first order in dz/indentation for a "
-             "sphere, paraboloid, cone or pyramid",
-}
 
 #: Relative step of the moduli sensitivity of an svda fit (its bias estimate).
 SENSITIVITY_STEP = 1e-4
@@ -59,7 +43,8 @@ def validity_note(model: str, ds: xr.Dataset) -> str:
     if "estimated_model_error" in ds.attrs:
         return (f"estimated model error {float(ds.attrs['estimated_model_error']):.2g} "
                 f"(relative, on the moduli)")
-    return VALIDITY.get(model, "not estimated")
+    known = MODELS.get(model)
+    return known.validity if known is not None else "not estimated"
 
 
 def svda_bias(ds: xr.Dataset, spectrum: xr.Dataset, position: float, radius: float,

@@ -178,16 +178,11 @@ def _outcome(model: FitModel, res: lmfit.minimizer.MinimizerResult | _engine.Lea
         jac = np.array([[grads[n].get(v, 0.0) for v in res.var_names] for n in model.names])
         cov = jac @ res.covar @ jac.T
     outcome = Outcome(model, res, {n: values[n] for n in model.names}, cov, data)
-    if data.weighting == "unweighted" and model.spec.name in AUTOCORRELATED_MODELS:
+    if data.weighting == "unweighted" and getattr(model, "autocorrelated", False):
         outcome.lag1 = residual_lag1(np.asarray(res.residual, dtype=float), data.x)
         if cov is not None:
             outcome.covariance = cov * outcome.stderr_factor ** 2
     return outcome
-
-
-#: Curve models of measured series whose stderr are corrected for residual autocorrelation
-#: (the step model fits a simulated trajectory, whose residual is the solver's smooth error).
-AUTOCORRELATED_MODELS = ("relaxation", "hertz", "creep", "ting")
 
 
 def residual_lag1(residual: np.ndarray, t: np.ndarray) -> float:

@@ -18,11 +18,11 @@ import numpy as np
 import xarray as xr
 
 from viscoforce.exceptions import ParameterError, ViscoforceError
-from viscoforce.fitting.base import SPECTRUM_MODELS
 from viscoforce.fitting.curves import curve_data
 from viscoforce.fitting.data import FitData, clean_pixels_fit_data, pixel_fit_data, spectrum_arrays
 from viscoforce.fitting.fit import local_identifiability, select, summary
 from viscoforce.fitting.identify import IDENTIFIABILITY
+from viscoforce.fitting.registry import entry
 from viscoforce.fitting.report import fit_report
 from viscoforce.fitting.verdict import PVALUE_WARN, hertz_verdict
 from viscoforce.schema import flag_attrs, index_values, validate_fit_result, validate_spectrum
@@ -66,7 +66,7 @@ def pixel_data(ds: xr.Dataset, model: str, *, segment: int | None = None
         ``shape`` (dim → size) and ``coords`` (name → (dims, values, attrs)): the coordinates
         of ``ds`` over the map dims, and ``x``, ``y`` [m] wherever they are.
     """
-    if model in SPECTRUM_MODELS:
+    if entry(model).data == "spectrum":
         validate_spectrum(ds, require=("stiffness", "phase"))
         dims = tuple(str(d) for d in ds["stiffness"].dims if d != "omega")
         arrays = spectrum_arrays(ds, dims)

@@ -67,13 +67,13 @@ from viscoforce.fitting.base import (
     tau_names,
 )
 from viscoforce.fitting.curve_models import baseline_windows, contact_window, hertz_guess, hertz_linear
-from viscoforce.fitting.curves import _segment_types, _source, segment_runs
 from viscoforce.fitting.data import FitData
 from viscoforce.fitting.fit import CRITERIA, _share_effective_size, result_dataset
 from viscoforce.fitting.guesses import material_guess, time_window
 from viscoforce.fitting.moduli import add_derived_moduli
-from viscoforce.fitting.outcome import AUTOCORRELATED_MODELS, Outcome, fit_once, residual_lag1
+from viscoforce.fitting.outcome import Outcome, fit_once, residual_lag1
 from viscoforce.fitting.report import carry
+from viscoforce.fitting.segments import _segment_types, _source, segment_runs
 from viscoforce.fitting.verdict import warn_fit
 from viscoforce.physics.ting import (
     PowerLawRelaxation,
@@ -531,7 +531,8 @@ def _select(data: TingData, modes: int | str, criterion: str, fixed: Mapping[str
             if not outcomes:
                 raise
             break
-        if not math.isfinite(outcome.lag1) and "ting" not in AUTOCORRELATED_MODELS:
+        if not math.isfinite(outcome.lag1) and not getattr(outcome.model, "autocorrelated",
+                                                            False):
             _autocorrelation(outcome)
         outcomes.append(outcome)
         _share_effective_size(outcomes)

@@ -1,0 +1,20 @@
+"""``relaxation``: the force on a hold, F_inf + sum dF_i exp(-t/tau_i) (force-relaxation times)."""
+
+from viscoforce.fitting.base import MAX_MODES
+from viscoforce.fitting.curve_models import _relaxation_model
+from viscoforce.fitting.registry import ModelEntry, register
+from viscoforce.fitting.segments import hold_data
+
+
+def parameters(modes: int, material: str | None = None) -> list[str]:
+    """F_inf, dF_1 ... dF_n, tau_1 ... tau_n."""
+    return ["F_inf", *(f"dF_{i}" for i in range(1, modes + 1)),
+            *(f"tau_{i}" for i in range(1, modes + 1))]
+
+
+ENTRY = register(ModelEntry(
+    name="relaxation", data="curve",
+    summary="force relaxation on a hold segment: a sum of exponentials",
+    build=_relaxation_model, parameters=parameters, max_modes=MAX_MODES, cut=hold_data,
+    validity="phenomenological sum of exponentials: no model error to estimate",
+    autocorrelated=True))
