@@ -384,9 +384,3 @@ def _step_model(spec: ModelSpec) -> FitModel:
     model = FitModel(spec, response.force, material_layout(1), "t", guesser, time_window)
     model.response = response  # type: ignore[attr-defined]
     return model
-
-
-def _ting_model(spec: ModelSpec) -> FitModel:
-    from viscoforce.fitting.ting import ting_model
-
-    return ting_model(spec)

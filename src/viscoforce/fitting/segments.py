@@ -3,7 +3,7 @@
 ``relaxation`` fits the force on a hold (the pause after the first approach that is not a
 constant-force pause; F relative to the file's free-cantilever baseline where it has one),
 ``creep`` the tip position on a constant-force pause, ``hertz`` the approach (force over the tip
-position), ``ting`` approach and retract (:func:`viscoforce.fitting.ting.ting_data`);
+position), ``ting`` approach and retract (:func:`viscoforce.fitting.ting_model.ting_data`);
 ``segment=N`` picks the curve's N-th segment (from 0, in the file's order). Each model's entry
 (:mod:`viscoforce.fitting.models`) names its function here as its ``cut``.
 """
@@ -180,12 +180,6 @@ def approach_data(curves: xr.Dataset, *, curve: int = 0, segment: int | None = N
     z, f = _segment_arrays(one, chosen, "tip_position", "force", "approach")
     source = _source(curves, one, chosen, z.size, curve)
     return FitData(z, f, None, source)
-
-
-def _ting_data(curves: xr.Dataset, *, curve: int = 0, segment: int | None = None) -> FitData:
-    from viscoforce.fitting.ting import ting_data
-
-    return ting_data(curves, curve=curve, segment=segment)
 
 
 def _free_baseline(one: xr.Dataset, row: int) -> float | None:

@@ -1,7 +1,6 @@
 """``ting``: approach and retract by Ting's hereditary integral for the tip shape."""
 
 from viscoforce.fitting.base import MAX_MODES, material_names
-from viscoforce.fitting.curve_models import _ting_model
 from viscoforce.fitting.models._inputs import (
     CONTACT_POINT,
     CONTACT_WINDOW,
@@ -14,7 +13,7 @@ from viscoforce.fitting.models._inputs import (
     require_bool,
 )
 from viscoforce.fitting.registry import Input, ModelEntry, register
-from viscoforce.fitting.segments import _ting_data
+from viscoforce.fitting.ting_model import ting_data, ting_model
 
 #: Material families of the ting model.
 MATERIALS = ("sls", "prony", "structural")
@@ -29,11 +28,11 @@ def parameters(modes: int, material: str | None) -> list[str]:
 ENTRY = register(ModelEntry(
     name="ting", data="curve",
     summary="approach-retract force curve by Ting's hereditary integral, contact point, drag",
-    build=_ting_model,
+    build=ting_model,
     inputs=(TIP, POSITION_TRACE, material_input(MATERIALS), DRAG, FIT_DRAG, CONTACT_POINT,
             CONTACT_WINDOW, REFERENCE_FREQUENCY,
             Input("newtonian", require_bool, "", "the structural material's Newtonian term "
                   "mu (False: none)", "--no-newtonian")),
     parameters=parameters, units={"drag": "N s/m"}, max_modes=MAX_MODES, materials=MATERIALS,
-    cut=_ting_data,
+    cut=ting_data,
     validity="not estimated", autocorrelated=True))
