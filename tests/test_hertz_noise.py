@@ -22,8 +22,8 @@ from viscoforce.exceptions import DataWarning
 from viscoforce.fitting import _params
 from viscoforce.fitting.curves import fit_curve
 from viscoforce.fitting.fit import local_identifiability
+from viscoforce.fitting.hertz_checks import SIGNAL_SIGMA
 from viscoforce.fitting.identify import IDENTIFIABILITY, WIDEST_DETERMINED, profile_parameters
-from viscoforce.fitting.verdict import SIGNAL_SIGMA
 from viscoforce.schema import make_curves
 
 E_PAPER = 3.0e3  # [Pa], the paper's E = 2 E*

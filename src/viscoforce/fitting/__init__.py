@@ -3,6 +3,8 @@
 The only layer that imports lmfit (and, in :mod:`viscoforce.fitting.maps`, dask.distributed).
 """
 
+# the choosers of model "auto" register themselves with fit_spectrum (fitting.fit.AUTO_CHOOSERS)
+from viscoforce.fitting import auto, measured  # noqa: F401
 from viscoforce.fitting.base import CONTACT_MATERIALS, FitModel, ModelSpec
 from viscoforce.fitting.data import spectrum_data
 from viscoforce.fitting.fit import CRITERIA, fit_data, fit_spectrum

@@ -27,7 +27,7 @@ from viscoforce.choice import (
 from viscoforce.exceptions import ConvergenceError, ModelValidityError, ParameterError
 from viscoforce.fitting.base import material_from
 from viscoforce.fitting.data import FitData, spectrum_data
-from viscoforce.fitting.fit import fit_data
+from viscoforce.fitting.fit import AUTO_CHOOSERS, fit_data
 from viscoforce.fitting.model_error import svda_bias, validity_note
 from viscoforce.fitting.models import check_fixed
 from viscoforce.fitting.spectrum_models import svda_position
@@ -157,3 +157,6 @@ def fit_spectrum_auto(spectrum: xr.Dataset, *, modes: int | str = 1, criterion: 
     kept.attrs["validity"] = validity_note(str(kept.attrs["model"]), kept)
     warn_fit(kept, stacklevel=5)
     return kept
+
+
+AUTO_CHOOSERS["theory"] = fit_spectrum_auto  # fit_spectrum(model="auto") reaches it here

@@ -196,7 +196,7 @@ def hertz_start(tip: Any, z: np.ndarray, f: np.ndarray) -> dict[str, float]:
 
     An approach whose force rises with z beyond no contact point (noise only, or the tip
     position's sign flipped) still gets a fit, so that it can be reported as what it is (E not
-    determined, :func:`viscoforce.fitting.verdict.hertz_checks` says why) rather than refused:
+    determined, :func:`viscoforce.fitting.hertz_checks.hertz_checks` says why) rather than refused:
     the straight baseline, the contact point at the deep end of the contact window and the
     smallest modulus of the guess's range.
     """

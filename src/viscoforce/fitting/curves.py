@@ -22,6 +22,7 @@ import xarray as xr
 from viscoforce.exceptions import ConvergenceError, ParameterError
 from viscoforce.fitting.data import FitData
 from viscoforce.fitting.fit import fit_data, result_dataset
+from viscoforce.fitting.hertz_checks import hertz_checks
 from viscoforce.fitting.model_error import validity_note
 from viscoforce.fitting.models import MODELS, make_model
 from viscoforce.fitting.moduli import add_derived_moduli
@@ -33,7 +34,7 @@ from viscoforce.fitting.segments import (  # noqa: F401 - public here too
     hold_data,
     segment_runs,
 )
-from viscoforce.fitting.verdict import hertz_checks, warn_fit
+from viscoforce.fitting.verdict import warn_fit
 from viscoforce.problem import ContactProblem
 from viscoforce.schema import validate_trajectory
 

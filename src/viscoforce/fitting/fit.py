@@ -36,7 +36,7 @@ and the theory's model choice (:mod:`viscoforce.fitting.auto`).
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from typing import Any
 
 import numpy as np
@@ -406,6 +406,14 @@ def fit_data(data: FitData, name: str, *, modes: int | str = 1, criterion: str =
     return ds
 
 
+#: The choosers of model ``"auto"``, registered by the modules that define them (they fit through
+#: this module, so it does not import them): ``"theory"``
+#: (:func:`viscoforce.fitting.auto.fit_spectrum_auto`, a position or mean force given) and
+#: ``"measured"`` (:func:`viscoforce.fitting.measured.fit_measured_auto`). Importing
+#: :mod:`viscoforce.fitting` registers both.
+AUTO_CHOOSERS: dict[str, Callable[..., xr.Dataset]] = {}
+
+
 def fit_spectrum(spectrum: xr.Dataset, model: str, *, modes: int | str | None = None,
                  criterion: str = "bic", accuracy: float | None = None,
                  weights: str | None = None, poisson: float | None = None,
@@ -459,19 +467,15 @@ def fit_spectrum(spectrum: xr.Dataset, model: str, *, modes: int | str | None = 
     profile = profile_choice(identifiability)
     if model == "auto":
         if fixed.get("position") is None and fixed.get("mean_force") is None:
-            from viscoforce.fitting.measured import fit_measured_auto
-
             if accuracy is not None:
                 raise ParameterError(
                     "accuracy chooses between the theory's approximations (with position or "
                     "mean_force, --h0/--mean-force); on measured data model 'auto' compares "
                     "materials by the criterion instead: leave accuracy out")
-            return add_derived_moduli(fit_measured_auto(
+            return add_derived_moduli(AUTO_CHOOSERS["measured"](
                 spectrum, modes="auto" if modes is None else modes, criterion=criterion,
                 weights=weights, profile=profile, **fixed), poisson)
-        from viscoforce.fitting.auto import fit_spectrum_auto  # it fits through this module
-
-        return add_derived_moduli(fit_spectrum_auto(
+        return add_derived_moduli(AUTO_CHOOSERS["theory"](
             spectrum, modes=1 if modes is None else modes, criterion=criterion,
             accuracy=accuracy, weights=weights, profile=profile, **fixed), poisson)
     modes = _check_modes(model, 1 if modes is None else modes) if model in MODELS else 1

@@ -33,7 +33,7 @@ import xarray as xr
 from viscoforce.exceptions import ConvergenceError, ModelValidityError, ParameterError
 from viscoforce.fitting.base import MAX_AUTO_MODES
 from viscoforce.fitting.data import _data_indentation, spectrum_data
-from viscoforce.fitting.fit import CRITERIA, _check_modes, result_dataset
+from viscoforce.fitting.fit import AUTO_CHOOSERS, CRITERIA, _check_modes, result_dataset
 from viscoforce.fitting.model_error import _warn_model_bias, contact_bias, validity_note
 from viscoforce.fitting.models import check_fixed, make_model
 from viscoforce.fitting.outcome import Outcome, fit_once
@@ -214,3 +214,6 @@ def _explain(rows: list[dict[str, Any]], chosen: str, criterion: str, best: floa
                      + (f", p {p:.2g}" if math.isfinite(p) else "") + f" [{verdict}]")
     return (f"measured data: contact materials compared by {criterion.upper()}; kept {chosen}, "
             f"the simplest within {MARGIN:g} of the best. " + "; ".join(parts))
+
+
+AUTO_CHOOSERS["measured"] = fit_measured_auto  # fit_spectrum(model="auto") reaches it here

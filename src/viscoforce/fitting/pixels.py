@@ -21,10 +21,11 @@ from viscoforce.exceptions import ParameterError, ViscoforceError
 from viscoforce.fitting.curves import curve_data
 from viscoforce.fitting.data import FitData, clean_pixels_fit_data, pixel_fit_data, spectrum_arrays
 from viscoforce.fitting.fit import local_identifiability, select, summary
+from viscoforce.fitting.hertz_checks import hertz_verdict
 from viscoforce.fitting.identify import IDENTIFIABILITY
 from viscoforce.fitting.registry import entry
 from viscoforce.fitting.report import fit_report
-from viscoforce.fitting.verdict import PVALUE_WARN, hertz_verdict
+from viscoforce.fitting.verdict import PVALUE_WARN
 from viscoforce.schema import flag_attrs, index_values, validate_fit_result, validate_spectrum
 from viscoforce.schema.fit import SUCCESS_FLAGS, parameter_units
 
@@ -166,7 +167,7 @@ def fit_block(items: Sequence[FitData | str], model: str, modes: int | str, crit
             info = summary(best)
             notes.append(f"the profile likelihood failed ({str(exc).splitlines()[0]}): the "
                          "identifiability is the local test")
-        if model == "hertz":  # the single fit's checks (verdict.hertz_checks), without warnings
+        if model == "hertz":  # the single fit's checks (hertz_checks.hertz_checks), without warnings
             notes += _hertz_notes(data, info, own["tip"])
         info["message"] = "; ".join([*notes, info["message"]])
         info["modes"] = best.model.spec.modes
@@ -186,7 +187,7 @@ def fit_block(items: Sequence[FitData | str], model: str, modes: int | str, crit
 
 
 def _hertz_notes(data: FitData, info: dict[str, Any], tip: Any) -> list[str]:
-    """A Hertz pixel's verdict (:func:`~.verdict.hertz_verdict`), as notes.
+    """A Hertz pixel's verdict (:func:`~.hertz_checks.hertz_verdict`), as notes.
 
     E and the contact point become not determined (code 3) where no indentation was measured or
     the tip position's sign looks flipped (the pixel's quality is then 3).

@@ -1,0 +1,331 @@
+"""The hertz model's checks of its own data: an indentation at all, its direction, E over depth.
+
+:func:`hertz_checks` checks a Hertz fit of an approach against its own data (the significance of
+the indentation, the direction the force rises in, E against the depth, the baseline before
+contact) and says where E is not determined; :func:`hertz_verdict` is the same verdict without
+warnings (a map's pixels). It refits (the depth check), so it sits above
+:mod:`viscoforce.fitting.fit`.
+"""
+
+from __future__ import annotations
+
+import math
+import warnings
+from typing import Any
+
+import numpy as np
+import xarray as xr
+
+from viscoforce.exceptions import (
+    DataWarning,
+    GoodnessOfFitWarning,
+    ParameterError,
+    ViscoforceError,
+)
+from viscoforce.fitting.curve_models import hertz_grid
+from viscoforce.fitting.data import FitData
+from viscoforce.fitting.fit import fit_data
+from viscoforce.fitting.outcome import residual_lag1
+from viscoforce.fitting.report import carry
+
+#: Fraction of the maximum contact force up to which the Hertz depth check refits.
+DEPTH_CHECK_FRACTION = 0.5
+#: Shift of E (in its stderr) beyond which the depth check warns.
+DEPTH_CHECK_SIGMA = 2.0
+#: Rise of the fitted baseline before contact (fraction of the contact force) that warns.
+PRECONTACT_RISE_WARN = 0.2
+#: Significance [σ] the indentation must reach for the approach to hold one: √Δχ² of the Hertz
+#: term (E, contact point) over the baseline alone, in noise variances (a 5σ test, the k·σ of
+#: :func:`viscoforce.experiments.modulation.find_contact_point`'s contact rise).
+SIGNAL_SIGMA = 5.0
+#: Fewest samples before the contact point whose residuals give the baseline noise (fewer: all
+#: the residuals give it).
+SIGNAL_BASELINE_POINTS = 10
+#: Δχ² (in noise variances, AR(1)-corrected) by which the approach described along −z must beat
+#: the approach along z as recorded to call the tip position's sign flipped: SIGNAL_SIGMA², a
+#: 5σ difference.
+FLIP_DELTA_CHI2 = SIGNAL_SIGMA**2
+
+
+def _hertz_force(z: np.ndarray, values: dict[str, float], tip: Any) -> np.ndarray:
+    """The Hertz model's force [N] (:func:`viscoforce.fitting.curve_models._hertz_model`)."""
+    c = values["contact_point"]
+    return (values["baseline"] + values["baseline_slope"] * (z - c)
+            + values["E"] * tip.force_shape(np.maximum(z - c, 0.0)))
+
+
+def _hertz_residual(z: np.ndarray, f: np.ndarray, values: dict[str, float], tip: Any
+                    ) -> np.ndarray:
+    """F − the Hertz model at ``values`` [N]."""
+    return f - _hertz_force(z, values, tip)
+
+
+def _noise_variance(residual: np.ndarray, z: np.ndarray, n_free: int) -> float:
+    """Residual variance [N²] times (1 + ρ1)/(1 − ρ1) for a lag-1 autocorrelation ρ1 > 0.
+
+    The variance of a sum of AR(1) residuals over a stretch, per sample: what a Δχ² between two
+    fits of the same samples is measured in (as the fits' stderr correction).
+    """
+    rho = residual_lag1(residual, z)
+    factor = (1.0 + rho) / (1.0 - rho) if 0.0 < rho < 1.0 else 1.0
+    return float(residual @ residual) / max(residual.size - n_free, 1) * factor
+
+
+def hertz_sse(z: np.ndarray, f: np.ndarray, residual: np.ndarray, tip: Any) -> float:
+    """The Hertz fit's sum of squares [N²]: its own, or its start grid's where that is lower.
+
+    (:func:`~viscoforce.fitting.curve_models.hertz_grid`: a fit stuck off its best contact
+    point then does not pass for a worse description than the model gives.)
+    """
+    sse = float(residual @ residual)
+    try:
+        grid = hertz_grid(tip, z, f)
+    except ParameterError:
+        return sse
+    return sse if grid is None else min(sse, grid[1])
+
+
+def indentation_signal(z: np.ndarray, f: np.ndarray, values: dict[str, float], tip: Any,
+                       sse: float) -> dict[str, float]:
+    """How clearly an approach (z [m], F [N]) holds the indentation of its Hertz fit ``values``.
+
+    ``signal`` [σ]: √Δχ², Δχ² the drop of the sum of squares from the straight baseline alone
+    (least squares) to the Hertz fit's ``sse`` (:func:`hertz_sse`), in noise variances
+    (:func:`_noise_variance` of the Hertz residuals): the likelihood-ratio significance of the
+    Hertz term, which counts every sample in contact. Under noise alone the contact point
+    roams over the approach to where the noise rises most, so Δχ² exceeds its χ²₁ value; a
+    5σ rule (:data:`SIGNAL_SIGMA`) leaves that margin.
+
+    Also, for the user's eye: ``rise`` [N], the fitted Hertz force at the deepest indentation,
+    E·shape(max z − contact point), and ``noise`` [N], 1.4826 × the median absolute deviation
+    of the residuals before the contact point (of all residuals where fewer than
+    :data:`SIGNAL_BASELINE_POINTS` lie before it), as
+    :func:`viscoforce.experiments.modulation.find_contact_point` measures it.
+    """
+    c = values["contact_point"]
+    rise = values["E"] * float(np.asarray(tip.force_shape(
+        np.array([max(float(np.max(z)) - c, 0.0)]))).reshape(-1)[0])
+    residual = _hertz_residual(z, f, values, tip)
+    base = residual[z <= c]
+    if base.size < SIGNAL_BASELINE_POINTS:
+        base = residual
+    noise = 1.4826 * float(np.median(np.abs(base - np.median(base))))
+    line = np.polyval(np.polyfit(z - c, f, 1), z - c)
+    drop = max(float((f - line) @ (f - line)) - sse, 0.0)
+    variance = _noise_variance(residual, z, 4)
+    signal = math.sqrt(drop / variance) if variance > 0 else (math.inf if drop > 0 else 0.0)
+    return {"rise": rise, "noise": noise, "signal": signal}
+
+
+def approach_direction(z: np.ndarray, f: np.ndarray, sse: float, tip: Any
+                       ) -> tuple[float, dict[str, float] | None]:
+    """How much better the approach is described with the tip position's sign flipped.
+
+    Contact is where the force rises with the indentation, wherever the samples' order puts it
+    (a retract-ordered array reads the same). The Hertz model along −z (the best of the guess's
+    grid of contact points, each linear in E, baseline and tilt:
+    :func:`~viscoforce.fitting.curve_models.hertz_grid`) against ``sse``, the Hertz fit's along
+    z (:func:`hertz_sse`): Δχ² = (sse − SSE₋)/σ², σ² the noise variance of the residuals along
+    −z (:func:`_noise_variance`).
+
+    Returns
+    -------
+    delta_chi2 : float
+        Positive where −z describes the approach better (NaN: not checked, too few samples).
+    mirrored : dict or None
+        E [Pa], the contact point [m, on the recorded axis] and ``rise`` [N], the model's force
+        at the lowest z less its force at that contact point (> 0: the force rises toward −z
+        in contact, baseline tilt included), along −z (None: no contact point along −z gives
+        E > 0).
+    """
+    try:
+        flipped = hertz_grid(tip, -z, f)
+    except ParameterError:
+        return math.nan, None
+    if flipped is None:
+        return -math.inf, None
+    c, sse_flipped, coef = flipped
+    residual = f - (coef[0] * tip.force_shape(np.maximum(-z - c, 0.0)) + coef[1]
+                    + coef[2] * (-z - c))
+    variance = _noise_variance(residual, z, 4)
+    delta = (sse - sse_flipped) / variance if variance > 0 else math.inf
+    deepest = max(-float(np.min(z)) - c, 0.0)
+    rise = float(coef[0] * np.asarray(tip.force_shape(np.array([deepest]))).reshape(-1)[0]
+                 + coef[2] * deepest)
+    return delta, {"E": float(coef[0]), "contact_point": -c, "rise": rise}
+
+
+def _flipped_reason(z: np.ndarray, values: dict[str, float], tip: Any, delta: float,
+                    mirrored: dict[str, float] | None, found: dict[str, float]) -> str | None:
+    """Why the force rises toward negative indentation (the tip position's sign flipped?), or None.
+
+    Either the approach is described better along −z by more than :data:`FLIP_DELTA_CHI2`
+    noise variances with a force that rises toward −z in that contact
+    (:func:`approach_direction`: a curve in contact throughout, convex and rising with z, is
+    described along either direction and is not called flipped by this), or the fit holds an
+    indentation (:data:`SIGNAL_SIGMA`) while its force is highest at the lowest tip position,
+    by more than :data:`SIGNAL_SIGMA` noise levels: an approach ends at its largest force, in
+    contact.
+    """
+    if delta > FLIP_DELTA_CHI2 and mirrored is not None and mirrored["rise"] > 0:
+        return (f"along the tip position reversed (-z) the approach is described better by "
+                f"{delta:.3g} noise variances of chi-square (E ~ {mirrored['E']:.3g} Pa, contact "
+                f"at tip position {mirrored['contact_point']:.4g} m) than along z as recorded")
+    low, high = _hertz_force(np.array([np.min(z), np.max(z)]), values, tip)
+    if found["signal"] >= SIGNAL_SIGMA and low - high > SIGNAL_SIGMA * found["noise"]:
+        return (f"the fitted force is highest at the lowest tip position ({low:.3g} N, against "
+                f"{high:.3g} N at the deepest), where an approach ends at its largest force")
+    return None
+
+
+def _not_determined(ds: xr.Dataset, names: tuple[str, ...], why: str) -> None:
+    """Set the identifiability of ``names`` to not determined (3) because ``why``, in place."""
+    codes = np.array(ds["identifiability"].values, copy=True)
+    params = [str(n) for n in ds["param_i"].values]
+    for name in names:
+        codes[params.index(name)] = 3  # IDENTIFIABILITY[3]: "not_determined"
+    ds["identifiability"] = ds["identifiability"].copy(data=codes)
+    method = str(ds.attrs.get("identifiability_method", ""))
+    ds.attrs["identifiability_method"] = (
+        f"{method}; {', '.join(names)} not determined by the hertz checks ({why})".lstrip("; "))
+
+
+def hertz_verdict(z: np.ndarray, f: np.ndarray, values: dict[str, float], tip: Any
+                  ) -> dict[str, Any]:
+    """Whether a Hertz fit ``values`` of an approach (z [m], F [N]) measured an indentation.
+
+    No warnings (:func:`hertz_checks` issues them; a map's pixels can take the same verdict).
+
+    Returns
+    -------
+    dict
+        ``indentation_signal`` [σ], ``indentation_rise`` [N], ``baseline_noise`` [N]
+        (:func:`indentation_signal`), ``direction_delta_chi2`` (:func:`approach_direction`),
+        ``approach_direction`` (text), ``flipped`` (why the tip position's sign looks flipped,
+        :func:`_flipped_reason`, or None) and ``no_signal`` (True below :data:`SIGNAL_SIGMA`).
+    """
+    sse = hertz_sse(z, f, _hertz_residual(z, f, values, tip), tip)
+    delta, mirrored = approach_direction(z, f, sse, tip)
+    found = indentation_signal(z, f, values, tip, sse)
+    flipped = _flipped_reason(z, values, tip, delta, mirrored, found)
+    direction = (f"reversed? {flipped}" if flipped is not None else
+                 "as recorded (the approach along -z is not described better by more than "
+                 f"{FLIP_DELTA_CHI2:g} noise variances, and its force is not highest at the "
+                 "lowest tip position)")
+    return {"indentation_signal": found["signal"], "indentation_rise": found["rise"],
+            "baseline_noise": found["noise"], "direction_delta_chi2": delta,
+            "approach_direction": direction, "flipped": flipped,
+            "no_signal": not found["signal"] >= SIGNAL_SIGMA}
+
+
+def hertz_checks(ds: xr.Dataset, data: FitData, tip: Any) -> xr.Dataset:
+    """Check a Hertz fit against its own data: an indentation at all, its direction, E over depth.
+
+    * **Direction**: where the force rises toward negative indentation
+      (:func:`_flipped_reason`: the approach described better along −z,
+      :func:`approach_direction`, or the fitted force highest at the lowest tip position), the
+      tip position's sign looks flipped: a :class:`DataWarning` says so, and E and the contact
+      point are not determined (``attrs["approach_direction"]``, ``direction_delta_chi2``).
+    * **Signal**: the significance of the Hertz term over the baseline alone
+      (:func:`indentation_signal`; ``attrs["indentation_signal"]`` [σ], with the fitted force
+      at the deepest indentation ``indentation_rise`` and the baseline residuals' noise
+      ``baseline_noise`` [N]); below :data:`SIGNAL_SIGMA` the approach holds no detectable
+      indentation: a :class:`DataWarning` says so, and E and the contact point are not
+      determined.
+    * **Depth** (where there is an indentation the right way): :func:`_depth_checks`.
+
+    The first two are :func:`hertz_verdict`'s.
+    """
+    z, f = np.asarray(data.x, dtype=float), np.asarray(data.y, dtype=float)
+    values = {n: float(ds[n]) for n in ("E", "contact_point", "baseline", "baseline_slope")}
+    out = carry(ds, ds.copy())
+    verdict = hertz_verdict(z, f, values, tip)
+    flipped = verdict.pop("flipped")
+    no_signal = verdict.pop("no_signal")
+    out.attrs.update(verdict)
+    if flipped is not None:
+        warnings.warn(
+            f"hertz: the force rises toward negative indentation: is the height sign flipped? "
+            f"{flipped[0].upper()}{flipped[1:]}. The tip position must grow toward the sample "
+            "(tip_position = -height - deflection, up to an offset): check the sign of the "
+            "height channel or of its conversion. E and the contact point fitted here are not "
+            "determined", DataWarning, stacklevel=3)
+        _not_determined(out, ("E", "contact_point"), "the tip position's sign looks flipped")
+        out.attrs["depth_check"] = "not made (the tip position's sign looks flipped)"
+        return out
+    if no_signal:
+        warnings.warn(
+            f"hertz: no detectable indentation: the Hertz term improves on the baseline alone "
+            f"by {verdict['indentation_signal']:.2g} sigma, below {SIGNAL_SIGMA:g} (its force "
+            f"at the deepest indentation, {verdict['indentation_rise']:.3g} N, against "
+            f"{verdict['baseline_noise']:.3g} N of noise in the baseline residuals). The "
+            "approach holds no contact this model can measure (noise only, no contact reached, "
+            "the wrong segment, or a force that does not rise with the tip position): E and "
+            "the contact point are not determined", DataWarning, stacklevel=3)
+        _not_determined(out, ("E", "contact_point"), "no detectable indentation")
+        out.attrs["depth_check"] = "not made (no detectable indentation)"
+        return out
+    return _depth_checks(out, z, f, values, tip)
+
+
+def _depth_checks(out: xr.Dataset, z: np.ndarray, f: np.ndarray, values: dict[str, float],
+                  tip: Any) -> xr.Dataset:
+    """E against the depth, the baseline before contact (of :func:`hertz_checks`), in ``out``.
+
+    * **Depth**: the approach refitted up to :data:`DEPTH_CHECK_FRACTION` of the maximum
+      contact force; the shift of E in units of the standard error of the difference,
+      √(σ_shallow² − σ_full²) (the shallow points are a subset of the full fit's:
+      ``attrs["depth_check_shift"]``, ``depth_check_E``). A law that describes the curve gives
+      the same E within that error;
+      beyond :data:`DEPTH_CHECK_SIGMA` a :class:`GoodnessOfFitWarning` says that the stderr
+      cover the noise only, not the model error.
+    * **Baseline**: the rise of the tilted baseline from the start of the approach to the
+      contact point, as a fraction of the contact force (``attrs["precontact_rise"]``); above
+      :data:`PRECONTACT_RISE_WARN` a :class:`DataWarning` says the approach is not a free
+      cantilever before contact.
+    """
+    c, b, slope = values["contact_point"], values["baseline"], values["baseline_slope"]
+    e, e_err = values["E"], float(out["E_stderr"])
+    excess = f - (b + slope * (z - c))
+    contact = z > c
+    peak = float(np.max(excess[contact])) if contact.any() else 0.0
+    if peak > 0:
+        rise = abs(slope) * max(c - float(np.min(z)), 0.0) / peak
+        out.attrs["precontact_rise"] = rise
+        if rise > PRECONTACT_RISE_WARN:
+            warnings.warn(
+                f"hertz: the fitted baseline rises by {100 * rise:.0f} % of the contact force "
+                "before the contact point: the approach is not a free cantilever there (a "
+                "long-range repulsion, a soft layer, or contact from the start of the "
+                "approach), so the contact point and E rest on the tilted baseline",
+                DataWarning, stacklevel=4)
+    keep = ~contact | (excess <= DEPTH_CHECK_FRACTION * peak)
+    if peak <= 0 or int(np.sum(contact & keep)) < 8 or not math.isfinite(e_err) or e_err <= 0:
+        out.attrs["depth_check"] = "not made (too few contact points, or E without stderr)"
+        return out
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            shallow = fit_data(FitData(z[keep], f[keep], None, {}), "hertz", tip=tip,
+                               profile=False)
+    except (ViscoforceError, ValueError, ArithmeticError) as exc:
+        out.attrs["depth_check"] = f"not made: the shallow refit failed ({exc})"
+        return out
+    e_half, e_half_err = float(shallow["E"]), float(shallow["E_stderr"])
+    # the shallow data are a subset of the full: for efficient estimators the variance of the
+    # difference is var(shallow) − var(full), not var(full) (a Hausman-type test)
+    spread = math.sqrt(max(e_half_err**2 - e_err**2, 0.0)) if math.isfinite(e_half_err) else 0.0
+    shift = (e_half - e) / max(spread, e_err * 1e-3)
+    out.attrs.update(depth_check_E=e_half, depth_check_shift=shift, depth_check=(
+        f"E refitted up to {100 * DEPTH_CHECK_FRACTION:.0f} % of the maximum contact force: "
+        f"{e_half:.4g} Pa, {shift:+.1f} standard errors of the difference "
+        f"({100 * (e_half / e - 1):+.1f} %) from the full fit"))
+    if abs(shift) > DEPTH_CHECK_SIGMA:
+        warnings.warn(
+            f"hertz: E depends on the indentation depth: up to {100 * DEPTH_CHECK_FRACTION:.0f} % "
+            f"of the maximum contact force E = {e_half:.4g} Pa, {shift:+.1f} standard errors "
+            f"({100 * (e_half / e - 1):+.1f} %) from the full fit's {e:.4g} Pa. The tip's elastic "
+            "law does not describe this approach (viscoelasticity, a finite thickness, the wrong "
+            "tip, or the contact point), and the stderr cover the noise only: report E with its "
+            "depth range", GoodnessOfFitWarning, stacklevel=4)
+    return out
