@@ -1,36 +1,11 @@
-"""The ``ting`` model: approach–retract force curves by Ting's hereditary integral.
+"""The ``ting`` fit of one approach–retract curve: modes by the criterion, Ting's reported forms.
 
-The force on the tip over time is (:mod:`viscoforce.physics.ting`)
-
-    F(t) = baseline + baseline_slope·(z(t) − contact_point) + F_Ting(t) + drag·dz/dt,
-
-with z(t) the measured tip position toward the sample (the ``tip_position`` of a curves
-dataset: the calibrated sensor height where the file has one, minus the deflection), the
-indentation δ(t) = max(z(t) − contact_point, 0), and F_Ting Ting's load for the tip's shape
-(``--tip``) and the material:
-
-* ``sls`` — ``tau`` (the CREEP time of Eq. 3), ``E0``, ``E_inf``;
-* ``prony`` — ``E0``, ``E_1`` … ``E_{n−1}``, ``E_inf``, ``tau_1`` … ``tau_n`` (creep times,
-  ascending), as the ``exact`` model; modes by the criterion;
-* ``structural`` — ``E_ref``, ``alpha``, ``mu``: E*(ω) = E_ref (iω/ω_ref)^α + iωμ,
-  ω_ref = 2π f_ref (``reference_frequency``, default 1 Hz), i.e. Ting's power law
-  E(t) = E0 (t/t0)^(−β) with β = α and E0 = E_ref/(Γ(1 − β)(2π f_ref t0)^β) at t0 = 1 s
-  (reported as ``ting_E0`` and ``beta`` by :func:`add_ting_forms`), plus a Newtonian μ.
-
-All moduli are the paper's (2/E = Σ(1 − ν²)/E_i; Young's Y = E(1 − ν²)/2). The contact point is
-fitted within the approach (or given), ``baseline`` and ``baseline_slope`` are the free-cantilever
-force and tilt as in ``hertz``, and the viscous drag B [N·s/m] is fixed (``drag``, default 0)
-or fitted (``fit_drag``). The drag velocity is the Savitzky–Golay derivative of the trace
-(:data:`VELOCITY_WINDOW`), so that the sensor noise does not enter the model.
-
-The data (:func:`ting_data`) are the approach and everything after it up to the end of the first
-retract that follows (pauses included: a hold at the deepest point is part of Ting's loading
-branch), as force over time; the tip-position trace travels with them
-(:attr:`TingData.position_trace`) and is the model's fixed ``position_trace``. The guess fits
-Hertz to the approach (E, contact point, baseline), estimates the drag from the gap between the
-approach and retract baselines, and chooses the material's time scale (``tau`` or ``alpha``) by
-the best linear fit of Ting's curve shape to the whole approach–retract loop (the retract's
-hysteresis is what measures the dissipation).
+The model itself — the force by Ting's hereditary integral, its materials (``sls``, ``prony``,
+``structural``), the contact point, baseline and drag, the data it fits (:func:`ting_data`) and
+its guess — is :mod:`viscoforce.fitting.ting_model`; :func:`fit_ting` fits it (one mode or
+``modes="auto"``), corrects the stderr for the residuals' autocorrelation, and
+:func:`add_ting_forms` reports the structural material as Ting's power law E(t) = E0 (t/t0)^(−β)
+(``ting_E0``, ``beta`` at t0 = :data:`TING_T0`).
 """
 
 from __future__ import annotations

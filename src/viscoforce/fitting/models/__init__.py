@@ -42,15 +42,7 @@ __all__ = ["MODELS", "check_fixed", "make_model"]
 
 
 def check_fixed(name: str, fixed: Mapping[str, Any]) -> dict[str, Any]:
-    """The fixed inputs of model ``name``, validated by its entry (None means not given).
-
-    Raises
-    ------
-    TypeError
-        An input the model does not take.
-    ParameterError
-        A value out of range (the message names it and the range).
-    """
+    """The fixed inputs of model ``name``, validated (:meth:`.registry.ModelEntry.check_fixed`)."""
     return entry(name).check_fixed(fixed)
 
 
