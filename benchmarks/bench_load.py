@@ -351,7 +351,7 @@ def profile_block(path: Path, indices: list[int], open_mode: str) -> dict:
                                     if "decompress" in fn and "zlib" in fn),
               "property_parsing_s": cum("_properties", "parse_properties")
               + cum("_properties", "resolve_references"),
-              "raw_decode_s": cum("jpk.py", "_decode_raw"),
+              "raw_decode_s": cum("_jpk_segments.py", "_decode_raw"),
               "jpk_to_curves_s": t_load - t_open,
               "lockin_modulation_spectrum_s": t_spec - t_load,
               "demodulate_s": cum("lockin", "demodulate") + cum("lockin", "harmonics")}

@@ -19,7 +19,7 @@ import pytest
 from viscoforce import _limits
 from viscoforce.cli import main
 from viscoforce.exceptions import EffortError, ParameterError, UnitError
-from viscoforce.io import csv_formats
+from viscoforce.io import _csv_table, csv_small_tables
 from viscoforce.io.csv_formats import (
     read_curves_csv,
     read_prony_moduli,
@@ -101,7 +101,7 @@ def test_the_cli_refuses_a_huge_csv_with_one_line(tmp_path, capsys):
 
 
 def test_too_many_rows_are_refused_up_front_from_the_size(tmp_path, monkeypatch):
-    monkeypatch.setattr(csv_formats, "MAX_CSV_ROWS", 1000)
+    monkeypatch.setattr(_csv_table, "MAX_CSV_ROWS", 1000)
     path = write(tmp_path / "long.csv", CURVES + rows(5000))
     with pytest.raises(EffortError, match=r"about 5e\+03 data rows \(from the file size, "
                                           r".*reads at most 1e\+03 rows \(MAX_CSV_ROWS\), "
@@ -110,7 +110,7 @@ def test_too_many_rows_are_refused_up_front_from_the_size(tmp_path, monkeypatch)
 
 
 def test_too_many_rows_are_refused_after_reading_the_limit(tmp_path, monkeypatch):
-    monkeypatch.setattr(csv_formats, "MAX_CSV_ROWS", 1000)
+    monkeypatch.setattr(_csv_table, "MAX_CSV_ROWS", 1000)
     path = write(tmp_path / "long.csv", SPECTRUM + "".join(
         f"{i + 1},1,10\n" for i in range(1500)))  # the estimate (1.5e3) stays below 2x
     with pytest.raises(EffortError, match=r"more than 1e\+03 data rows; .*MAX_CSV_ROWS"):
@@ -120,7 +120,7 @@ def test_too_many_rows_are_refused_after_reading_the_limit(tmp_path, monkeypatch
 
 
 def test_a_trace_has_its_own_row_limit(tmp_path, monkeypatch):
-    monkeypatch.setattr(csv_formats, "MAX_TRACE_ROWS", 100)
+    monkeypatch.setattr(csv_small_tables, "MAX_TRACE_ROWS", 100)
     path = write(tmp_path / "trace.csv", "time (ms),position (nm)\n" + rows(150, 2))
     with pytest.raises(EffortError, match=r"reads at most 100 rows \(MAX_TRACE_ROWS\)"):
         read_trace(path)

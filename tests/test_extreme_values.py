@@ -24,7 +24,7 @@ import pytest
 from viscoforce import _limits
 from viscoforce.cli import main
 from viscoforce.exceptions import EffortError, InstrumentFormatError, ParameterError
-from viscoforce.io import csv_formats
+from viscoforce.io import _csv_table
 from viscoforce.io.bruker import read_uff
 from viscoforce.io.curves import jpk_to_curves
 from viscoforce.io.instruments import load_instrument
@@ -460,7 +460,7 @@ def test_a_csv_of_text_is_refused_from_its_first_rows(tmp_path):
 
 
 def test_text_at_the_end_of_a_csv_is_found_chunk_by_chunk(tmp_path, monkeypatch):
-    monkeypatch.setattr(csv_formats, "_CHUNK_ROWS", 5_000, raising=False)
+    monkeypatch.setattr(_csv_table, "_CHUNK_ROWS", 5_000)
     path = tmp_path / "late.csv"
     rows = "".join(f"{k * 1e-3!r},1e-9,{1e-6 + k * 1e-12!r}\n" for k in range(300_000))
     path.write_text("time (s),force (N),height (m)\n" + rows + "x,1e-9,1e-6\n")
@@ -484,8 +484,8 @@ def test_a_line_with_an_extra_field_is_found_without_parsing_every_line(tmp_path
                                                                         header, row, match):
     """NumPy counts the delimiters; Python parses only the lines whose count differs."""
     calls = []
-    split = csv_formats._split
-    monkeypatch.setattr(csv_formats, "_split", lambda *a: calls.append(1) or split(*a))
+    split = _csv_table._split
+    monkeypatch.setattr(_csv_table, "_split", lambda *a: calls.append(1) or split(*a))
     path = tmp_path / "extra.csv"
     rows = [row.replace("0,", f"{k * 1e-3!r},", 1) for k in range(200_000)]
     path.write_text("\n".join([header, *rows, rows[-1] + ",5"]) + "\n")
