@@ -47,7 +47,6 @@ from viscoforce.schema._core import (
     clean_attrs,
     flag_attrs,
     flag_meanings,
-    flat_over,
     index_values,
     parameter_names,
     plain_variable,
@@ -83,6 +82,7 @@ from viscoforce.schema.spectrum import (
     phase_quality,
     validate_spectrum,
 )
+from viscoforce.schema.tables import flat_over
 from viscoforce.schema.trajectory import (
     PROFILE_VARIABLES,
     TRAJECTORY_VARIABLES,
