@@ -22,30 +22,24 @@ Every drive is a frozen dataclass that satisfies :class:`viscoforce._typing.Sepa
   a one-line summary with units.
 
 Positions follow the package convention: h0 is the undeformed apex separation and may be negative.
+
+The shared base class lives in :mod:`viscoforce.experiments._drive_base` and the measured trace in
+:mod:`viscoforce.experiments.measured_trace`; :class:`MeasuredTrace` is re-exported here.
 """
 
 from __future__ import annotations
 
 import math
-from abc import ABC, abstractmethod
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING
 
 import numpy as np
-from numpy.typing import ArrayLike
 
 from viscoforce._typing import FloatArray
-from viscoforce._validation import (
-    as_float_1d,
-    require_finite,
-    require_increasing,
-    require_positive,
-)
+from viscoforce._validation import require_finite, require_positive
 from viscoforce.exceptions import ParameterError
-
-if TYPE_CHECKING:
-    from scipy.interpolate import PchipInterpolator
+from viscoforce.experiments._drive_base import _Drive, _endpoints, _si
+from viscoforce.experiments.measured_trace import MeasuredTrace
 
 __all__ = ["Hold", "Ramp", "Step", "Triangle", "Sinusoid", "Sequence", "MeasuredTrace"]
 
@@ -55,136 +49,6 @@ _REL_TOL = 1e-9
 
 #: Fewest time steps per period of a sinusoid any accurate stepper takes (used by min_steps).
 STEPS_PER_PERIOD = 8
-
-_PREFIXES = ((1e3, "k"), (1.0, ""), (1e-3, "m"), (1e-6, "µ"), (1e-9, "n"), (1e-12, "p"),
-             (1e-15, "f"))
-
-
-def _si(value: float, unit: str) -> str:
-    """Format ``value`` [unit] with an SI prefix, 4 significant digits and a true minus sign."""
-    if value == 0:
-        return f"0 {unit}"
-    magnitude = abs(value)
-    scale, prefix = _PREFIXES[-1]
-    for s, p in _PREFIXES:
-        if magnitude >= s * (1 - 1e-9):
-            scale, prefix = s, p
-            break
-    text = f"{value / scale:.4g}".replace("-", "\u2212")
-    return f"{text} {prefix}{unit}"
-
-
-def _as_time(t: ArrayLike) -> FloatArray:
-    """Return ``t`` [s] as a float array (0-d for a scalar); raise unless all entries are finite."""
-    bad = t is None or isinstance(t, dict | str | bytes)
-    try:
-        bad = bad or np.iscomplexobj(t)  # a complex time would lose its imaginary part
-        arr = np.asarray(t, dtype=float)
-    except (TypeError, ValueError):
-        bad = True
-    if bad:
-        raise ParameterError(f"t must be real times [s], got {t!r}")
-    if not np.all(np.isfinite(arr)):
-        raise ParameterError(f"t must be finite, got {t!r}")
-    return arr
-
-
-class _Drive(ABC):
-    """Shared machinery of the drives: holds outside [0, duration] and the right-sided velocity.
-
-    Subclasses are frozen dataclasses that provide ``duration`` [s] (a field or a property),
-    ``start_position`` and ``end_position`` [m], the position and velocity on the active interval,
-    ``breakpoints``, ``extent`` and ``describe``.
-    """
-
-    __slots__ = ()
-
-    @property
-    @abstractmethod
-    def start_position(self) -> float:
-        """Position h0(0) [m]; held for t < 0."""
-
-    @property
-    @abstractmethod
-    def end_position(self) -> float:
-        """Position h0(duration) [m]; held for t > duration."""
-
-    @abstractmethod
-    def _position_active(self, t: FloatArray) -> FloatArray:
-        """Position [m] at 1-D times ``t`` strictly inside (0, duration) [s]."""
-
-    @abstractmethod
-    def _velocity_active(self, t: FloatArray) -> FloatArray:
-        """Right-sided velocity [m/s] at 1-D times ``t`` in [0, duration) [s]."""
-
-    @abstractmethod
-    def breakpoints(self) -> FloatArray:
-        """Return the sorted times [s] in [0, duration] where the velocity may jump (incl. ends)."""
-
-    @abstractmethod
-    def extent(self) -> tuple[float, float]:
-        """Return the smallest and largest position (min, max) [m] over [0, duration]."""
-
-    def min_steps(self) -> int:
-        """Return a lower bound on the time steps any accurate stepper needs over [0, duration].
-
-        Piecewise-linear drives: the number of breakpoints (a stepper lands on every one).
-        """
-        return int(np.asarray(self.breakpoints()).size)
-
-    @abstractmethod
-    def describe(self) -> str:
-        """Return a one-line summary of the drive with units."""
-
-    def position(self, t: ArrayLike) -> FloatArray:
-        """Position h0(t) [m].
-
-        Parameters
-        ----------
-        t : float or array_like
-            Times [s]; the drive holds ``start_position`` for t <= 0 and ``end_position`` for
-            t >= ``duration``.
-
-        Returns
-        -------
-        numpy.ndarray
-            Positions [m], same shape as ``t`` (0-d for a scalar).
-        """
-        tt = _as_time(t)
-        duration = self.duration  # type: ignore[attr-defined]
-        before = tt <= 0.0
-        after = tt >= duration
-        inside = ~(before | after)
-        out = np.empty(tt.shape, dtype=float)
-        out[before] = self.start_position
-        out[after] = self.end_position
-        if np.any(inside):
-            out[inside] = self._position_active(np.atleast_1d(tt[inside]))
-        return out
-
-    def velocity(self, t: ArrayLike) -> FloatArray:
-        """Drive velocity dh0/dt [m/s], right-sided at kinks and 0 outside [0, duration).
-
-        Parameters
-        ----------
-        t : float or array_like
-            Times [s].
-
-        Returns
-        -------
-        numpy.ndarray
-            Velocities [m/s], same shape as ``t`` (0-d for a scalar).
-        """
-        tt = _as_time(t)
-        active = (tt >= 0.0) & (tt < self.duration)  # type: ignore[attr-defined]
-        out = np.zeros(tt.shape, dtype=float)
-        if np.any(active):
-            out[active] = self._velocity_active(np.atleast_1d(tt[active]))
-        return out
-
-
-def _endpoints(duration: float) -> FloatArray:
-    return np.array([0.0, duration])
 
 
 class _LinearMove(_Drive):
@@ -660,105 +524,3 @@ class Sequence(_Drive):
     def describe(self) -> str:
         """Return a one-line summary: the segments' descriptions joined by ``"; then "``."""
         return "; then ".join(seg.describe() for seg in self.segments)
-
-
-@dataclass(frozen=True, eq=False)
-class MeasuredTrace(_Drive):
-    """An arbitrary (e.g. measured) position trace, interpolated between its samples.
-
-    The time axis is shifted to start at 0; the original first time is kept as ``time_offset``.
-    By default the trace is piecewise linear: the velocity is piecewise constant (right-sided at
-    the samples) and every sample time is a breakpoint. With ``smooth=True`` a monotone cubic
-    (PCHIP) interpolant is used instead: C¹, no overshoot beyond the samples, and breakpoints only
-    at 0 and the end. The arrays are stored read-only; equality and hashing are by identity.
-
-    Parameters
-    ----------
-    time : array_like
-        Sample times [s], strictly increasing, at least 2 samples.
-    h0 : array_like
-        Positions h0 at those times [m], finite, same length as ``time``.
-    smooth : bool, optional
-        Use a C¹ monotone cubic interpolant instead of piecewise-linear (default False).
-    """
-
-    time: FloatArray
-    h0: FloatArray
-    smooth: bool = False
-    time_offset: float = field(init=False)
-    _interpolant: PchipInterpolator | None = field(init=False, repr=False)
-
-    def __post_init__(self) -> None:
-        time = as_float_1d("time", self.time, min_size=2)
-        time = require_increasing("time", time)
-        position = as_float_1d("h0", self.h0, min_size=2)
-        if position.size != time.size:
-            raise ParameterError(
-                f"h0 must have the same length as time ({time.size}), "
-                f"got {position.size}")
-        if not isinstance(self.smooth, bool | np.bool_):
-            raise ParameterError(f"smooth must be True or False, got {self.smooth!r}")
-        offset = float(time[0])
-        shifted = np.array(time - offset, dtype=float)
-        require_increasing("time (after shifting to start at 0)", shifted)
-        position = np.array(position, dtype=float)  # own copy: the caller's array stays as is
-        shifted.flags.writeable = False
-        position.flags.writeable = False
-        interpolant = None
-        if self.smooth:
-            from scipy.interpolate import PchipInterpolator  # only smooth traces need scipy here
-
-            interpolant = PchipInterpolator(shifted, position)
-        object.__setattr__(self, "time", shifted)
-        object.__setattr__(self, "h0", position)
-        object.__setattr__(self, "smooth", bool(self.smooth))
-        object.__setattr__(self, "time_offset", offset)
-        object.__setattr__(self, "_interpolant", interpolant)
-
-    @property
-    def duration(self) -> float:
-        """Duration of the trace [s] (last shifted sample time)."""
-        return float(self.time[-1])
-
-    @property
-    def start_position(self) -> float:
-        """First sample [m]."""
-        return float(self.h0[0])
-
-    @property
-    def end_position(self) -> float:
-        """Last sample [m]."""
-        return float(self.h0[-1])
-
-    def _position_active(self, t: FloatArray) -> FloatArray:
-        if self._interpolant is not None:
-            return np.asarray(self._interpolant(t), dtype=float)
-        return np.interp(t, self.time, self.h0)
-
-    def _velocity_active(self, t: FloatArray) -> FloatArray:
-        if self._interpolant is not None:
-            return np.asarray(self._interpolant(t, 1), dtype=float)
-        slopes = np.diff(self.h0) / np.diff(self.time)
-        idx = np.searchsorted(self.time, t, side="right") - 1
-        return slopes[np.clip(idx, 0, slopes.size - 1)]
-
-    def breakpoints(self) -> FloatArray:
-        """Return all sample times [s] (piecewise linear), or 0 and duration (``smooth=True``)."""
-        if self.smooth:
-            return _endpoints(self.duration)
-        return np.array(self.time)
-
-    def min_steps(self) -> int:
-        """Return the number of samples (one step per sample interval, smooth or not)."""
-        return int(self.time.size)
-
-    def extent(self) -> tuple[float, float]:
-        """Return the (min, max) position over [0, duration] [m]: the extreme samples."""
-        return (float(np.min(self.h0)), float(np.max(self.h0)))
-
-    def describe(self) -> str:
-        """Return a one-line summary, e.g. ``"measured trace: 101 samples over 10 ms, …"``."""
-        low, high = self.extent()
-        kind = "monotone cubic" if self.smooth else "piecewise linear"
-        return (f"measured trace: {self.time.size} samples over {_si(self.duration, 's')}, "
-                f"{_si(low, 'm')} \u2026 {_si(high, 'm')} ({kind})")
