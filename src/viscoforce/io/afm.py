@@ -57,16 +57,13 @@ with the ordinary errors its parsers raise on broken input, and re-raised as
 
 from __future__ import annotations
 
-import logging
 import math
 import re
-import struct
 import tempfile
 import warnings
 import zipfile
 import zlib
-from collections.abc import Iterator, Sequence
-from contextlib import contextmanager
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -76,82 +73,45 @@ import xarray as xr
 
 from viscoforce import _limits
 from viscoforce._limits import check_effort
-from viscoforce._validation import require_plausible, require_positive
-from viscoforce.exceptions import InstrumentFormatError, ParameterError, ViscoforceError
-from viscoforce.io.quality import (
-    PHYSICAL_RANGES,
-    below_scale,
-    first_beyond,
-    range_text,
-    scale_text,
+from viscoforce.exceptions import InstrumentFormatError, ParameterError
+from viscoforce.io._afm_checks import (  # noqa: F401 (re-exported)
+    _CALIBRATIONS,
+    _file_calibration,
+    _finite_or_nan,
+    _optional_calibration,
+    _require_finite_samples,
+    _require_physical,
 )
+from viscoforce.io._afm_formats import (  # noqa: F401 (re-exported)
+    _CLI_HINT,
+    _HEAD,
+    _IGOR_VERSIONS,
+    _MAKER_CHIARO,
+    _MAKER_IGOR,
+    _MAKER_NTMDT,
+    _MAKER_WORKSHOP,
+    _MEMBER_EXTENSIONS,
+    _NUMBER,
+    _PARSE_ERRORS,
+    _SAFE_COMPRESSIONS,
+    _afmformats,
+    _kind_of,
+    _read_head,
+    _translated,
+    _zip_members,
+)
+from viscoforce.io._afm_segments import _igor_segments, _segments  # noqa: F401 (re-exported)
 from viscoforce.schema import make_curves
 
 __all__ = ["AFMFORMATS_EXTENSIONS", "detect_afmformats", "read_afmformats"]
 
 #: File extensions :func:`read_afmformats` handles (content decides, see :func:`detect_afmformats`).
 AFMFORMATS_EXTENSIONS = (".ibw", ".csv", ".txt", ".zip")
-_MEMBER_EXTENSIONS = (".ibw", ".csv", ".txt")
-_HEAD = 65536
 #: bytes copied per step from a zip member to the temporary directory
 _COPY_CHUNK = 1024**2
-#: zip compressions read: zipfile decompresses a bzip2 read whole, without an output limit (a few
-#: kB of bzip2 can expand to gigabytes), so bzip2 members are refused
-_SAFE_COMPRESSIONS = (zipfile.ZIP_STORED, zipfile.ZIP_DEFLATED, zipfile.ZIP_LZMA)
-_IGOR_VERSIONS = (1, 2, 3, 5)
-_NUMBER = re.compile(r"^[+-]?(\d+([.,]\d*)?|[.,]\d+)([eE][+-]?\d+)?$")
-_MAKER_NTMDT = "NT-MDT Spectrum Instruments"
-_MAKER_WORKSHOP = "AFM workshop"
-_MAKER_IGOR = "Asylum Research"
-_MAKER_CHIARO = "Optics11 Life"
-#: errors the afmformats parsers (numpy.loadtxt, igor2, zipfile, its own asserts) raise on bad input
-_PARSE_ERRORS = (ValueError, TypeError, KeyError, IndexError, AssertionError, AttributeError,
-                 ArithmeticError,
-                 OSError, EOFError, UnicodeError, struct.error, zipfile.BadZipFile, zlib.error)
-_CLI_HINT = ("pass spring_constant [N/m] and sensitivity [m/V] (CLI: --spring-constant 0.1N/m "
-             "--sensitivity 50nm/V)")
 
 
 # ── detection ─────────────────────────────────────────────────────────────────────────────────
-
-
-def _kind_of(suffix: str, head: bytes) -> str | None:
-    """Which afmformats format ``head`` (the first bytes of a file named ``*suffix``) is, or None."""
-    suffix = suffix.lower()
-    if suffix == ".ibw":
-        if len(head) < 64:
-            return None
-        le, be = struct.unpack("<h", head[:2])[0], struct.unpack(">h", head[:2])[0]
-        return "igor" if le in _IGOR_VERSIONS or be in _IGOR_VERSIONS else None
-    text = head.decode("latin-1")
-    if suffix == ".csv":
-        first = text.lstrip("\ufeff\xef\xbb\xbf").splitlines()[:1]
-        return "workshop" if first and first[0].strip() == "Force-Distance Curve" else None
-    if suffix == ".txt":
-        if "Device:\tChiaro" in text:
-            return "chiaro"
-        lines = [ln for ln in text.splitlines() if ln.strip()]
-        if len(head) == _HEAD and lines:
-            lines = lines[:-1]  # the last line may be cut
-        lines = lines[:10]
-        if lines and all(len(tok := ln.split()) == 3 and all(_NUMBER.match(t) for t in tok)
-                         for ln in lines):
-            return "ntmdt"
-    return None
-
-
-def _zip_members(zf: zipfile.ZipFile) -> list[zipfile.ZipInfo]:
-    return [info for info in zf.infolist()
-            if not info.is_dir() and Path(info.filename).suffix.lower() in _MEMBER_EXTENSIONS
-            and not info.filename.startswith("__MACOSX/")
-            and not Path(info.filename).name.startswith(".")]
-
-
-def _read_head(zf: zipfile.ZipFile, info: zipfile.ZipInfo) -> bytes:
-    if info.compress_type not in _SAFE_COMPRESSIONS:
-        return b""
-    with zf.open(info) as fh:
-        return fh.read(_HEAD)
 
 
 def detect_afmformats(path: str | Path) -> bool:
@@ -198,160 +158,6 @@ class _Curve:
     x: float = math.nan
     y: float = math.nan
     notes: dict[str, str] = field(default_factory=dict)
-
-
-def _afmformats():
-    try:
-        import afmformats
-    except ImportError as exc:  # pragma: no cover - depends on the environment
-        raise InstrumentFormatError("reading Igor/AFM Workshop/Chiaro/NT-MDT files needs the "
-                                    "afmformats package: pip install afmformats") from exc
-    for name in ("afmformats", "igor2"):
-        # afmformats logs a traceback (logger.exception) and igor2 an error with the raw bytes
-        # before raising on a broken file; with no handler configured, logging's last resort
-        # would print them on stderr although we raise a clean InstrumentFormatError. Records
-        # still propagate to the application's own handlers.
-        logger = logging.getLogger(name)
-        if not logger.handlers:
-            logger.addHandler(logging.NullHandler())
-    return afmformats
-
-
-@contextmanager
-def _translated(where: str) -> Iterator[None]:
-    """Turn afmformats' BaseException-derived errors and parser errors into InstrumentFormatError."""
-    afmformats = _afmformats()
-    errors = afmformats.errors
-    try:
-        yield
-    except ViscoforceError:
-        raise
-    except errors.MissingMetaDataError as exc:
-        keys = " and ".join(getattr(exc, "meta_keys", []) or ["calibration"])
-        raise InstrumentFormatError(f"{where}: the file lacks the {keys}; {_CLI_HINT}") from None
-    except errors.FileFormatNotSupportedError as exc:
-        raise InstrumentFormatError(f"{where}: not a file afmformats can read ({exc})") from None
-    except errors.AFMFileFormatError as exc:
-        raise InstrumentFormatError(f"{where}: corrupt or unsupported file: "
-                                    f"{type(exc).__name__}: {exc}") from None
-    except _PARSE_ERRORS as exc:
-        raise InstrumentFormatError(f"{where}: corrupt, truncated or unexpected content "
-                                    f"({type(exc).__name__}: {exc})") from None
-
-
-def _igor_segments(path: Path, n: int) -> list[tuple[int, int, float]] | None:
-    """(start, stop, direction) per segment from the Igor wave note, or None if unusable."""
-    from igor2 import binarywave  # afmformats' own dependency
-
-    note = binarywave.load(str(path))["wave"]["note"]
-    if isinstance(note, bytes):
-        note = note.decode("latin-1")
-    fields: dict[str, str] = {}
-    for line in re.split(r"\r\n|\r|\n", str(note)):
-        key, sep, value = line.partition(":")
-        if sep:
-            fields[key.strip()] = value.strip()
-    try:
-        indexes = [int(float(v)) for v in fields["Indexes"].split(",") if v.strip()]
-        directions = [float(v) for v in fields["Direction"].split(",") if v.strip()]
-    except (KeyError, ValueError):
-        return None
-    if (len(indexes) < 2 or len(directions) < len(indexes) or indexes[0] != 0
-            or indexes[-1] != n - 1 or np.any(np.diff(indexes) <= 0)):
-        return None
-    bounds = [0] + [i + 1 for i in indexes[1:]]
-    return [(bounds[k], bounds[k + 1], directions[k + 1]) for k in range(len(bounds) - 1)]
-
-
-def _segments(kind: str, path: Path, data: Any, n: int, height: np.ndarray,
-              notes: dict[str, str]) -> tuple[list[tuple[str, str]], np.ndarray]:
-    local = np.zeros(n, dtype=np.int32)
-    if kind == "igor":
-        parts = _igor_segments(path, n)
-        if parts is None:
-            split = int(np.argmin(height)) + 1
-            notes["segments_from"] = "split after the lowest height (the note has no Indexes)"
-            local[split:] = 1
-            return [("approach", "extend"), ("retract", "retract")], local
-        notes["segments_from"] = "wave note Indexes and Direction"
-        table: list[tuple[str, str]] = []
-        for start, stop, direction in parts:
-            row = (("approach", "extend") if direction > 0 else ("retract", "retract")
-                   if direction < 0 else ("pause", "dwell"))
-            if row not in table:
-                table.append(row)
-            local[start:stop] = table.index(row)
-        return table, local
-    raw = np.asarray(data["segment"]).astype(np.int64)
-    labels = {0: ("approach", "afmformats segment 0 (approach)"),
-              1: ("retract", "afmformats segment 1 (retract)")}
-    table = []
-    for value in np.unique(raw):
-        row = labels.get(int(value), ("other", f"afmformats segment {int(value)}"))
-        table.append(row)
-        local[raw == value] = len(table) - 1
-    notes["segments_from"] = "afmformats segment column"
-    return table, local
-
-
-def _finite_or_nan(value: Any) -> float:
-    try:
-        x = float(value)
-    except (TypeError, ValueError):
-        return math.nan
-    return x if math.isfinite(x) else math.nan
-
-
-_CALIBRATIONS = {"spring constant": ("spring_constant", "N/m", "SPRING_CONSTANT_RANGE"),
-                 "sensitivity": ("sensitivity", "m/V", "SENSITIVITY_RANGE")}
-
-
-def _file_calibration(meta: dict[str, Any], key: str, where: str, check: bool) -> float:
-    """The file's calibration ``key`` (NaN when absent); refused outside its plausible range."""
-    value = meta.get(key)
-    if value is None or not check:
-        return _finite_or_nan(value)
-    name, unit, limits = _CALIBRATIONS[key]
-    low, high = getattr(_limits, limits)
-    try:
-        number = float(value)
-    except (TypeError, ValueError):
-        number = math.nan
-    if not low <= number <= high:  # also NaN and text
-        raise InstrumentFormatError(
-            f"{where}: the file's {key} is {value!r} {unit}, outside the plausible range "
-            f"[{low:g}, {high:g}] {unit} ({name}): a corrupt header")
-    return number
-
-
-def _require_finite_samples(values: np.ndarray, channel: str, where: str, index: int,
-                            table: list[tuple[str, str]], local: np.ndarray) -> None:
-    """Refuse NaN / inf samples, naming the file (and member), curve, segment and channel."""
-    finite = np.isfinite(values)
-    if finite.all():
-        return
-    bad = np.flatnonzero(~finite)
-    segment = table[int(local[bad[0]])][0]
-    raise InstrumentFormatError(
-        f"{where}: curve {index}, segment {segment!r}, channel '{channel}': {bad.size} of "
-        f"{values.size} samples are not finite (first: sample {bad[0]} = {float(values[bad[0]])})")
-
-
-def _require_physical(values: np.ndarray, channel: str, where: str, index: int) -> None:
-    """Refuse samples beyond the channel's physical range, or a channel below its scale."""
-    unit = PHYSICAL_RANGES[channel][2]
-    i = first_beyond(channel, values)
-    if i is not None:
-        raise InstrumentFormatError(
-            f"{where}: curve {index}, channel '{channel}': sample {i} is {float(values[i]):g} "
-            f"{unit}, beyond the physical range {range_text(channel)}: the file's calibration "
-            "or its data are damaged")
-    tiny = below_scale(channel, values)
-    if tiny is not None:
-        raise InstrumentFormatError(
-            f"{where}: curve {index}, channel '{channel}': every sample is at most "
-            f"{abs(tiny[1]):g} {unit} in magnitude (sample {tiny[0]}), below "
-            f"{scale_text(channel)}: the file's calibration or its data are damaged")
 
 
 def _convert(kind: str, fmt: str, path: Path, afm: Any, k_user: float | None,
@@ -587,14 +393,6 @@ def _meta_attrs(curves: Sequence[_Curve]) -> dict[str, Any]:
             else:
                 out[_attr_key(key)] = np.asarray(values, dtype=float)
     return out
-
-
-def _optional_calibration(name: str, value: Any, unit: str, limits: tuple[float, float]
-                          ) -> float | None:
-    """None, or ``value`` when positive and within ``limits`` (else ParameterError)."""
-    if value is None:
-        return None
-    return require_plausible(name, require_positive(name, value), limits, unit)
 
 
 def read_afmformats(path: str | Path, *, spring_constant: float | None = None,

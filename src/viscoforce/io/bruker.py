@@ -72,25 +72,53 @@ and a segment with more lines than its ``nb_point`` is refused at the first one 
 from __future__ import annotations
 
 import math
-import re
 from array import array
-from collections.abc import Iterator
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, NoReturn
+from typing import Any
 
 import numpy as np
 import xarray as xr
 
-from viscoforce._limits import (
-    SENSITIVITY_RANGE,
-    SPRING_CONSTANT_RANGE,
-    TIP_HALF_ANGLE_RANGE,
-    TIP_RADIUS_RANGE,
-    check_effort,
-)
-from viscoforce._validation import require_path, require_plausible
+from viscoforce._limits import check_effort
+from viscoforce._validation import require_path
 from viscoforce.exceptions import InstrumentFormatError, ParameterError, UnitError
+from viscoforce.io._bruker_nanoscope import (  # noqa: F401 (re-exported)
+    _HEAD,
+    _NANOSCOPE_MAGIC,
+    _head,
+    _nanoscope_header,
+    _number,
+    detect_nanoscope,
+    refuse_nanoscope,
+)
+from viscoforce.io._bruker_uff_checks import (  # noqa: F401 (re-exported)
+    _K_FIELDS,
+    _MAX_TIP_RADIUS,
+    _RANGES,
+    _S_FIELDS,
+    _TIP_WORDS,
+    _calibration,
+    _measured,
+    _meta,
+    _meta_key,
+    _option,
+    _tip_attrs,
+)
+from viscoforce.io._bruker_uff_header import (  # noqa: F401 (re-exported)
+    _END,
+    _UNKNOWN,
+    _Column,
+    _field,
+    _float_field,
+    _int_field,
+    _line_number,
+    _lines,
+    _parse_header,
+    _Segment,
+    _Uff,
+    _whole_lines,
+)
 from viscoforce.io.csv_formats import segment_label
 from viscoforce.io.quality import (
     MIN_TIME_STEP,
@@ -101,118 +129,12 @@ from viscoforce.io.quality import (
     scale_text,
 )
 from viscoforce.schema import make_curves
-from viscoforce.units import parse_quantity, unit_factor
+from viscoforce.units import unit_factor
 
 __all__ = ["detect_nanoscope", "detect_uff", "read_uff", "refuse_nanoscope"]
 
-_HEAD = 4096
-_NANOSCOPE_MAGIC = (b"\\*Force file list", b"\\*File list", b"\\*EC File list")
 _VOLTS = ("v", "volt", "volts")
-_UNKNOWN = ("", "?")
-_END = re.compile(r"^\*+$")
-#: largest plausible tip radius [m] (colloid probes reach tens of µm)
-_MAX_TIP_RADIUS = 1e-3
-_TIP_WORDS = (("pyramid", "pyramid"), ("cone", "cone"), ("conical", "cone"),
-              ("sphere", "sphere"), ("spheric", "sphere"), ("colloid", "sphere"),
-              ("bead", "sphere"), ("parabol", "paraboloid"), ("flat", "flat"),
-              ("cylind", "flat"), ("punch", "flat"))
-_K_FIELDS = ("Cantilever_springK_used(N/m)", "Cantilever_springK_read(N/m)")
-_S_FIELDS = ("Recording_inv_optical_lever_sens_used(m/V)",
-             "Recording_inv_optical_lever_sens_read(m/V)")
 _CLI_HINT = "pass {name} (CLI: {flag})"
-
-
-def _head(path: Path, size: int = _HEAD) -> bytes:
-    try:
-        with path.open("rb") as fh:
-            return fh.read(size)
-    except OSError:
-        return b""
-
-
-# ── Nanoscope binary: recognised, refused ──────────────────────────────────────────────────────
-
-
-def detect_nanoscope(path: str | Path) -> bool:
-    r"""True if ``path`` starts like a Bruker Nanoscope file (``\*Force file list``, ``\*File list``).
-
-    Never raises (an unreadable file gives False).
-    """
-    head = _head(Path(path), 64).removeprefix(b"\xef\xbb\xbf")
-    return head.startswith(_NANOSCOPE_MAGIC)
-
-
-def _nanoscope_header(path: Path) -> dict[str, str]:
-    """The few header values the refusal quotes (version, mode, spring constant, sensitivity)."""
-    wanted = {"\\Version:": "version", "\\Operating mode:": "mode",
-              "\\Spring Constant:": "spring_constant", "\\@Sens. DeflSens:": "deflection_sens"}
-    found: dict[str, str] = {}
-    try:
-        with path.open("rb") as fh:
-            for _ in range(5000):
-                raw = fh.readline()
-                if not raw:
-                    break
-                line = raw.decode("latin-1").strip()
-                if line.startswith("\\*File list end"):
-                    break
-                for prefix, key in wanted.items():
-                    if line.startswith(prefix) and key not in found:
-                        found[key] = line[len(prefix):].strip()
-    except OSError:
-        pass
-    return found
-
-
-def _number(text: str) -> float | None:
-    match = re.search(r"[-+]?(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?", text)
-    return float(match.group(0)) if match else None
-
-
-def refuse_nanoscope(path: str | Path, *, spring_constant: Any = None,
-                     sensitivity: Any = None) -> NoReturn:
-    """Raise: viscoforce does not read Nanoscope binary files; the message says what would.
-
-    Parameters
-    ----------
-    path : str or Path
-        A Bruker Nanoscope file (``.spm``, ``.000`` …); only its text header is read.
-    spring_constant, sensitivity : optional
-        Accepted (so that ``load --spring-constant …`` reaches this message) and not used.
-
-    Raises
-    ------
-    InstrumentFormatError
-        Always: names the file, what it is (header version, operating mode), why it is not read
-        and how to load the curve (a text export, or a UFF text file).
-    """
-    del spring_constant, sensitivity  # the refusal does not depend on them
-    path = require_path("path", path)
-    header = _nanoscope_header(path)
-    first = _head(path, 64).removeprefix(b"\xef\xbb\xbf").split(b"\r")[0].split(b"\n")[0]
-    what = [f"'{first.decode('latin-1')}'"]
-    if "version" in header:
-        what.append(f"version {header['version']}")
-    if "mode" in header:
-        what.append(f"operating mode {header['mode']}")
-    calibration = []
-    k = _number(header.get("spring_constant", ""))
-    if k is not None:
-        calibration.append(f"--spring-constant {k:g}N/m")
-    s = _number(header.get("deflection_sens", ""))
-    if s is not None:
-        calibration.append(f"--sensitivity {s:g}nm/V")
-    flags = (f" with the header's calibration, {' '.join(calibration)}" if calibration
-             else " with --spring-constant and --sensitivity")
-    raise InstrumentFormatError(
-        f"{path}: Bruker Nanoscope binary file ({', '.join(what)}): viscoforce does not read "
-        "Nanoscope binary data, because no maintained, permissively licensed Python package "
-        "reads calibrated Nanoscope force curves (afmformats, MIT, has no Bruker format; "
-        "pyfmreader 0.1.3, MIT, reads them but has had no release since July 2023 and subtracts "
-        "a baseline while reading; Bruker's own 'nanoscope' package runs on Windows only). To load "
-        "the curve, export it from NanoScope Analysis as ASCII text with 'name (unit)' column "
-        "headers, e.g. 'time (s),height (nm),deflection (V)', and load that as format csv-curves"
-        f"{flags}; or load a UFF text export (.uff) of the curve (format uff)")
 
 
 # ── UFF text ───────────────────────────────────────────────────────────────────────────────────
@@ -229,32 +151,6 @@ def detect_uff(path: str | Path) -> bool:
     text = head.decode("latin-1").removeprefix("\xef\xbb\xbf")
     first = next((ln.strip() for ln in text.splitlines() if ln.strip()), "")
     return first.startswith("HE ") and ("HE UFF_code:" in text or "HE Entry_UFF_version:" in text)
-
-
-@dataclass
-class _Column:
-    title: str
-    unit: str
-
-
-@dataclass
-class _Segment:
-    index: int
-    code: str
-    kind: str  # the file's type label
-    number: str  # Recording_segment_<i>_nb as written
-    n_points: int
-    columns: list[_Column]
-    #: the data, one row per sample (filled by :func:`_parse`)
-    rows: np.ndarray = field(default_factory=lambda: np.empty((0, 0)))
-
-
-@dataclass
-class _Uff:
-    path: Path
-    fields: dict[str, str]
-    segments: list[_Segment]
-    notes: dict[str, str] = field(default_factory=dict)
 
 
 #: Largest UFF text file read [bytes] (a force curve of 1e6 samples is ~ 40 MB).
@@ -279,100 +175,6 @@ def _read_text(path: Path) -> str:
     if "\n" not in text and "\r" in text:  # classic Mac OS line ends
         text = text.replace("\r", "\n")
     return text
-
-
-def _lines(text: str) -> Iterator[tuple[int, str]]:
-    """(1-based line number, stripped line) of every non-blank line of ``text``, one at a time.
-
-    The lines are cut out of ``text`` lazily: a list of every line (or of every line's tokens)
-    of a 256 MB file would take several times the file in memory before anything is checked.
-    """
-    start, lineno, size = 0, 0, len(text)
-    while start < size:
-        end = text.find("\n", start)
-        if end < 0:
-            end = size
-        lineno += 1
-        line = text[start:end].strip()
-        if line:
-            yield lineno, line
-        start = end + 1
-
-
-def _line_number(text: str, offset: int) -> int:
-    """1-based line number of character ``offset`` (for messages only: it counts)."""
-    return text.count("\n", 0, offset) + 1
-
-
-def _whole_lines(text: str, token: str, end: int | None = None) -> Iterator[tuple[int, str]]:
-    """(offset, stripped line) of the lines of ``text[:end]`` that start with ``token``.
-
-    Found by ``str.find`` (C speed) rather than by visiting every line: a header's few lines
-    among millions of data lines.
-    """
-    end = len(text) if end is None else end
-    pos = 0
-    while (i := text.find(token, pos, end)) >= 0:
-        start = text.rfind("\n", 0, i) + 1
-        stop = text.find("\n", i, end)
-        stop = end if stop < 0 else stop
-        if not text[start:i].strip():
-            yield start, text[start:stop].strip()
-        pos = stop + 1 if stop > i else i + len(token)
-
-
-def _parse_header(path: Path, text: str) -> tuple[dict[str, str], str]:
-    """Header fields (key → value text), and the text up to the ``****`` end marker.
-
-    The data lines are not visited here; content after the end marker is refused.
-    """
-    marker = next((offset for offset, line in _whole_lines(text, "*") if _END.match(line)), None)
-    body = text if marker is None else text[:marker]
-    fields: dict[str, str] = {}
-    for offset, line in _whole_lines(body, "HE "):
-        key, sep, value = line[3:].partition(":")
-        key = key.strip()
-        if not sep or not key:
-            raise InstrumentFormatError(f"{path}: line {_line_number(text, offset)}: header "
-                                        f"line without 'key: value' ({line[:60]!r})")
-        if key in fields:
-            raise InstrumentFormatError(f"{path}: line {_line_number(text, offset)}: header "
-                                        f"field {key!r} given twice")
-        fields[key] = value.strip().strip('"').strip()
-    if marker is not None:
-        stop = text.find("\n", marker)
-        after = None if stop < 0 else re.compile(r"\S").search(text, stop)
-        if after is not None:
-            raise InstrumentFormatError(f"{path}: line {_line_number(text, after.start())}: "
-                                        "content after the '****' end marker")
-    return fields, body
-
-
-def _field(uff_path: Path, fields: dict[str, str], key: str) -> str:
-    if key not in fields:
-        raise InstrumentFormatError(f"{uff_path}: the UFF header lacks {key!r}")
-    return fields[key]
-
-
-def _int_field(uff_path: Path, fields: dict[str, str], key: str, minimum: int) -> int:
-    text = _field(uff_path, fields, key)
-    try:
-        value = float(text)
-    except ValueError:
-        value = math.nan
-    if not (math.isfinite(value) and value == int(value) and value >= minimum):
-        raise InstrumentFormatError(f"{uff_path}: header field {key!r} must be an integer >= "
-                                    f"{minimum}, got {text!r}")
-    return int(value)
-
-
-def _float_field(fields: dict[str, str], key: str) -> float:
-    """The field as a finite float, NaN if absent, unrecorded (``?``) or not a number."""
-    try:
-        value = float(fields.get(key, "nan"))
-    except ValueError:
-        return math.nan
-    return value if math.isfinite(value) else math.nan
 
 
 def _parse(path: Path) -> _Uff:
@@ -516,27 +318,6 @@ def _columns(uff: _Uff, seg: _Segment) -> dict[str, _Channel]:
     return out
 
 
-def _measured(uff: _Uff, seg: _Segment, title: str, role: str, values: np.ndarray
-              ) -> np.ndarray:
-    """``values`` [SI] of channel ``role``, refused beyond its physical range or scale."""
-    with np.errstate(over="ignore"):  # an overflow is refused here
-        values = np.asarray(values, dtype=float)
-    where = f"{uff.path}: segment {seg.index} ({seg.code}) column {title!r}"
-    i = first_beyond(role, values)
-    if i is not None:
-        raise InstrumentFormatError(
-            f"{where}: sample {i} is {float(values[i]):g} {PHYSICAL_RANGES[role][2]}, beyond the "
-            f"physical range {range_text(role)}: the header's unit or calibration, or the data, "
-            "are damaged")
-    tiny = below_scale(role, values)
-    if tiny is not None:
-        raise InstrumentFormatError(
-            f"{where} is at most {abs(tiny[1]):g} {PHYSICAL_RANGES[role][2]} in magnitude (sample "
-            f"{tiny[0]}), below {scale_text(role)}: the header's unit or calibration, or the "
-            "data, are damaged")
-    return values
-
-
 def _order_and_time(uff: _Uff, seg: _Segment, height: np.ndarray, name: str
                     ) -> tuple[np.ndarray, np.ndarray, str]:
     """(row order in time, time from the segment start [s], how) from the ramp."""
@@ -582,92 +363,6 @@ def _deflection(uff: _Uff, channel: _Channel, s: tuple[float, str], notes: dict[
             + _CLI_HINT.format(name="sensitivity", flag="--sensitivity 50nm/V"))
     notes["deflection_channel"] = f"{channel.title} [V] x sensitivity {value:g} m/V ({source})"
     return channel.values * value  # checked with the force by _assemble
-
-
-def _tip_attrs(fields: dict[str, str]) -> tuple[dict[str, Any], str]:
-    """Tip attrs (Tip.as_attrs keys) from the header, and a note on what was not used."""
-    geometry = fields.get("Tip_geometry", "").strip().lower()
-    shape = next((s for word, s in _TIP_WORDS if word in geometry), None)
-    angle = _float_field(fields, "Tip_half_angle(deg)")
-    radius = _float_field(fields, "Tip_radius(m)")
-    notes = []
-    radius_ok = TIP_RADIUS_RANGE[0] <= radius <= _MAX_TIP_RADIUS
-    if not math.isnan(radius) and radius != -1 and not radius_ok:
-        notes.append(f"Tip_radius(m) = {fields.get('Tip_radius(m)')} is not a plausible tip "
-                     f"radius in metres ({TIP_RADIUS_RANGE[0]:g} to {_MAX_TIP_RADIUS:g} m); not "
-                     "used")
-    if shape is None:
-        if geometry not in _UNKNOWN:
-            notes.append(f"Tip_geometry {fields.get('Tip_geometry')!r} names no known tip shape")
-        return {}, "; ".join(notes)
-    if shape in ("cone", "pyramid"):
-        low, high = TIP_HALF_ANGLE_RANGE
-        if low <= angle <= high:
-            return {"tip_shape": shape, "tip_half_angle": angle}, "; ".join(notes)
-        notes.append(f"{geometry} tip without a half angle in [{low:g}, {high:g}] degrees "
-                     f"(Tip_half_angle(deg) = {fields.get('Tip_half_angle(deg)')!r}); not used")
-        return {}, "; ".join(notes)
-    if radius_ok:
-        return {"tip_shape": shape, "tip_radius": radius}, "; ".join(notes)
-    notes.append(f"{geometry} tip without a plausible radius; not used")
-    return {}, "; ".join(notes)
-
-
-def _meta_key(key: str) -> str:
-    return "meta_" + re.sub(r"[^0-9A-Za-z]+", "_", key).strip("_").lower()
-
-
-def _meta(fields: dict[str, str]) -> dict[str, Any]:
-    """Every header field as ``meta_<key>``: a finite number as a float, else the text."""
-    out: dict[str, Any] = {}
-    for key, text in fields.items():
-        try:
-            value = float(text)
-        except ValueError:
-            value = math.nan
-        out[_meta_key(key)] = value if math.isfinite(value) else text
-    return out
-
-
-#: name → (plausible range, unit, what it is) of the calibrations (:mod:`viscoforce._limits`).
-_RANGES = {"spring_constant": (SPRING_CONSTANT_RANGE, "N/m", "spring constant"),
-           "sensitivity": (SENSITIVITY_RANGE, "m/V", "inverse optical lever sensitivity")}
-
-
-def _option(name: str, value: Any, dimension: str) -> float | None:
-    if value is None:
-        return None
-    if isinstance(value, bool) or not isinstance(value, str | int | float):
-        raise ParameterError(f"{name} must be a number [SI] or a quantity string, got {value!r}")
-    out = parse_quantity(value, dimension, name=name) if isinstance(value, str) else float(value)
-    if not (math.isfinite(out) and out > 0):
-        raise ParameterError(f"{name} must be finite and > 0, got {value!r}")
-    bounds, unit, _ = _RANGES[name]
-    return require_plausible(name, out, bounds, unit,
-                             why=f"given as {value!r}" if isinstance(value, str) else "")
-
-
-def _calibration(uff: _Uff, keys: tuple[str, ...], user: float | None, name: str
-                 ) -> tuple[float, str]:
-    """(value, where it came from): the caller's, else the first positive header field.
-
-    A header value outside the plausible range (:data:`_RANGES`) is refused as a corrupt
-    header (UFF writes -1 or ``?`` for "not recorded": those are skipped).
-    """
-    if user is not None:
-        return user, name
-    (low, high), unit, what = _RANGES[name]
-    for key in keys:
-        value = _float_field(uff.fields, key)
-        if value > 0:
-            if not low <= value <= high:
-                flag = "--" + name.replace("_", "-")
-                raise InstrumentFormatError(
-                    f"{uff.path}: the header's {what} {key} = {uff.fields[key]} is outside the "
-                    f"plausible range [{low:g}, {high:g}] {unit} ({name}): a corrupt header; "
-                    f"pass the right value as {name} (CLI: {flag})")
-            return value, key
-    return math.nan, ""
 
 
 def read_uff(path: str | Path, *, spring_constant: float | str | None = None,
