@@ -55,7 +55,7 @@ def test_power_law_fits_chunked_and_special_powers(exponent, monkeypatch):
         a = float(g @ r) / float(g @ g)
         np.testing.assert_allclose(amp, a, rtol=1e-12)
         np.testing.assert_allclose(cost, float((r - a * g) @ (r - a * g)), rtol=1e-10)
-    monkeypatch.setattr(modulation, "_FIT_CHUNK", 1000)         # 3 candidates per chunk
+    monkeypatch.setattr("viscoforce.experiments.contact_point._FIT_CHUNK", 1000)  # 3 candidates per chunk
     chunked = modulation._power_law_fits(z, r, grid, exponent)
     np.testing.assert_allclose(chunked[0], costs, rtol=1e-14)
     np.testing.assert_allclose(chunked[1], amps, rtol=1e-14)
