@@ -14,21 +14,45 @@
   :data:`viscoforce.physics.paper.PAPER`).
 * Output files are declared with :func:`add_outputs` (:class:`Output` rows: a netCDF file, a
   figure, a directory) and checked by :func:`check_outputs` before anything is computed.
+* Error messages name the flag the user typed: :func:`typed_flags`, :func:`name_typed_option`,
+  :func:`name_flag_in_error`.
+
+This module is the CLI's single import point for its argument grammar. The negative values live
+in :mod:`viscoforce.cli._negative_args`, the output files in :mod:`viscoforce.cli._outputs_check`,
+the typed-flag naming in :mod:`viscoforce.cli._flag_names` and :class:`UsageError` in
+:mod:`viscoforce.cli._usage`; they are re-exported here.
 """
 
 from __future__ import annotations
 
 import argparse
 import math
-import os
 import re
-from collections.abc import Callable, Iterable, Sequence
+from collections.abc import Callable
 from dataclasses import dataclass
-from pathlib import Path
 from typing import Any, NamedTuple
 
 from viscoforce import _limits
-from viscoforce._files import same_file
+from viscoforce.cli._flag_names import (
+    PARAMETER_FLAGS,
+    name_flag_in_error,
+    name_typed_option,
+    typed_flags,
+)
+from viscoforce.cli._negative_args import normalize_negative_args, value_options
+from viscoforce.cli._outputs_check import (
+    DIRECTORY,
+    FIGURE,
+    NETCDF,
+    NETCDF_OR_CSV,
+    Output,
+    add_outputs,
+    check_output_paths,
+    check_outputs,
+    figure_formats,
+    format_names,
+)
+from viscoforce.cli._usage import UsageError
 from viscoforce.exceptions import EffortError, ParameterError, UnitError, ViscoforceError
 from viscoforce.physics.paper import PAPER
 from viscoforce.units import accepted_units, format_quantity, parse_quantity
@@ -65,10 +89,6 @@ __all__ = [
     "unitless_frequency_message",
     "value_options",
 ]
-
-
-class UsageError(ViscoforceError, ValueError):
-    """A command-line combination that cannot be run (exit status 2)."""
 
 
 # ── type= callables ──────────────────────────────────────────────────────────────────────────────
@@ -346,102 +366,6 @@ class OmegaRange(argparse.Action):
         setattr(namespace, self.dest, (lo, hi, n))
 
 
-# ── negative values ──────────────────────────────────────────────────────────────────────────────
-
-_NEGATIVE_VALUE_RE = re.compile(r"-[0-9.]")
-
-
-def _looks_negative(token: str) -> bool:
-    return _NEGATIVE_VALUE_RE.match(token) is not None
-
-
-def normalize_negative_args(argv: Iterable[str], value_options: Iterable[str],
-                            multi_value_options: Iterable[str] = ()) -> list[str]:
-    """Rewrite ``argv`` so that argparse accepts negative quantities such as ``-5nm``.
-
-    argparse takes any token that starts with ``-`` and is not a plain negative number
-    (``-5``, ``-.5``) for an option, so ``--h0 -5nm`` fails with "expected one argument".
-    A token "looks negative" here when it starts with ``-`` followed by a digit or ``.``
-    (``-5nm``, ``-.5nm``, ``-1e-9``, ``-3``).
-
-    * For an option in ``value_options`` (one value) followed by such a token, the pair is
-      joined: ``["--h0", "-5nm"]`` → ``["--h0=-5nm"]`` (a one-dash option ``-x`` becomes
-      ``-x-5nm``). ``--h0=-5nm`` is left alone.
-    * For an option in ``multi_value_options`` (``nargs="+"``/``"*"``/N), every following token
-      up to the next option is a value; each that looks negative gets a leading space
-      (``["--omega", "1", "-2kHz"]`` → ``["--omega", "1", " -2kHz"]``). argparse treats a token
-      that does not start with ``-`` as a value, and :func:`~viscoforce.units.parse_quantity`
-      strips the space. (``--omega=-2`` cannot work for ``nargs="+"``: it gives that single
-      value.)
-
-    Everything after a bare ``--`` is left untouched. Option names are matched exactly: give the
-    full names (argparse's prefix abbreviations such as ``--ome`` are not recognised here).
-    The scheme assumes that no option of the parser itself looks like a negative number.
-
-    Parameters
-    ----------
-    argv : iterable of str
-        Command-line tokens without the program name (``sys.argv[1:]``).
-    value_options : iterable of str
-        Option strings that take exactly one value (``{"--h0", "--from", "--to"}``).
-    multi_value_options : iterable of str, optional
-        Option strings that take one or more values (``{"--omega"}``).
-
-    Returns
-    -------
-    list of str
-        A new token list; ``argv`` is not modified.
-    """
-    single = set(value_options)
-    multi = set(multi_value_options)
-    tokens = list(argv)
-    out: list[str] = []
-    i = 0
-    while i < len(tokens):
-        token = tokens[i]
-        if token == "--":
-            out.extend(tokens[i:])
-            break
-        out.append(token)
-        i += 1
-        if token in multi:
-            while i < len(tokens) and (not tokens[i].startswith("-") or _looks_negative(tokens[i])):
-                out.append(" " + tokens[i] if _looks_negative(tokens[i]) else tokens[i])
-                i += 1
-        elif token in single and i < len(tokens) and _looks_negative(tokens[i]):
-            joiner = "=" if token.startswith("--") else ""
-            out[-1] = f"{token}{joiner}{tokens[i]}"
-            i += 1
-    return out
-
-
-def value_options(*parsers: argparse.ArgumentParser) -> tuple[set[str], set[str]]:
-    """The option strings of ``parsers`` that take one value, and those that take several.
-
-    Parameters
-    ----------
-    *parsers : argparse.ArgumentParser
-        The parsers whose options :func:`normalize_negative_args` should know.
-
-    Returns
-    -------
-    tuple of set of str
-        ``(single, multi)``: the options with ``nargs=None`` (one value), and those with
-        ``nargs`` ``"+"``, ``"*"`` or an integer > 1.
-    """
-    single: set[str] = set()
-    multi: set[str] = set()
-    for parser in parsers:
-        for action in parser._actions:  # argparse has no public accessor
-            nargs = action.nargs
-            target = (single if nargs is None else
-                      multi if nargs in ("+", "*") or (isinstance(nargs, int) and nargs > 1)
-                      else None)
-            if target is not None:
-                target.update(o for o in action.option_strings if o.startswith("-"))
-    return single, multi
-
-
 # ── flag tables ──────────────────────────────────────────────────────────────────────────────────
 
 class Flag(NamedTuple):
@@ -578,288 +502,3 @@ NUMERICS_FLAGS = FlagGroup("numerics", (
     Flag("--outer-radius", "length", None, "LENGTH",
          "outer radius of the grid (default: where the force is negligible)"),
 ))
-
-
-# ── output files ─────────────────────────────────────────────────────────────────────────────────
-
-#: Output kinds of :class:`Output`.
-NETCDF, FIGURE, DIRECTORY = "netcdf", "figure", "directory"
-#: An output that is a netCDF file (.nc) or a CSV table (.csv), by its extension.
-NETCDF_OR_CSV = "netcdf-or-csv"
-
-#: Figure formats assumed when matplotlib cannot be asked.
-_FALLBACK_FIGURE_FORMATS = ("eps", "jpeg", "jpg", "pdf", "png", "ps", "svg", "tif", "tiff",
-                            "webp")
-
-
-class Output(NamedTuple):
-    """An output-file flag, as data.
-
-    Attributes
-    ----------
-    flag : str
-        The option string (``"--out"``).
-    kind : str
-        :data:`NETCDF`, :data:`FIGURE` or :data:`DIRECTORY` (what :func:`check_output_paths`
-        requires of the path).
-    metavar, help : str
-        As shown by ``--help``.
-    aliases : tuple of str
-        Other spellings that keep working (``demo --out`` beside ``--out-dir``).
-    """
-
-    flag: str
-    kind: str
-    metavar: str
-    help: str
-    aliases: tuple[str, ...] = ()
-
-
-def add_outputs(parser: argparse.ArgumentParser, outputs: Sequence[Output]) -> None:
-    """Add output-file flags to ``parser`` and record them for :func:`check_outputs`.
-
-    Parameters
-    ----------
-    parser : argparse.ArgumentParser
-        The (sub)command parser.
-    outputs : sequence of Output
-        The flags (default None: not written).
-    """
-    for o in outputs:
-        parser.add_argument(o.flag, *o.aliases, default=None, metavar=o.metavar, help=o.help,
-                            dest=_dest(o.flag))
-    parser.set_defaults(outputs_=tuple(outputs))
-
-
-def format_names() -> str:
-    """The instrument formats ``--format`` takes, from the registry (``"jpk, csv-curves, ..."``)."""
-    from viscoforce.io.instruments import FORMATS
-
-    return ", ".join(f.name for f in FORMATS)
-
-
-def figure_formats() -> tuple[str, ...]:
-    """File extensions (without the dot) that matplotlib's ``savefig`` can write.
-
-    Asks :meth:`matplotlib.backend_bases.FigureCanvasBase.get_supported_filetypes` (pyplot is
-    not imported); a fixed list (png, pdf, svg, eps, ps, jpg, jpeg, tif, tiff, webp) if
-    matplotlib cannot be imported.
-    """
-    try:
-        from matplotlib.backend_bases import FigureCanvasBase
-    except ImportError:  # pragma: no cover - matplotlib is a dependency
-        return _FALLBACK_FIGURE_FORMATS
-    return tuple(sorted(FigureCanvasBase.get_supported_filetypes()))
-
-
-def _check_one(flag: str, text: str, kind: str) -> None:
-    path = Path(text)
-    shown = f"{flag} {text}"
-    if not text.strip():
-        raise UsageError(f"{flag}: empty file name")
-    if kind == DIRECTORY:
-        if path.exists() and not path.is_dir():
-            raise UsageError(f"{shown}: exists and is not a directory")
-        return
-    if path.is_dir():
-        raise UsageError(f"{shown}: is a directory; give a file name")
-    suffix = path.suffix.lower()
-    if kind == NETCDF and suffix != ".nc":
-        raise UsageError(f"{shown}: a netCDF file name must end in .nc")
-    if kind == NETCDF_OR_CSV and suffix not in (".nc", ".csv"):
-        raise UsageError(f"{shown}: the file name must end in .nc (netCDF) or .csv (a table)")
-    if kind == FIGURE:
-        formats = figure_formats()
-        listed = ", ".join(f".{f}" for f in formats)
-        if not suffix:
-            raise UsageError(f"{shown}: no file extension to choose the figure format; end the "
-                             f"name in one of {listed}")
-        if suffix[1:] not in formats:
-            raise UsageError(f"{shown}: unsupported figure format '{suffix}'; supported: {listed}")
-    parent = path.parent
-    if not parent.is_dir():
-        raise UsageError(f"{shown}: directory '{parent}' does not exist")
-    if path.exists() and not os.access(path, os.W_OK):
-        raise UsageError(f"{shown}: the existing file is not writable")
-    if not path.exists() and not os.access(parent, os.W_OK | os.X_OK):
-        raise UsageError(f"{shown}: directory '{parent}' is not writable")
-
-
-def check_output_paths(paths: Iterable[tuple[str, str | None, str]]) -> None:
-    """Refuse output paths that cannot be written, before anything is computed.
-
-    Parameters
-    ----------
-    paths : iterable of (flag, path or None, kind)
-        Each output flag, its value (None: not given) and its kind (:data:`NETCDF`: must end in
-        ``.nc``; :data:`FIGURE`: an extension matplotlib can write, see :func:`figure_formats`;
-        :data:`DIRECTORY`: a directory, created by the command if missing).
-
-    Raises
-    ------
-    UsageError
-        Two flags naming the same file; an empty name; a file path that is a directory or
-        whose parent directory does not exist or is not writable; a wrong or missing extension.
-    """
-    given = [(flag, text, kind) for flag, text, kind in paths if text is not None]
-    seen: dict[str, str] = {}
-    for flag, text, _ in given:
-        key = os.path.normcase(os.path.realpath(text)) if text.strip() else ""
-        if key and key in seen:
-            raise UsageError(f"{flag} {text}: the same file as {seen[key]}; give two different "
-                             "file names")
-        seen[key] = flag
-    for flag, text, kind in given:
-        _check_one(flag, text, kind)
-
-
-def _dest(flag: str) -> str:
-    return flag.lstrip("-").replace("-", "_")
-
-
-def check_outputs(args: argparse.Namespace) -> None:
-    """:func:`check_output_paths` for the outputs a parser declared with :func:`add_outputs`.
-
-    Parameters
-    ----------
-    args : argparse.Namespace
-        Parsed arguments (without declared outputs nothing is checked).
-    """
-    outputs: Sequence[Output] = getattr(args, "outputs_", ())
-    typed = getattr(args, "typed_", {})
-
-    def shown(o: Output) -> str:  # the spelling the user typed
-        return typed.get(_dest(o.flag), (o.flag,))[0]
-
-    check_output_paths((shown(o), getattr(args, _dest(o.flag)), o.kind) for o in outputs)
-    written = {_dest(o.flag) for o in outputs}
-    inputs = [text for key, value in vars(args).items()
-              if key not in written and not key.endswith("_") for text in _strings(value)]
-    for o in outputs:
-        target = getattr(args, _dest(o.flag))
-        if target is None or o.kind == DIRECTORY or not Path(target).exists():
-            continue
-        for source in inputs:
-            if same_file(target, source):
-                raise UsageError(f"{shown(o)} {target} is an input of this command ({source}): "
-                                 "writing it would destroy the data; give another file name")
-
-
-def _strings(value: object) -> list[str]:
-    """The strings in an argument value (a path, a list of paths, HEIGHT=FILE pairs)."""
-    if isinstance(value, str):
-        return [value]
-    if isinstance(value, list | tuple):
-        return [s for v in value for s in _strings(v)]
-    return []
-
-
-# ── the flag the user typed ──────────────────────────────────────────────────────────────────────
-
-#: Library parameter names that are not the name of the flag that sets them: name → (the dests
-#: that may have set it, in order of preference; the words shown instead of the name).
-PARAMETER_FLAGS: dict[str, tuple[tuple[str, ...], str]] = {
-    "deepest_position": (("h0", "to", "from_"), "the deepest position"),
-    "position": (("h0",), "the position"),
-    "radius": (("R",), "the radius"),
-    "rise_time": (("duration",), "the rise time"),
-    "n_jobs": (("jobs",), "the number of workers"),
-    "reference_frequency": (("reference_frequency",), "the reference frequency"),
-    "load": (("mean_force",), "the mean force"),
-}
-
-_ALTERNATIVES_RE = re.compile(r"argument ((?:--?[\w-]+/)+--?[\w-]+)")
-_LEADING_NAME_RE = re.compile(r"([A-Za-z_][A-Za-z0-9_]*)(?=[ \[(:]|$)")
-
-
-def typed_flags(parser: argparse.ArgumentParser, argv: Sequence[str]
-                ) -> dict[str, tuple[str, str | None]]:
-    """Which spelling of each option the user typed, and its value as typed.
-
-    Parameters
-    ----------
-    parser : argparse.ArgumentParser
-        The command's parser (its actions give the option strings and dests).
-    argv : sequence of str
-        The tokens as given (before :func:`normalize_negative_args`).
-
-    Returns
-    -------
-    dict
-        dest → (option string as typed, value text or None for a flag without one value); the
-        last occurrence wins, as in argparse.
-    """
-    by_option = {o: a for a in parser._actions for o in a.option_strings}
-    tokens = list(argv)
-    out: dict[str, tuple[str, str | None]] = {}
-    for i, token in enumerate(tokens):
-        if token == "--":
-            break
-        name, eq, value = token.partition("=")
-        action = by_option.get(name)
-        if action is None:
-            continue
-        if not eq:
-            value = tokens[i + 1] if action.nargs is None and i + 1 < len(tokens) else None
-        out[action.dest] = (name, value if action.nargs is None else None)
-    return out
-
-
-def name_typed_option(message: str, argv: Sequence[str]) -> str:
-    """Rewrite argparse's ``argument --radius/--R: ...`` as ``argument --R: ...`` if ``--R`` was typed.
-
-    Parameters
-    ----------
-    message : str
-        An argparse error message.
-    argv : sequence of str
-        The tokens as given.
-
-    Returns
-    -------
-    str
-        The message with each ``A/B`` option list reduced to the spelling found in ``argv``
-        (unchanged where none of them is).
-    """
-    typed = {t.partition("=")[0] for t in argv}
-
-    def pick(match: re.Match[str]) -> str:
-        options = match[1].split("/")
-        chosen = next((o for o in options if o in typed), None)
-        return f"argument {chosen}" if chosen else match[0]
-
-    return _ALTERNATIVES_RE.sub(pick, message)
-
-
-def name_flag_in_error(message: str, typed: dict[str, tuple[str, str | None]]) -> str:
-    """A library error about a parameter, told in terms of the flag the user typed.
-
-    ``deepest_position must be >= -0.1 R ..., got -0.005`` after ``--h0 -5mm`` becomes
-    ``--h0 -5mm: the deepest position must be >= ...``; ``radius (R) must be > 0`` after
-    ``--radius 0`` becomes ``--radius 0: radius (R) must be > 0``. A message whose leading name
-    no typed flag sets is returned unchanged.
-
-    Parameters
-    ----------
-    message : str
-        The error text.
-    typed : dict
-        :func:`typed_flags` of the command line.
-
-    Returns
-    -------
-    str
-        The message, prefixed with ``FLAG VALUE:`` when a typed flag set the parameter named.
-    """
-    match = _LEADING_NAME_RE.match(message)
-    if match is None:
-        return message
-    name = match[1]
-    dests, words = PARAMETER_FLAGS.get(name, ((name,), None))
-    dest = next((d for d in dests if d in typed), None)
-    if dest is None:
-        return message
-    option, value = typed[dest]
-    if words is not None:
-        message = words + message[match.end():]
-    return f"{option}{'' if value is None else ' ' + value}: {message}"

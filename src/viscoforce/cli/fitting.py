@@ -10,7 +10,7 @@ import argparse
 import sys
 from typing import Any
 
-from viscoforce._files import write_netcdf, write_text
+from viscoforce._files import write_netcdf
 from viscoforce.cli._args import (
     FIGURE,
     NETCDF_OR_CSV,
@@ -27,22 +27,36 @@ from viscoforce.cli._args import (
     integer_type,
     real_type,
 )
+from viscoforce.cli._fit_inputs import (  # noqa: F401 - read_data, one_curve_squeezed: public here
+    _CURVE_MODELS,
+    _MATERIALS,
+    _MODELS,
+    _check_model,
+    _extra_dims,
+    _fixed,
+    _kind,
+    _select_curve,
+    fit_one,
+    measured,
+    one_curve_squeezed,
+    read_data,
+)
+from viscoforce.cli._fit_report import (
+    _fit_recording,
+    _map_json,
+    _print_map,
+    _print_single,
+    _single_json,
+    show_value,
+)
+from viscoforce.cli._fit_tables import _write_csv, table_rows, write_table  # noqa: F401
 from viscoforce.cli._output import (
-    DIGITS,
-    format_estimate,
-    format_value,
     print_json,
     print_written,
 )
-from viscoforce.physics.paper import PAPER
 
 __all__ = ["SUBCOMMANDS", "modes_type", "read_data"]
 
-_MODELS = ("svda", "exact", "contact", "prony", "relaxation", "step", "hertz", "creep", "ting",
-           "auto")
-#: Models of measured force curves (a curves dataset).
-_CURVE_MODELS = ("relaxation", "hertz", "creep", "ting")
-_MATERIALS = ("sls", "prony", "power-law", "structural")
 _WEIGHTS = ("stderr", "relative")
 
 
@@ -223,482 +237,7 @@ def add_bode(parser: argparse.ArgumentParser) -> None:
                              "(omega, stiffness, phase_deg) and the fit (as fit --json)")
 
 
-# ── data ────────────────────────────────────────────────────────────────────────────────────────
-
-def read_data(path: str, fmt: str | None = None):
-    """The dataset of DATA: netCDF as written, instrument files through ``load``'s route.
-
-    Measured data in a netCDF file (``source`` an instrument format, not "simulation" or absent)
-    pass the checks the instrument readers apply (:func:`viscoforce.io.quality.check_measured`):
-    a file written elsewhere, or edited, may hold values no measurement gives.
-    """
-    from pathlib import Path
-
-    from viscoforce.cli.analysis import has_modulation, streamed_spectrum
-    from viscoforce.exceptions import EffortError
-    from viscoforce.io.instruments import load_instrument
-    from viscoforce.io.netcdf import open_netcdf
-    from viscoforce.io.quality import check_measured
-
-    if Path(path).suffix.lower() == ".nc" and fmt is None:
-        if not Path(path).is_file():
-            raise UsageError(f"DATA {path}: no such file")
-        try:
-            ds = open_netcdf(path)
-        except EffortError:
-            raise
-        except (OSError, ValueError) as exc:
-            raise UsageError(f"DATA {path}: not a readable netCDF file ({exc})") from None
-        if str(ds.attrs.get("source", "simulation")) != "simulation":  # measured
-            check_measured(ds, str(path))
-        return one_curve_squeezed(ds)
-    streamed = streamed_spectrum(path, fmt)  # a JPK map: demodulated in chunks of curves
-    if streamed is not None:
-        return one_curve_squeezed(streamed)
-    data = load_instrument(path, format=fmt)
-    if "omega" not in data.dims and has_modulation(data):
-        from viscoforce.experiments.modulation import modulation_spectrum
-
-        data = modulation_spectrum(data)
-    return one_curve_squeezed(data)
-
-
-def one_curve_squeezed(ds):
-    """A spectrum of a single curve (``curve`` of size 1) as one spectrum, not a 1-pixel map."""
-    if "omega" in ds.dims and ds.sizes.get("curve") == 1:
-        return ds.isel(curve=0)
-    return ds
-
-
-def _kind(ds) -> str:
-    if "omega" in ds.dims and "stiffness" in ds.variables:
-        return "spectrum"
-    if "sample" in ds.dims:
-        return "curves"
-    if "time" in ds.dims and "position" in ds.variables:
-        return "trajectory"
-    raise UsageError("DATA is neither a spectrum, curves nor a trajectory dataset")
-
-
-def measured(ds, args: argparse.Namespace) -> bool:
-    """Whether ``--model auto`` fits measured data: no --h0/--mean-force, an indentation known."""
-    if args.h0 is not None or args.mean_force is not None:
-        return False
-    return args.indentation is not None or "mean_indentation" in ds.variables
-
-
-def _given(args: argparse.Namespace, *names: str) -> list[str]:
-    """The flags among ``names`` (dest names) that were given."""
-    return [f"--{n.replace('_', '-')}" for n in names
-            if getattr(args, n, None) not in (None, False)]
-
-
-def _fixed(args: argparse.Namespace, ds, kind: str) -> dict[str, Any]:
-    """The model's fixed inputs from the flags (and the data); flags a model cannot honour fail."""
-    model = args.model
-    if args.h0 is not None and args.mean_force is not None:
-        raise UsageError("give --h0 or --mean-force, not both")
-    if args.material is not None and args.material not in _MATERIALS:
-        raise UsageError(f"--material must be one of {', '.join(_MATERIALS)}, got "
-                         f"{args.material!r}")
-    contact_only = ("material", "newtonian", "reference_frequency", "indentation")
-    if model == "auto" and kind == "spectrum" and measured(ds, args):
-        bad = _given(args, "newtonian", "segment")
-        if bad:
-            raise UsageError(f"--model auto on measured data cannot honour {', '.join(bad)} (it "
-                             "compares power-law with and without mu itself)")
-        return {**_tip_inputs(args, ds), "indentation": args.indentation, "drag": args.drag,
-                "material": args.material, "reference_frequency": args.reference_frequency,
-                "debye_length": args.debye_length}
-    if model == "ting":
-        bad = _given(args, "indentation", "newtonian", "h0", "mean_force")
-        if bad:
-            raise UsageError(f"--model ting cannot honour {', '.join(bad)}")
-        if args.material not in (None, "sls", "prony", "structural"):
-            raise UsageError(f"--model ting takes --material sls, prony or structural, got "
-                             f"{args.material}")
-        if args.fit_drag and args.drag is not None:
-            raise UsageError("give --drag or --fit-drag, not both")
-        return {"tip": _hertz_tip(args, ds), "material": args.material or "sls",
-                "drag": args.drag, "fit_drag": bool(args.fit_drag) or None,
-                "contact_point": args.contact_point,
-                "reference_frequency": args.reference_frequency,
-                "newtonian": False if args.no_newtonian else None}
-    if model != "contact":
-        bad = _given(args, *contact_only)
-        if model == "auto":
-            bad = [b for b in bad if b != "--drag"]
-        if bad:
-            raise UsageError(f"--model {model} cannot honour {', '.join(bad)} (contact-model "
-                             "flags" + ("; --model auto takes them on measured data, without "
-                                        "--h0/--mean-force" if model == "auto" else "") + ")")
-    fixed: dict[str, Any] = {}
-    if model in ("svda", "exact", "auto"):
-        if args.h0 is None and args.mean_force is None:
-            median = ""
-            if "mean_force" in ds.variables:
-                import numpy as np
-
-                median = (f" (this spectrum's median mean force is "
-                          f"{float(np.nanmedian(ds['mean_force'].values)):.4g} N)")
-            hint = ("; on measured data give --indentation D0 (or load a file with a contact "
-                    "point) to compare contact materials") if model == "auto" else ""
-            raise UsageError(f"--model {model} needs the mean position: --h0 H or --mean-force "
-                             f"F{median}{hint}")
-        fixed["position" if args.h0 is not None else "mean_force"] = (
-            args.h0 if args.h0 is not None else args.mean_force)
-    if model in ("svda", "exact", "step", "auto"):
-        if args.tip is not None:
-            raise UsageError(f"--model {model} models the paper's sphere: give --R, not --tip "
-                             "(--tip applies to --model contact and --model auto on measured "
-                             "data)")
-        if args.R is None:
-            args.R = PAPER.R
-    if model == "svda":
-        fixed.update(radius=args.R, P=args.P, debye_length=args.debye_length)
-    if model in ("exact", "step", "auto"):
-        fixed["problem"] = _problem(args, ds, kind)
-    if model == "auto" and args.drag is not None:
-        fixed["drag"] = args.drag
-    if model == "hertz":
-        fixed["tip"] = _hertz_tip(args, ds)
-    if model in ("relaxation", "creep") and (args.tip is not None or args.R is not None):
-        raise UsageError(f"--model {model} fits {'forces' if model == 'relaxation' else 'the tip position'}"
-                         " over time: it takes no --tip or --R")
-    if model == "contact":
-        fixed.update(**_tip_inputs(args, ds), indentation=args.indentation, drag=args.drag,
-                     material=args.material or "sls", debye_length=args.debye_length)
-        if args.newtonian:
-            fixed["newtonian"] = True
-        if args.reference_frequency is not None:
-            fixed["reference_frequency"] = args.reference_frequency
-    return fixed
-
-
-def _tip_inputs(args: argparse.Namespace, ds) -> dict[str, Any]:
-    """``tip`` or ``radius`` of the contact model; measured data without either are refused.
-
-    A measured file does not record the tip here: a silent 10 µm would put every modulus off by
-    √(10 µm / R). Spectra the project simulated (``source`` "simulation" or none) take the
-    paper's sphere.
-    """
-    if args.tip is not None and args.R is not None:
-        raise UsageError("give --tip or --R (the paper's sphere), not both")
-    if args.tip is not None:
-        return {"tip": args.tip}
-    if args.R is not None:
-        return {"radius": args.R}
-    from viscoforce.fitting.curves import file_tip
-
-    recorded = file_tip(ds)
-    if recorded is not None:  # the file's own tip metadata
-        return {"tip": recorded}
-    source = str(ds.attrs.get("source", "simulation"))
-    if source != "simulation":
-        raise UsageError(
-            f"the moduli need the tip, which this {source} file does not record: give --tip "
-            "sphere:R | paraboloid:R | cone:HALF_ANGLE | pyramid:HALF_ANGLE | flat:RADIUS "
-            "(e.g. --tip sphere:5um) or --R (the paper's sphere)")
-    return {"radius": PAPER.R}
-
-
-def _hertz_tip(args: argparse.Namespace, ds):
-    """The hertz model's tip: --tip, --R (a sphere) or the file's own; else a usage error."""
-    from viscoforce.fitting.curves import file_tip
-    from viscoforce.physics.tips import Sphere
-
-    if args.tip is not None and args.R is not None:
-        raise UsageError("give --tip or --R (a sphere), not both")
-    if args.tip is not None:
-        return args.tip
-    if args.R is not None:
-        return Sphere(args.R)
-    tip = file_tip(ds)
-    if tip is None:
-        raise UsageError(
-            f"--model {args.model} needs the tip, which this {ds.attrs.get('source', '')} file "
-            "does not "
-            "record: give --tip sphere:R | paraboloid:R | cone:HALF_ANGLE | pyramid:HALF_ANGLE | "
-            "flat:RADIUS (e.g. --tip cone:20) or --R")
-    return tip
-
-
-def _problem(args: argparse.Namespace, ds, kind: str):
-    import numpy as np
-
-    from viscoforce.cli.model import problem_from_args
-    from viscoforce.physics.materials import StandardLinearSolid
-    from viscoforce.physics.paper import PAPER
-
-    if kind == "trajectory":
-        deepest = float(np.min(ds["position"].values))
-    else:
-        deepest = args.h0 if args.h0 is not None else -20e-9
-    material = StandardLinearSolid(PAPER.E0, PAPER.E_inf, PAPER.tau)
-    return problem_from_args(args, material, min(deepest, 0.0) - 2 * args.debye_length)
-
-
-def _check_model(args: argparse.Namespace, kind: str) -> None:
-    spectrum_models = ("svda", "exact", "contact", "prony", "auto")
-    wanted = {"spectrum": spectrum_models, "curves": _CURVE_MODELS, "trajectory": ("step",)}
-    if args.model not in wanted[kind]:
-        raise UsageError(f"--model {args.model} does not fit {kind} data; for {kind}: "
-                         f"{', '.join(wanted[kind])}")
-    if args.modes == "auto" and args.model not in ("exact", "contact", "prony", "relaxation",
-                                                   "creep", "ting", "auto"):
-        raise UsageError(f"--modes auto needs a model with several modes, not {args.model}")
-    if args.criterion not in ("bic", "aic"):
-        raise UsageError(f"--criterion must be bic or aic, got {args.criterion!r}")
-
-
-def _extra_dims(ds, kind: str) -> list[str]:
-    if kind == "spectrum":
-        return [str(d) for d in ds["stiffness"].dims if d != "omega"]
-    if kind == "curves":
-        return ["curve"] if int(ds.sizes["curve"]) > 1 else []
-    return []
-
-
-def _select_curve(ds, kind: str, index: int | None):
-    if index is None:
-        return ds
-    dims = _extra_dims(ds, kind)
-    if not dims:
-        if index != 0:
-            raise UsageError(f"--curve {index}: DATA holds one spectrum or curve (use 0)")
-        return ds
-    if kind == "curves":
-        from viscoforce.schema import select_curve
-
-        n = int(ds.sizes["curve"])
-        if index >= n:
-            raise UsageError(f"--curve {index}: DATA has {n} curves (0 to {n - 1})")
-        return select_curve(ds, index)
-    stacked = ds.stack(pixel=dims)
-    n = stacked.sizes["pixel"]
-    if index >= n:
-        raise UsageError(f"--curve {index}: DATA has {n} spectra (0 to {n - 1})")
-    return stacked.isel(pixel=index).drop_vars(["pixel", *dims], errors="ignore")
-
-
-def fit_one(args: argparse.Namespace, ds, kind: str):
-    """The fit result of one spectrum, curve or trajectory."""
-    from viscoforce.fitting.curves import fit_curve, fit_hold, fit_step
-    from viscoforce.fitting.fit import fit_spectrum
-
-    fixed = _fixed(args, ds, kind)
-    if kind == "spectrum":
-        if args.model == "auto":
-            if args.accuracy is not None and measured(ds, args):
-                raise UsageError("--accuracy chooses between the theory's approximations (with "
-                                 "--h0 or --mean-force); on measured data --model auto compares "
-                                 "materials by the criterion: leave --accuracy out")
-            if args.accuracy is not None:
-                fixed["accuracy"] = args.accuracy
-            if args.weights is not None and not measured(ds, args):
-                raise UsageError("--weights applies to named models and to --model auto on "
-                                 "measured data")
-        elif args.accuracy is not None:
-            raise UsageError("--accuracy needs --model auto")
-        weights = {} if args.weights is None else {"weights": args.weights}
-        chosen = getattr(args, "identifiability", None)  # bode --fit has no such flag
-        options = {} if chosen is None else {"identifiability": chosen}
-        return fit_spectrum(ds, args.model, modes=args.modes, criterion=args.criterion,
-                            poisson=args.poisson, **weights, **options, **fixed)
-    if getattr(args, "identifiability", None) is not None:
-        raise UsageError("--identifiability applies to spectra and maps (curve fits use "
-                         "their own rule)")
-    if args.weights is not None:
-        raise UsageError("--weights applies to spectra (curve fits are unweighted)")
-    modes = 1 if args.modes is None else args.modes
-    if kind == "curves":
-        if args.model == "hertz" and args.modes not in (None, 1):
-            raise UsageError("--model hertz has no modes: leave --modes out")
-        if args.model == "relaxation":
-            return fit_hold(ds, segment=args.segment, modes=modes, criterion=args.criterion)
-        if args.model == "ting":
-            from viscoforce.fitting.ting import fit_ting
-
-            return fit_ting(ds, segment=args.segment, modes=modes, criterion=args.criterion,
-                            poisson=args.poisson, **{k: v for k, v in fixed.items()
-                                                     if v is not None})
-        return fit_curve(ds, args.model, segment=args.segment, modes=modes,
-                         criterion=args.criterion, tip=fixed.get("tip"),
-                         poisson=args.poisson if args.model == "hertz" else None)
-    return fit_step(ds, problem=fixed["problem"], poisson=args.poisson)
-
-
 # ── fit ─────────────────────────────────────────────────────────────────────────────────────────
-
-def show_value(value: float | None, unit: str, digits: int = DIGITS) -> str:
-    """A parameter value for humans (:func:`~viscoforce.cli._output.format_value`)."""
-    return format_value(value, unit, digits)
-
-
-def _single_json(result) -> dict[str, Any]:
-    import numpy as np
-
-    from viscoforce.fitting.identify import IDENTIFIABILITY
-    from viscoforce.fitting.verdict import bound_text
-
-    names = [str(n) for n in result["param_i"].values]
-    codes = (np.asarray(result["identifiability"].values).reshape(-1).tolist()
-             if "identifiability" in result else [0] * len(names))
-    params = {}
-    for n, code in zip(names, codes, strict=True):
-        entry = {"value": float(result[n]), "stderr": float(result[f"{n}_stderr"]),
-                 "identified": IDENTIFIABILITY[int(code)]}
-        for side in ("lower", "upper"):
-            if f"{n}_{side}" in result:
-                entry[side] = float(result[f"{n}_{side}"])
-        text = bound_text(result, n)
-        if text:
-            entry["report_as"] = text
-        params[n] = entry
-    corr = result["correlation"].values
-    out: dict[str, Any] = {
-        "model": result.attrs["model"], "modes": int(result["modes"]), "params": params,
-        "correlations": {a: {b: float(corr[i, j]) for j, b in enumerate(names) if j != i}
-                         for i, a in enumerate(names)},
-        "redchi": float(result["redchi"]), "aic": float(result["aic"]),
-        "bic": float(result["bic"]), "success": bool(int(result["success"])),
-        "chi2_pvalue": float(result["chi2_pvalue"]) if "chi2_pvalue" in result else None,
-        "weighting": str(result.attrs.get("weighting", "")),
-        "at_bound": [s for s in str(result.attrs.get("at_bound", "")).split(", ")
-                     if s and s != "none"]}
-    derived = {str(n): {"value": float(result[n]), "stderr": float(result[f"{n}_stderr"])}
-               for n in result.data_vars if str(n).endswith(("_young", "_shear"))
-               or str(n) in ("ting_E0", "beta")}
-    if derived:
-        out["derived"] = derived
-        out["poisson"] = float(result.attrs.get("poisson", 0.5))
-    for key in ("tip", "tip_shape", "tip_radius", "tip_half_angle"):
-        if key in result.attrs:
-            value = result.attrs[key]
-            out[key] = value if isinstance(value, str) else float(value)
-    for key in ("material", "candidate", "residual_lag1", "effective_samples", "validity",
-                "identifiability_method", "ting_error",
-                "depth_check", "depth_check_E", "depth_check_shift", "precontact_rise",
-                "creep_force", "segment_type"):
-        if key in result.attrs:
-            value = result.attrs[key]
-            out[key] = value if isinstance(value, str) else float(value)
-    if "selection_modes" in result:
-        rows = []
-        for i in range(result.sizes["candidate"]):
-            row = {"modes": int(result["selection_modes"].values[i]),
-                   "aic": float(result["selection_aic"].values[i]),
-                   "bic": float(result["selection_bic"].values[i])}
-            for key in ("label", "redchi", "pvalue", "parameters"):
-                if f"selection_{key}" in result:
-                    value = result[f"selection_{key}"].values[i]
-                    row[key] = str(value) if key == "label" else float(value)
-            rows.append(row)
-        out["selection"] = rows
-        out["criterion"] = result.attrs.get("criterion", "bic")
-        if "selection_note" in result.attrs:
-            out["selection_note"] = str(result.attrs["selection_note"])
-    if "explanation" in result.attrs:  # --model auto
-        out["explanation"] = str(result.attrs["explanation"])
-        if "estimated_model_error" in result.attrs:
-            out["estimated_model_error"] = float(result.attrs["estimated_model_error"])
-    return out
-
-
-def _map_json(result) -> dict[str, Any]:
-    from viscoforce.fitting.pixels import map_summary
-
-    return {"model": result.attrs["model"], **map_summary(result),
-            "n_failed": int(result.attrs["n_failed"])}
-
-
-def _print_single(info: dict[str, Any]) -> None:
-    from viscoforce.schema.fit import parameter_units
-
-    p_value = info.get("chi2_pvalue")
-    fit_text = (f"chi-square p-value {p_value:.2g}" if p_value is not None and p_value == p_value
-                else f"no p-value (weights {info.get('weighting') or 'unknown'})")
-    label = f" ({info['candidate']})" if "candidate" in info else ""
-    print(f"model {info['model']}{label}, {info['modes']} mode(s), "
-          f"{'converged' if info['success'] else 'DID NOT CONVERGE'}; redchi "
-          f"{info['redchi']:.4g}, {fit_text}, AIC {info['aic']:.4g}, BIC {info['bic']:.4g}")
-    for name, p in info["params"].items():
-        unit = parameter_units(name)
-        line = f"  {name:<8} = {format_estimate(p['value'], p['stderr'], unit)}"
-        if "report_as" in p:
-            line += f"   -> report as {p['report_as']} ({info.get('identifiability_method', '')})"
-        print(line)
-    if info.get("derived"):
-        nu = info["poisson"]
-        print(f"  Young's and shear moduli (Poisson's ratio {nu:g}; E above is the paper's "
-              "2/E = sum (1 - nu^2)/E_i):")
-        for name, p in info["derived"].items():
-            base = name if name in ("ting_E0", "beta") else name.rsplit("_", 1)[0]
-            unit = parameter_units(base)
-            print(f"  {name:<12} = {format_estimate(p['value'], p['stderr'], unit)}")
-    if "tip" in info:
-        print(f"  tip: {info['tip']}")
-    if info["at_bound"]:
-        print(f"  at a bound (not identified by these data): {', '.join(info['at_bound'])}")
-    for row in info.get("selection", []):
-        name = row.get("label", f"{row['modes']} mode(s)")
-        extra = f", redchi {row['redchi']:.3g}" if "redchi" in row else ""
-        print(f"  candidate {name}: AIC {row['aic']:.4g}, BIC {row['bic']:.4g}{extra}")
-    if "selection_note" in info:
-        print(f"  note: {info['selection_note']}")
-    if "explanation" in info:
-        print(f"  model choice: {info['explanation']}")
-    if "depth_check" in info:
-        print(f"  depth check: {info['depth_check']}")
-    if "validity" in info:
-        print(f"  validity: {info['validity']}")
-
-
-def _print_map(info: dict[str, Any]) -> None:
-    from viscoforce.schema.fit import parameter_units
-
-    left = ", ".join(f"{v} {k.replace('_', ' ')}" for k, v in info["left_out"].items() if v)
-    print(f"model {info['model']}: {info['n_fits']} fits, {info['n_good']} good"
-          + (f"; left out of the summary: {left}" if left else ""))
-    for modes, block in info["by_modes"].items():
-        print(f"  {modes} mode(s), {block['n']} good pixel(s):")
-        for name, p in block["params"].items():
-            unit = parameter_units(name)
-            print(f"    {name:<8} median {show_value(p['median'], unit)}, IQR "
-                  f"{show_value(p['q25'], unit)} .. {show_value(p['q75'], unit)}")
-    if info.get("derived"):
-        print(f"  Young's and shear moduli (Poisson's ratio {info['poisson']:g}), the pixels of "
-              f"{info['modes']} mode(s):")
-        for name, p in info["derived"].items():
-            unit = parameter_units(name.rsplit("_", 1)[0])
-            print(f"    {name:<12} median {show_value(p['median'], unit)}, IQR "
-                  f"{show_value(p['q25'], unit)} .. {show_value(p['q75'], unit)}")
-
-
-def _fit_recording(run, *args: Any, **kwargs: Any):
-    """``run(*args, **kwargs)`` with the viscoforce warnings recorded, then shown; (result, texts)."""
-    import warnings
-
-    from viscoforce.exceptions import (
-        AccuracyWarning,
-        DataWarning,
-        GoodnessOfFitWarning,
-        ModelValidityWarning,
-    )
-
-    kinds = (ModelValidityWarning, AccuracyWarning, GoodnessOfFitWarning, DataWarning)
-    with warnings.catch_warnings(record=True) as caught:
-        warnings.simplefilter("always")
-        result = run(*args, **kwargs)
-    texts = []
-    for w in caught:
-        if issubclass(w.category, kinds):
-            text = str(w.message)
-            if text not in texts:
-                texts.append(text)
-        warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
-    return result, texts
-
 
 #: File suffixes a folder given as DATA contributes to a batch fit (what ``load`` reads).
 BATCH_SUFFIXES = (".jpk-force", ".jpk-force-map", ".zip", ".ibw", ".csv", ".tsv", ".txt", ".nc",
@@ -809,56 +348,6 @@ def run_fit(args: argparse.Namespace) -> int:
         _print_single(info)
     print_written(args.out, args.plot)
     return 0
-
-
-def table_rows(result) -> tuple[list[str], list[list[Any]]]:
-    """A fit result as table rows: ``name (unit)`` headers and one row per curve/pixel.
-
-    Columns: the map's coordinates, each parameter and its stderr, the derived Young's and shear
-    moduli, ``redchi``, ``chi2_pvalue``, ``quality`` (maps), ``success``, ``modes``; every column
-    read over the rows by dim name (:func:`viscoforce.schema.flat_over`).
-    """
-    from viscoforce.schema import flat_over
-
-    names = [str(n) for n in result["param_i"].values]
-    columns = [n for name in names for n in (name, f"{name}_stderr")]
-    columns += [str(n) for n in result.data_vars if str(n).endswith(
-        ("_young", "_shear", "_young_stderr", "_shear_stderr"))]
-    columns += [n for n in ("redchi", "chi2_pvalue", "quality", "success", "modes")
-                if n in result.variables]
-    dims = [str(d) for d in result["success"].dims]
-    coords = [str(c) for c in result.coords
-              if c not in ("param_i", "param_j", "omega", "time", "tip_position")
-              and set(result[c].dims) <= set(dims) and result[c].dims]
-
-    def header(name: str) -> str:
-        unit = str(result[name].attrs.get("units", ""))
-        return f"{name} ({unit})" if unit else name
-
-    headers = [header(c) for c in (*coords, *columns)]
-    rows = [list(row) for row in zip(*(flat_over(result, c, tuple(dims))
-                                       for c in (*coords, *columns)), strict=True)]
-    return headers, rows
-
-
-def _write_csv(path: str, headers: list[str], rows: list[list[Any]]) -> None:
-    import csv
-    import io
-
-    import numpy as np
-
-    handle = io.StringIO(newline="")
-    writer = csv.writer(handle)
-    writer.writerow(headers)
-    for row in rows:
-        writer.writerow(["" if v is None else f"{v:.10g}" if isinstance(
-            v, float | np.floating) else v for v in row])
-    write_text(path, handle.getvalue())
-
-
-def write_table(result, path: str) -> None:
-    """A fit result as CSV: one row per curve/pixel, ``name (unit)`` headers (:func:`table_rows`)."""
-    _write_csv(path, *table_rows(result))
 
 
 # ── batch: many files into one table ────────────────────────────────────────────────────────────

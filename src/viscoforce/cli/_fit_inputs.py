@@ -1,0 +1,323 @@
+"""What ``fit`` and ``bode`` do before fitting: read DATA, check the model, map the flags to inputs.
+
+:func:`read_data` reads DATA (a netCDF file with a bound, an instrument file through ``load``'s
+route, a streamed JPK map); :func:`_fixed` turns the flags into the model's fixed inputs (and
+refuses the flags a model cannot honour); :func:`fit_one` fits one spectrum or curve.
+"""
+
+from __future__ import annotations
+
+import argparse
+from typing import Any
+
+from viscoforce.cli._args import UsageError
+from viscoforce.physics.paper import PAPER
+
+_MODELS = ("svda", "exact", "contact", "prony", "relaxation", "step", "hertz", "creep", "ting",
+           "auto")
+#: Models of measured force curves (a curves dataset).
+_CURVE_MODELS = ("relaxation", "hertz", "creep", "ting")
+_MATERIALS = ("sls", "prony", "power-law", "structural")
+
+
+def read_data(path: str, fmt: str | None = None):
+    """The dataset of DATA: netCDF as written, instrument files through ``load``'s route.
+
+    Measured data in a netCDF file (``source`` an instrument format, not "simulation" or absent)
+    pass the checks the instrument readers apply (:func:`viscoforce.io.quality.check_measured`):
+    a file written elsewhere, or edited, may hold values no measurement gives.
+    """
+    from pathlib import Path
+
+    from viscoforce.cli.analysis import has_modulation, streamed_spectrum
+    from viscoforce.exceptions import EffortError
+    from viscoforce.io.instruments import load_instrument
+    from viscoforce.io.netcdf import open_netcdf
+    from viscoforce.io.quality import check_measured
+
+    if Path(path).suffix.lower() == ".nc" and fmt is None:
+        if not Path(path).is_file():
+            raise UsageError(f"DATA {path}: no such file")
+        try:
+            ds = open_netcdf(path)
+        except EffortError:
+            raise
+        except (OSError, ValueError) as exc:
+            raise UsageError(f"DATA {path}: not a readable netCDF file ({exc})") from None
+        if str(ds.attrs.get("source", "simulation")) != "simulation":  # measured
+            check_measured(ds, str(path))
+        return one_curve_squeezed(ds)
+    streamed = streamed_spectrum(path, fmt)  # a JPK map: demodulated in chunks of curves
+    if streamed is not None:
+        return one_curve_squeezed(streamed)
+    data = load_instrument(path, format=fmt)
+    if "omega" not in data.dims and has_modulation(data):
+        from viscoforce.experiments.modulation import modulation_spectrum
+
+        data = modulation_spectrum(data)
+    return one_curve_squeezed(data)
+
+
+def one_curve_squeezed(ds):
+    """A spectrum of a single curve (``curve`` of size 1) as one spectrum, not a 1-pixel map."""
+    if "omega" in ds.dims and ds.sizes.get("curve") == 1:
+        return ds.isel(curve=0)
+    return ds
+
+
+def _kind(ds) -> str:
+    if "omega" in ds.dims and "stiffness" in ds.variables:
+        return "spectrum"
+    if "sample" in ds.dims:
+        return "curves"
+    if "time" in ds.dims and "position" in ds.variables:
+        return "trajectory"
+    raise UsageError("DATA is neither a spectrum, curves nor a trajectory dataset")
+
+
+def measured(ds, args: argparse.Namespace) -> bool:
+    """Whether ``--model auto`` fits measured data: no --h0/--mean-force, an indentation known."""
+    if args.h0 is not None or args.mean_force is not None:
+        return False
+    return args.indentation is not None or "mean_indentation" in ds.variables
+
+
+def _given(args: argparse.Namespace, *names: str) -> list[str]:
+    """The flags among ``names`` (dest names) that were given."""
+    return [f"--{n.replace('_', '-')}" for n in names
+            if getattr(args, n, None) not in (None, False)]
+
+
+def _fixed(args: argparse.Namespace, ds, kind: str) -> dict[str, Any]:
+    """The model's fixed inputs from the flags (and the data); flags a model cannot honour fail."""
+    model = args.model
+    if args.h0 is not None and args.mean_force is not None:
+        raise UsageError("give --h0 or --mean-force, not both")
+    if args.material is not None and args.material not in _MATERIALS:
+        raise UsageError(f"--material must be one of {', '.join(_MATERIALS)}, got "
+                         f"{args.material!r}")
+    contact_only = ("material", "newtonian", "reference_frequency", "indentation")
+    if model == "auto" and kind == "spectrum" and measured(ds, args):
+        bad = _given(args, "newtonian", "segment")
+        if bad:
+            raise UsageError(f"--model auto on measured data cannot honour {', '.join(bad)} (it "
+                             "compares power-law with and without mu itself)")
+        return {**_tip_inputs(args, ds), "indentation": args.indentation, "drag": args.drag,
+                "material": args.material, "reference_frequency": args.reference_frequency,
+                "debye_length": args.debye_length}
+    if model == "ting":
+        bad = _given(args, "indentation", "newtonian", "h0", "mean_force")
+        if bad:
+            raise UsageError(f"--model ting cannot honour {', '.join(bad)}")
+        if args.material not in (None, "sls", "prony", "structural"):
+            raise UsageError(f"--model ting takes --material sls, prony or structural, got "
+                             f"{args.material}")
+        if args.fit_drag and args.drag is not None:
+            raise UsageError("give --drag or --fit-drag, not both")
+        return {"tip": _hertz_tip(args, ds), "material": args.material or "sls",
+                "drag": args.drag, "fit_drag": bool(args.fit_drag) or None,
+                "contact_point": args.contact_point,
+                "reference_frequency": args.reference_frequency,
+                "newtonian": False if args.no_newtonian else None}
+    if model != "contact":
+        bad = _given(args, *contact_only)
+        if model == "auto":
+            bad = [b for b in bad if b != "--drag"]
+        if bad:
+            raise UsageError(f"--model {model} cannot honour {', '.join(bad)} (contact-model "
+                             "flags" + ("; --model auto takes them on measured data, without "
+                                        "--h0/--mean-force" if model == "auto" else "") + ")")
+    fixed: dict[str, Any] = {}
+    if model in ("svda", "exact", "auto"):
+        if args.h0 is None and args.mean_force is None:
+            median = ""
+            if "mean_force" in ds.variables:
+                import numpy as np
+
+                median = (f" (this spectrum's median mean force is "
+                          f"{float(np.nanmedian(ds['mean_force'].values)):.4g} N)")
+            hint = ("; on measured data give --indentation D0 (or load a file with a contact "
+                    "point) to compare contact materials") if model == "auto" else ""
+            raise UsageError(f"--model {model} needs the mean position: --h0 H or --mean-force "
+                             f"F{median}{hint}")
+        fixed["position" if args.h0 is not None else "mean_force"] = (
+            args.h0 if args.h0 is not None else args.mean_force)
+    if model in ("svda", "exact", "step", "auto"):
+        if args.tip is not None:
+            raise UsageError(f"--model {model} models the paper's sphere: give --R, not --tip "
+                             "(--tip applies to --model contact and --model auto on measured "
+                             "data)")
+        if args.R is None:
+            args.R = PAPER.R
+    if model == "svda":
+        fixed.update(radius=args.R, P=args.P, debye_length=args.debye_length)
+    if model in ("exact", "step", "auto"):
+        fixed["problem"] = _problem(args, ds, kind)
+    if model == "auto" and args.drag is not None:
+        fixed["drag"] = args.drag
+    if model == "hertz":
+        fixed["tip"] = _hertz_tip(args, ds)
+    if model in ("relaxation", "creep") and (args.tip is not None or args.R is not None):
+        raise UsageError(f"--model {model} fits {'forces' if model == 'relaxation' else 'the tip position'}"
+                         " over time: it takes no --tip or --R")
+    if model == "contact":
+        fixed.update(**_tip_inputs(args, ds), indentation=args.indentation, drag=args.drag,
+                     material=args.material or "sls", debye_length=args.debye_length)
+        if args.newtonian:
+            fixed["newtonian"] = True
+        if args.reference_frequency is not None:
+            fixed["reference_frequency"] = args.reference_frequency
+    return fixed
+
+
+def _tip_inputs(args: argparse.Namespace, ds) -> dict[str, Any]:
+    """``tip`` or ``radius`` of the contact model; measured data without either are refused.
+
+    A measured file does not record the tip here: a silent 10 µm would put every modulus off by
+    √(10 µm / R). Spectra the project simulated (``source`` "simulation" or none) take the
+    paper's sphere.
+    """
+    if args.tip is not None and args.R is not None:
+        raise UsageError("give --tip or --R (the paper's sphere), not both")
+    if args.tip is not None:
+        return {"tip": args.tip}
+    if args.R is not None:
+        return {"radius": args.R}
+    from viscoforce.fitting.curves import file_tip
+
+    recorded = file_tip(ds)
+    if recorded is not None:  # the file's own tip metadata
+        return {"tip": recorded}
+    source = str(ds.attrs.get("source", "simulation"))
+    if source != "simulation":
+        raise UsageError(
+            f"the moduli need the tip, which this {source} file does not record: give --tip "
+            "sphere:R | paraboloid:R | cone:HALF_ANGLE | pyramid:HALF_ANGLE | flat:RADIUS "
+            "(e.g. --tip sphere:5um) or --R (the paper's sphere)")
+    return {"radius": PAPER.R}
+
+
+def _hertz_tip(args: argparse.Namespace, ds):
+    """The hertz model's tip: --tip, --R (a sphere) or the file's own; else a usage error."""
+    from viscoforce.fitting.curves import file_tip
+    from viscoforce.physics.tips import Sphere
+
+    if args.tip is not None and args.R is not None:
+        raise UsageError("give --tip or --R (a sphere), not both")
+    if args.tip is not None:
+        return args.tip
+    if args.R is not None:
+        return Sphere(args.R)
+    tip = file_tip(ds)
+    if tip is None:
+        raise UsageError(
+            f"--model {args.model} needs the tip, which this {ds.attrs.get('source', '')} file "
+            "does not "
+            "record: give --tip sphere:R | paraboloid:R | cone:HALF_ANGLE | pyramid:HALF_ANGLE | "
+            "flat:RADIUS (e.g. --tip cone:20) or --R")
+    return tip
+
+
+def _problem(args: argparse.Namespace, ds, kind: str):
+    import numpy as np
+
+    from viscoforce.cli.model import problem_from_args
+    from viscoforce.physics.materials import StandardLinearSolid
+    from viscoforce.physics.paper import PAPER
+
+    if kind == "trajectory":
+        deepest = float(np.min(ds["position"].values))
+    else:
+        deepest = args.h0 if args.h0 is not None else -20e-9
+    material = StandardLinearSolid(PAPER.E0, PAPER.E_inf, PAPER.tau)
+    return problem_from_args(args, material, min(deepest, 0.0) - 2 * args.debye_length)
+
+
+def _check_model(args: argparse.Namespace, kind: str) -> None:
+    spectrum_models = ("svda", "exact", "contact", "prony", "auto")
+    wanted = {"spectrum": spectrum_models, "curves": _CURVE_MODELS, "trajectory": ("step",)}
+    if args.model not in wanted[kind]:
+        raise UsageError(f"--model {args.model} does not fit {kind} data; for {kind}: "
+                         f"{', '.join(wanted[kind])}")
+    if args.modes == "auto" and args.model not in ("exact", "contact", "prony", "relaxation",
+                                                   "creep", "ting", "auto"):
+        raise UsageError(f"--modes auto needs a model with several modes, not {args.model}")
+    if args.criterion not in ("bic", "aic"):
+        raise UsageError(f"--criterion must be bic or aic, got {args.criterion!r}")
+
+
+def _extra_dims(ds, kind: str) -> list[str]:
+    if kind == "spectrum":
+        return [str(d) for d in ds["stiffness"].dims if d != "omega"]
+    if kind == "curves":
+        return ["curve"] if int(ds.sizes["curve"]) > 1 else []
+    return []
+
+
+def _select_curve(ds, kind: str, index: int | None):
+    if index is None:
+        return ds
+    dims = _extra_dims(ds, kind)
+    if not dims:
+        if index != 0:
+            raise UsageError(f"--curve {index}: DATA holds one spectrum or curve (use 0)")
+        return ds
+    if kind == "curves":
+        from viscoforce.schema import select_curve
+
+        n = int(ds.sizes["curve"])
+        if index >= n:
+            raise UsageError(f"--curve {index}: DATA has {n} curves (0 to {n - 1})")
+        return select_curve(ds, index)
+    stacked = ds.stack(pixel=dims)
+    n = stacked.sizes["pixel"]
+    if index >= n:
+        raise UsageError(f"--curve {index}: DATA has {n} spectra (0 to {n - 1})")
+    return stacked.isel(pixel=index).drop_vars(["pixel", *dims], errors="ignore")
+
+
+def fit_one(args: argparse.Namespace, ds, kind: str):
+    """The fit result of one spectrum, curve or trajectory."""
+    from viscoforce.fitting.curves import fit_curve, fit_hold, fit_step
+    from viscoforce.fitting.fit import fit_spectrum
+
+    fixed = _fixed(args, ds, kind)
+    if kind == "spectrum":
+        if args.model == "auto":
+            if args.accuracy is not None and measured(ds, args):
+                raise UsageError("--accuracy chooses between the theory's approximations (with "
+                                 "--h0 or --mean-force); on measured data --model auto compares "
+                                 "materials by the criterion: leave --accuracy out")
+            if args.accuracy is not None:
+                fixed["accuracy"] = args.accuracy
+            if args.weights is not None and not measured(ds, args):
+                raise UsageError("--weights applies to named models and to --model auto on "
+                                 "measured data")
+        elif args.accuracy is not None:
+            raise UsageError("--accuracy needs --model auto")
+        weights = {} if args.weights is None else {"weights": args.weights}
+        chosen = getattr(args, "identifiability", None)  # bode --fit has no such flag
+        options = {} if chosen is None else {"identifiability": chosen}
+        return fit_spectrum(ds, args.model, modes=args.modes, criterion=args.criterion,
+                            poisson=args.poisson, **weights, **options, **fixed)
+    if getattr(args, "identifiability", None) is not None:
+        raise UsageError("--identifiability applies to spectra and maps (curve fits use "
+                         "their own rule)")
+    if args.weights is not None:
+        raise UsageError("--weights applies to spectra (curve fits are unweighted)")
+    modes = 1 if args.modes is None else args.modes
+    if kind == "curves":
+        if args.model == "hertz" and args.modes not in (None, 1):
+            raise UsageError("--model hertz has no modes: leave --modes out")
+        if args.model == "relaxation":
+            return fit_hold(ds, segment=args.segment, modes=modes, criterion=args.criterion)
+        if args.model == "ting":
+            from viscoforce.fitting.ting import fit_ting
+
+            return fit_ting(ds, segment=args.segment, modes=modes, criterion=args.criterion,
+                            poisson=args.poisson, **{k: v for k, v in fixed.items()
+                                                     if v is not None})
+        return fit_curve(ds, args.model, segment=args.segment, modes=modes,
+                         criterion=args.criterion, tip=fixed.get("tip"),
+                         poisson=args.poisson if args.model == "hertz" else None)
+    return fit_step(ds, problem=fixed["problem"], poisson=args.poisson)

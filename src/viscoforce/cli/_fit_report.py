@@ -1,0 +1,177 @@
+"""How ``fit`` reports a result: the ``--json`` object and the printed summary of a fit or a map."""
+
+from __future__ import annotations
+
+from typing import Any
+
+from viscoforce.cli._output import DIGITS, format_estimate, format_value
+
+
+def show_value(value: float | None, unit: str, digits: int = DIGITS) -> str:
+    """A parameter value for humans (:func:`~viscoforce.cli._output.format_value`)."""
+    return format_value(value, unit, digits)
+
+
+def _single_json(result) -> dict[str, Any]:
+    import numpy as np
+
+    from viscoforce.fitting.identify import IDENTIFIABILITY
+    from viscoforce.fitting.verdict import bound_text
+
+    names = [str(n) for n in result["param_i"].values]
+    codes = (np.asarray(result["identifiability"].values).reshape(-1).tolist()
+             if "identifiability" in result else [0] * len(names))
+    params = {}
+    for n, code in zip(names, codes, strict=True):
+        entry = {"value": float(result[n]), "stderr": float(result[f"{n}_stderr"]),
+                 "identified": IDENTIFIABILITY[int(code)]}
+        for side in ("lower", "upper"):
+            if f"{n}_{side}" in result:
+                entry[side] = float(result[f"{n}_{side}"])
+        text = bound_text(result, n)
+        if text:
+            entry["report_as"] = text
+        params[n] = entry
+    corr = result["correlation"].values
+    out: dict[str, Any] = {
+        "model": result.attrs["model"], "modes": int(result["modes"]), "params": params,
+        "correlations": {a: {b: float(corr[i, j]) for j, b in enumerate(names) if j != i}
+                         for i, a in enumerate(names)},
+        "redchi": float(result["redchi"]), "aic": float(result["aic"]),
+        "bic": float(result["bic"]), "success": bool(int(result["success"])),
+        "chi2_pvalue": float(result["chi2_pvalue"]) if "chi2_pvalue" in result else None,
+        "weighting": str(result.attrs.get("weighting", "")),
+        "at_bound": [s for s in str(result.attrs.get("at_bound", "")).split(", ")
+                     if s and s != "none"]}
+    derived = {str(n): {"value": float(result[n]), "stderr": float(result[f"{n}_stderr"])}
+               for n in result.data_vars if str(n).endswith(("_young", "_shear"))
+               or str(n) in ("ting_E0", "beta")}
+    if derived:
+        out["derived"] = derived
+        out["poisson"] = float(result.attrs.get("poisson", 0.5))
+    for key in ("tip", "tip_shape", "tip_radius", "tip_half_angle"):
+        if key in result.attrs:
+            value = result.attrs[key]
+            out[key] = value if isinstance(value, str) else float(value)
+    for key in ("material", "candidate", "residual_lag1", "effective_samples", "validity",
+                "identifiability_method", "ting_error",
+                "depth_check", "depth_check_E", "depth_check_shift", "precontact_rise",
+                "creep_force", "segment_type"):
+        if key in result.attrs:
+            value = result.attrs[key]
+            out[key] = value if isinstance(value, str) else float(value)
+    if "selection_modes" in result:
+        rows = []
+        for i in range(result.sizes["candidate"]):
+            row = {"modes": int(result["selection_modes"].values[i]),
+                   "aic": float(result["selection_aic"].values[i]),
+                   "bic": float(result["selection_bic"].values[i])}
+            for key in ("label", "redchi", "pvalue", "parameters"):
+                if f"selection_{key}" in result:
+                    value = result[f"selection_{key}"].values[i]
+                    row[key] = str(value) if key == "label" else float(value)
+            rows.append(row)
+        out["selection"] = rows
+        out["criterion"] = result.attrs.get("criterion", "bic")
+        if "selection_note" in result.attrs:
+            out["selection_note"] = str(result.attrs["selection_note"])
+    if "explanation" in result.attrs:  # --model auto
+        out["explanation"] = str(result.attrs["explanation"])
+        if "estimated_model_error" in result.attrs:
+            out["estimated_model_error"] = float(result.attrs["estimated_model_error"])
+    return out
+
+
+def _map_json(result) -> dict[str, Any]:
+    from viscoforce.fitting.pixels import map_summary
+
+    return {"model": result.attrs["model"], **map_summary(result),
+            "n_failed": int(result.attrs["n_failed"])}
+
+
+def _print_single(info: dict[str, Any]) -> None:
+    from viscoforce.schema.fit import parameter_units
+
+    p_value = info.get("chi2_pvalue")
+    fit_text = (f"chi-square p-value {p_value:.2g}" if p_value is not None and p_value == p_value
+                else f"no p-value (weights {info.get('weighting') or 'unknown'})")
+    label = f" ({info['candidate']})" if "candidate" in info else ""
+    print(f"model {info['model']}{label}, {info['modes']} mode(s), "
+          f"{'converged' if info['success'] else 'DID NOT CONVERGE'}; redchi "
+          f"{info['redchi']:.4g}, {fit_text}, AIC {info['aic']:.4g}, BIC {info['bic']:.4g}")
+    for name, p in info["params"].items():
+        unit = parameter_units(name)
+        line = f"  {name:<8} = {format_estimate(p['value'], p['stderr'], unit)}"
+        if "report_as" in p:
+            line += f"   -> report as {p['report_as']} ({info.get('identifiability_method', '')})"
+        print(line)
+    if info.get("derived"):
+        nu = info["poisson"]
+        print(f"  Young's and shear moduli (Poisson's ratio {nu:g}; E above is the paper's "
+              "2/E = sum (1 - nu^2)/E_i):")
+        for name, p in info["derived"].items():
+            base = name if name in ("ting_E0", "beta") else name.rsplit("_", 1)[0]
+            unit = parameter_units(base)
+            print(f"  {name:<12} = {format_estimate(p['value'], p['stderr'], unit)}")
+    if "tip" in info:
+        print(f"  tip: {info['tip']}")
+    if info["at_bound"]:
+        print(f"  at a bound (not identified by these data): {', '.join(info['at_bound'])}")
+    for row in info.get("selection", []):
+        name = row.get("label", f"{row['modes']} mode(s)")
+        extra = f", redchi {row['redchi']:.3g}" if "redchi" in row else ""
+        print(f"  candidate {name}: AIC {row['aic']:.4g}, BIC {row['bic']:.4g}{extra}")
+    if "selection_note" in info:
+        print(f"  note: {info['selection_note']}")
+    if "explanation" in info:
+        print(f"  model choice: {info['explanation']}")
+    if "depth_check" in info:
+        print(f"  depth check: {info['depth_check']}")
+    if "validity" in info:
+        print(f"  validity: {info['validity']}")
+
+
+def _print_map(info: dict[str, Any]) -> None:
+    from viscoforce.schema.fit import parameter_units
+
+    left = ", ".join(f"{v} {k.replace('_', ' ')}" for k, v in info["left_out"].items() if v)
+    print(f"model {info['model']}: {info['n_fits']} fits, {info['n_good']} good"
+          + (f"; left out of the summary: {left}" if left else ""))
+    for modes, block in info["by_modes"].items():
+        print(f"  {modes} mode(s), {block['n']} good pixel(s):")
+        for name, p in block["params"].items():
+            unit = parameter_units(name)
+            print(f"    {name:<8} median {show_value(p['median'], unit)}, IQR "
+                  f"{show_value(p['q25'], unit)} .. {show_value(p['q75'], unit)}")
+    if info.get("derived"):
+        print(f"  Young's and shear moduli (Poisson's ratio {info['poisson']:g}), the pixels of "
+              f"{info['modes']} mode(s):")
+        for name, p in info["derived"].items():
+            unit = parameter_units(name.rsplit("_", 1)[0])
+            print(f"    {name:<12} median {show_value(p['median'], unit)}, IQR "
+                  f"{show_value(p['q25'], unit)} .. {show_value(p['q75'], unit)}")
+
+
+def _fit_recording(run, *args: Any, **kwargs: Any):
+    """``run(*args, **kwargs)`` with the viscoforce warnings recorded, then shown; (result, texts)."""
+    import warnings
+
+    from viscoforce.exceptions import (
+        AccuracyWarning,
+        DataWarning,
+        GoodnessOfFitWarning,
+        ModelValidityWarning,
+    )
+
+    kinds = (ModelValidityWarning, AccuracyWarning, GoodnessOfFitWarning, DataWarning)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        result = run(*args, **kwargs)
+    texts = []
+    for w in caught:
+        if issubclass(w.category, kinds):
+            text = str(w.message)
+            if text not in texts:
+                texts.append(text)
+        warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
+    return result, texts
