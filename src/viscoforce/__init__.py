@@ -50,6 +50,7 @@ _LAZY = {
     "load": "viscoforce.io.instruments",
     "modulation_spectrum": "viscoforce.experiments.modulation",
     "stream_spectrum": "viscoforce.experiments.stream",
+    "fit": "viscoforce.fitting.front",
     "fit_spectrum": "viscoforce.fitting.fit",
     "fit_hold": "viscoforce.fitting.curves",
     "fit_step": "viscoforce.fitting.curves",
