@@ -66,13 +66,12 @@ def one_curve_squeezed(ds):
 
 
 def _kind(ds) -> str:
-    if "omega" in ds.dims and "stiffness" in ds.variables:
-        return "spectrum"
-    if "sample" in ds.dims:
-        return "curves"
-    if "time" in ds.dims and "position" in ds.variables:
-        return "trajectory"
-    raise UsageError("DATA is neither a spectrum, curves nor a trajectory dataset")
+    from viscoforce.schema import data_kind
+
+    kind = data_kind(ds)
+    if kind is None:
+        raise UsageError("DATA is neither a spectrum, curves nor a trajectory dataset")
+    return kind
 
 
 def measured(ds, args: argparse.Namespace) -> bool:

@@ -23,6 +23,7 @@ from viscoforce.fitting.fit import fit_spectrum
 from viscoforce.fitting.maps import fit_map
 from viscoforce.fitting.registry import entries, entry
 from viscoforce.fitting.ting import fit_ting
+from viscoforce.schema import data_kind as schema_kind
 
 __all__ = ["data_kind", "fit"]
 
@@ -41,12 +42,9 @@ def data_kind(data: Any) -> str:
     if not isinstance(data, xr.Dataset):
         raise ParameterError(f"data must be an xarray.Dataset (a spectrum, curves or a "
                              f"trajectory: viscoforce.load(path)), got {describe_value(data)}")
-    if "omega" in data.dims and "stiffness" in data.variables:
-        return "spectrum"
-    if "sample" in data.dims:
-        return "curves"
-    if "time" in data.dims and "position" in data.variables:
-        return "trajectory"
+    kind = schema_kind(data)
+    if kind is not None:
+        return kind
     raise ParameterError("data is neither a spectrum (stiffness over omega), curves (over "
                          "sample) nor a trajectory (position over time)")
 

@@ -82,7 +82,7 @@ from viscoforce.schema.spectrum import (
     phase_quality,
     validate_spectrum,
 )
-from viscoforce.schema.tables import flat_over
+from viscoforce.schema.tables import data_kind, flat_over
 from viscoforce.schema.trajectory import (
     PROFILE_VARIABLES,
     TRAJECTORY_VARIABLES,
@@ -92,7 +92,7 @@ from viscoforce.schema.trajectory import (
 
 __all__ = [
     "SchemaError", "VariableSpec", "EXTRA", "clean_attrs", "plain_variable", "flag_attrs",
-    "flag_meanings", "flat_over", "index_values", "parameter_names",
+    "flag_meanings", "data_kind", "flat_over", "index_values", "parameter_names",
     "EQUILIBRIUM_VARIABLES", "SIGN_CONVENTION", "make_equilibrium", "validate_equilibrium",
     "TRAJECTORY_VARIABLES", "PROFILE_VARIABLES", "make_trajectory", "validate_trajectory",
     "SPECTRUM_VARIABLES", "PHASE_CONVENTION", "QUALITY_FLAGS", "QUALITY_COMMENT", "make_spectrum",

@@ -1,4 +1,4 @@
-"""Tables over a map: a variable read as one value per row.
+"""Tables over a map (a variable read as one value per row) and the kind of a dataset.
 
 Every table viscoforce writes or shows (a fit's CSV, a batch of files, the viewer's pixel table)
 reads its columns through :func:`flat_over`, so each row sits at its own coordinates.
@@ -11,7 +11,22 @@ import xarray as xr
 
 from viscoforce.exceptions import SchemaError
 
-__all__ = ["flat_over"]
+__all__ = ["data_kind", "flat_over"]
+
+
+def data_kind(ds: xr.Dataset) -> str | None:
+    """What kind of dataset ``ds`` is: the route of a fit.
+
+    ``"spectrum"`` (stiffness over omega), ``"curves"`` (over sample), ``"trajectory"``
+    (position over time), or None.
+    """
+    if "omega" in ds.dims and "stiffness" in ds.variables:
+        return "spectrum"
+    if "sample" in ds.dims:
+        return "curves"
+    if "time" in ds.dims and "position" in ds.variables:
+        return "trajectory"
+    return None
 
 
 def flat_over(ds: xr.Dataset, name: str, dims: tuple[str, ...]) -> np.ndarray:
