@@ -97,7 +97,11 @@ class Choice:
     explanation : str
         Why: the estimates compared, in words.
     considered : tuple of (str, float, str)
-        Every candidate: method, estimated error (inf if not applicable), verdict.
+        Every candidate: method, its number (``score``; inf if not applicable), verdict.
+    score : str
+        What the number of ``considered`` is: ``"estimated error"`` (the theory's choosers,
+        by model error) or ``"BIC"``/``"AIC"`` above the best candidate's (the fit choosers by
+        criterion, :mod:`viscoforce.fitting.selection`).
     """
 
     method: str
@@ -106,6 +110,7 @@ class Choice:
     accuracy: float
     explanation: str
     considered: tuple[tuple[str, float, str], ...] = field(default=())
+    score: str = "estimated error"
 
 
 def require_accuracy(accuracy: Any) -> float:

@@ -42,7 +42,7 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
-from viscoforce.exceptions import ConvergenceError, ParameterError
+from viscoforce.exceptions import ParameterError
 from viscoforce.fitting import _params
 from viscoforce.fitting.base import MAX_AUTO_MODES, MAX_MODES
 from viscoforce.fitting.data import FitData, _data_indentation, spectrum_data
@@ -56,16 +56,22 @@ from viscoforce.fitting.identify import (
 from viscoforce.fitting.model_error import _warn_model_bias, contact_bias, svda_bias, validity_note
 from viscoforce.fitting.models import MODELS, check_fixed, make_model
 from viscoforce.fitting.moduli import add_derived_moduli, derived_attrs, derived_variables
-from viscoforce.fitting.outcome import Outcome, fit_once, summary_stderr
+from viscoforce.fitting.outcome import Outcome, summary_stderr
 from viscoforce.fitting.registry import entries
 from viscoforce.fitting.report import attach
+from viscoforce.fitting.selection import (
+    CRITERIA,
+    Candidate,
+    Tried,
+    check_criterion,
+    compare,
+    explain,
+    keep,
+    share_effective_size,
+)
 from viscoforce.fitting.spectrum_models import svda_position
 from viscoforce.fitting.verdict import warn_fit
 from viscoforce.schema import make_fit_result, plain_variable
-
-#: Information criteria of ``modes="auto"`` (``--criterion``).
-CRITERIA = ("bic", "aic")
-
 
 #: Points of the best-fit curve written with a spectrum fit.
 FIT_CURVE_POINTS = 200
@@ -311,53 +317,28 @@ def select(data: FitData, name: str, *, modes: int | str = 1, criterion: str = "
     """The best fit of model ``name`` and the candidates tried (one unless ``modes="auto"``).
 
     ``"auto"`` fits 1, 2, … modes until the criterion has not improved twice in a row, the
-    parameters would outnumber the data, or ``max_modes``; it keeps the lowest criterion.
+    parameters would outnumber the data, or ``max_modes``; it keeps the lowest criterion (the
+    one loop and rule of :mod:`viscoforce.fitting.selection`).
     """
+    best, tried = select_tried(data, name, modes=modes, criterion=criterion,
+                               max_modes=max_modes, **fixed)
+    return best.outcome, [{"modes": t.modes, **t.outcome.criterion} for t in tried
+                          if t.outcome is not None]
+
+
+def select_tried(data: FitData, name: str, *, modes: int | str = 1, criterion: str = "bic",
+                 max_modes: int = MAX_AUTO_MODES, **fixed: Any) -> tuple[Tried, list[Tried]]:
+    """:func:`select` with the candidates as :class:`~viscoforce.fitting.selection.Tried`."""
     modes = _check_modes(name, modes)
-    if criterion not in CRITERIA:
-        raise ParameterError(f"criterion must be one of {', '.join(CRITERIA)}, got {criterion!r}")
-    if modes != "auto":
-        outcome = fit_once(make_model(name, modes, **fixed), data)
-        _share_effective_size([outcome])
-        return outcome, [{"modes": modes, **outcome.criterion}]
-    outcomes: list[Outcome] = []
-    worse = 0
-    for n in range(1, max_modes + 1):
-        model = make_model(name, n, **fixed)
-        if len(model.names) >= data.n_values:  # one internal parameter per SPEC name
-            break
-        try:
-            outcomes.append(fit_once(model, data, settle=False))
-        except ConvergenceError:
-            if not outcomes:
-                raise
-            break
-        _share_effective_size(outcomes)  # the stopping rule scores as the final choice does
-        scores = [o.criterion[criterion] for o in outcomes]
-        worse = worse + 1 if len(scores) > 1 and scores[-1] >= min(scores[:-1]) else 0
-        if worse >= 2:
-            break
-    _share_effective_size(outcomes)
-    best = min(outcomes, key=lambda o: o.criterion[criterion])
-    return best, [{"modes": o.model.spec.modes, **o.criterion} for o in outcomes]
+    check_criterion(criterion)
+    counts = range(1, max_modes + 1) if modes == "auto" else [modes]
+    family = [Candidate(f"{n} mode{'s' if n > 1 else ''}",
+                        lambda n=n: make_model(name, n, **fixed)) for n in counts]
+    tried = compare([family], data, criterion)
+    return keep(tried, criterion), tried
 
 
-def _share_effective_size(outcomes: list[Outcome]) -> None:
-    """Curve fits: one effective sample size n (1 − ρ1)/(1 + ρ1) for every candidate.
-
-    ρ1 is the residual lag-1 autocorrelation of the candidate with the smallest χ² (the least
-    misfit, so the closest to the noise's own), so that the criteria stay comparable.
-    """
-    curve = [o for o in outcomes if math.isfinite(o.lag1)]
-    if not curve:
-        return
-    rho = min(curve, key=lambda o: float(o.result.chisqr)).lag1
-    n = curve[0].n_values
-    n_eff = n * (1.0 - rho) / (1.0 + rho) if rho > 0 else float(n)
-    # one m for all (the criteria differ by m ln(χ²_a/χ²_b): unit-free only with a common m)
-    n_eff = min(max(n_eff, max(o.n_free for o in curve) + 2.0), float(n))
-    for o in curve:
-        o.n_effective = n_eff
+_share_effective_size = share_effective_size  # the earlier private name
 
 
 # ── public entry points ─────────────────────────────────────────────────────────────────────────
@@ -393,12 +374,16 @@ def fit_data(data: FitData, name: str, *, modes: int | str = 1, criterion: str =
     xarray.Dataset
         The fit result (:func:`result_dataset`).
     """
-    best, selection = select(data, name, modes=modes, criterion=criterion, max_modes=max_modes,
-                             **fixed)
+    kept, tried = select_tried(data, name, modes=modes, criterion=criterion,
+                               max_modes=max_modes, **fixed)
+    best = kept.outcome
+    selection = [{"modes": t.modes, **t.outcome.criterion} for t in tried if t.outcome]
     ds = result_dataset(best, data, selection=selection if modes == "auto" else None,
                         profile=profile)
     if modes == "auto":
         ds.attrs["criterion"] = criterion
+        ds.attrs["explanation"] = explain(tried, kept, criterion, 0.0,
+                                          f"modes of model {name!r}").explanation
         if best.model.spec.modes == max(row["modes"] for row in selection) >= max_modes:
             ds.attrs["selection_note"] = (
                 f"the {criterion.upper()} still improved at the largest number of modes tried "

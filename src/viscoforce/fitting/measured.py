@@ -24,7 +24,6 @@ carry stderr).
 
 from __future__ import annotations
 
-import math
 from typing import Any
 
 import numpy as np
@@ -33,11 +32,12 @@ import xarray as xr
 from viscoforce.exceptions import ConvergenceError, ModelValidityError, ParameterError
 from viscoforce.fitting.base import MAX_AUTO_MODES
 from viscoforce.fitting.data import _data_indentation, spectrum_data
-from viscoforce.fitting.fit import AUTO_CHOOSERS, CRITERIA, _check_modes, result_dataset
+from viscoforce.fitting.fit import AUTO_CHOOSERS, _check_modes, result_dataset
 from viscoforce.fitting.model_error import _warn_model_bias, contact_bias, validity_note
 from viscoforce.fitting.models import check_fixed, make_model
-from viscoforce.fitting.outcome import Outcome, fit_once
+from viscoforce.fitting.outcome import Outcome
 from viscoforce.fitting.report import carry
+from viscoforce.fitting.selection import Candidate, check_criterion, compare, explain, keep
 from viscoforce.fitting.verdict import warn_fit
 
 #: Criterion margin of the measured-data chooser: a richer candidate is kept only when its
@@ -113,8 +113,7 @@ def fit_measured_auto(spectrum: xr.Dataset, *, modes: int | str = "auto", criter
             f"model 'auto' on measured data (no position or mean_force) takes "
             f"{', '.join(INPUTS)}; it cannot honour {', '.join(unknown)} (give position or "
             "mean_force for the theory chooser, or name the model)")
-    if criterion not in CRITERIA:
-        raise ParameterError(f"criterion must be one of {', '.join(CRITERIA)}, got {criterion!r}")
+    check_criterion(criterion)
     if fixed.get("radius") is None and fixed.get("tip") is None:
         raise ParameterError("model 'auto' on measured data needs the tip: tip= (--tip "
                              "sphere:R | paraboloid:R | cone:ANGLE | pyramid:ANGLE | flat:RADIUS) "
@@ -133,42 +132,23 @@ def fit_measured_auto(spectrum: xr.Dataset, *, modes: int | str = "auto", criter
     if base.get("indentation") is None:
         base["indentation"] = _data_indentation(spectrum, data)
     families = (material,) if material else ("prony", "power-law", "structural")
-    rows: list[dict[str, Any]] = []
-    kept: list[tuple[str, Outcome, dict[str, Any]]] = []
-    for family in families:
-        worse = 0
-        for label, n, inputs in _candidates(family, modes):
-            model = make_model("contact", n, **base, **inputs)
-            if len(model.names) > data.n_values - MIN_DOF:
-                rows.append({"label": label, "note": f"not tried: {len(model.names)} parameters "
-                             f"leave fewer than {MIN_DOF} degrees of freedom in "
-                             f"{data.n_values} values"})
-                break
-            try:
-                outcome = fit_once(model, data, settle=False)  # compared by criterion
-            except (ConvergenceError, ModelValidityError, ParameterError) as exc:
-                rows.append({"label": label, "note": f"failed: {str(exc).splitlines()[0]}"})
-                continue
-            score = outcome.criterion[criterion]
-            same = [o for lab, o, _ in kept if lab.startswith("prony") or lab == "sls"]
-            if family in ("sls", "prony") and same:
-                best_before = min(o.criterion[criterion] for o in same)
-                worse = worse + 1 if score >= best_before else 0
-            kept.append((label, outcome, inputs))
-            rows.append({"label": label, "outcome": outcome})
-            if worse >= 2:
-                break
-    if not kept:
+    tried = compare(
+        [[Candidate(label, lambda n=n, inputs=inputs: make_model("contact", n, **base, **inputs),
+                    inputs) for label, n, inputs in _candidates(family, modes)]
+         for family in families],
+        data, criterion, min_dof=MIN_DOF, on_failure="skip",
+        failures=(ConvergenceError, ModelValidityError, ParameterError))
+    if not any(t.outcome for t in tried):
         raise ConvergenceError("model 'auto' could fit no contact material: " + "; ".join(
-            f"{r['label']} {r.get('note', '')}" for r in rows))
-    best_score = min(o.criterion[criterion] for _, o, _ in kept)
-    within = [k for k in kept if k[1].criterion[criterion] <= best_score + MARGIN]
-    label, outcome, inputs = min(within, key=lambda k: (k[1].n_free, k[1].criterion[criterion]))
+            f"{t.label} {t.note}" for t in tried))
+    chosen = keep(tried, criterion, MARGIN)
+    label, outcome, inputs = chosen.label, chosen.outcome, chosen.inputs
+    kept = [(t.label, t.outcome, t.inputs) for t in tried if t.outcome is not None]
+    choice = explain(tried, chosen, criterion, MARGIN, "measured data: contact materials")
     ds = result_dataset(outcome, data, profile=profile)
     ds = _with_selection(ds, kept, criterion)
     ds.attrs.update(material=str(inputs["material"]), candidate=label, criterion=criterion,
-                    selection_margin=MARGIN, explanation=_explain(rows, label, criterion,
-                                                                  best_score))
+                    selection_margin=MARGIN, explanation=choice.explanation)
     if inputs.get("newtonian"):
         ds.attrs["newtonian"] = 1
     if decay is not None:
@@ -196,24 +176,6 @@ def _with_selection(ds: xr.Dataset, kept: list[tuple[str, Outcome, dict[str, Any
                                 "reduced chi-square of the candidate"),
         selection_pvalue=column([k[1].pvalue for k in kept], "1",
                                 "chi-square p-value of the candidate (NaN: stderr unknown)")))
-
-
-def _explain(rows: list[dict[str, Any]], chosen: str, criterion: str, best: float) -> str:
-    parts = []
-    for row in rows:
-        o = row.get("outcome")
-        if o is None:
-            parts.append(f"{row['label']}: {row['note']}")
-            continue
-        score = o.criterion[criterion]
-        p = o.pvalue
-        verdict = ("kept" if row["label"] == chosen else
-                   f"{'+' if score >= best else ''}{score - best:.3g} from the best")
-        parts.append(f"{row['label']} ({o.n_free} parameters): {criterion.upper()} {score:.4g}, "
-                     f"redchi {float(o.result.redchi):.3g}"
-                     + (f", p {p:.2g}" if math.isfinite(p) else "") + f" [{verdict}]")
-    return (f"measured data: contact materials compared by {criterion.upper()}; kept {chosen}, "
-            f"the simplest within {MARGIN:g} of the best. " + "; ".join(parts))
 
 
 AUTO_CHOOSERS["measured"] = fit_measured_auto  # fit_spectrum(model="auto") reaches it here

@@ -22,7 +22,7 @@ from viscoforce._validation import (
     require_int,
     require_positive,
 )
-from viscoforce.exceptions import ConvergenceError, ParameterError
+from viscoforce.exceptions import ParameterError
 from viscoforce.fitting.base import (
     MAX_AUTO_MODES,
     MAX_MODES,
@@ -30,10 +30,11 @@ from viscoforce.fitting.base import (
     ModelSpec,
 )
 from viscoforce.fitting.curves import required_tip
-from viscoforce.fitting.fit import CRITERIA, _share_effective_size, result_dataset
+from viscoforce.fitting.fit import result_dataset
 from viscoforce.fitting.moduli import add_derived_moduli
-from viscoforce.fitting.outcome import Outcome, fit_once, residual_lag1
+from viscoforce.fitting.outcome import Outcome, residual_lag1
 from viscoforce.fitting.report import carry
+from viscoforce.fitting.selection import Candidate, Tried, check_criterion, compare, explain, keep
 from viscoforce.fitting.ting_model import (
     TING_FIXED,
     TING_MATERIALS,
@@ -65,10 +66,13 @@ __all__ = [
 
 
 def _select(data: TingData, modes: int | str, criterion: str, fixed: Mapping[str, Any]
-            ) -> tuple[Outcome, list[dict[str, Any]]]:
-    """The best fit and the candidates (``modes="auto"``: 1, 2, … prony modes by ``criterion``)."""
-    if criterion not in CRITERIA:
-        raise ParameterError(f"criterion must be one of {', '.join(CRITERIA)}, got {criterion!r}")
+            ) -> tuple[Tried, list[Tried]]:
+    """The kept fit and the candidates (``modes="auto"``: 1, 2, … prony modes by ``criterion``).
+
+    The loop and rule are :mod:`viscoforce.fitting.selection`'s (the lowest criterion), each fit
+    with the AR(1) stderr correction before it is scored.
+    """
+    check_criterion(criterion)
     if modes == "auto":
         if fixed.get("material") != "prony":
             raise ParameterError("modes='auto' needs material='prony'")
@@ -78,26 +82,16 @@ def _select(data: TingData, modes: int | str, criterion: str, fixed: Mapping[str
         if counts[0] > MAX_MODES:
             raise ParameterError(f"modes must be an integer in [1, {MAX_MODES}] or 'auto', got "
                                  f"{modes!r}")
-    outcomes: list[Outcome] = []
-    worse = 0
-    for n in counts:
-        try:
-            outcome = fit_once(ting_model(ModelSpec("ting", n, fixed)), data)
-        except ConvergenceError:
-            if not outcomes:
-                raise
-            break
+    family = [Candidate(f"{n} mode{'s' if n > 1 else ''}",
+                        lambda n=n: ting_model(ModelSpec("ting", n, fixed))) for n in counts]
+
+    def corrected(outcome: Outcome) -> None:
         if not math.isfinite(outcome.lag1) and not getattr(outcome.model, "autocorrelated",
                                                             False):
             _autocorrelation(outcome)
-        outcomes.append(outcome)
-        _share_effective_size(outcomes)
-        scores = [o.criterion[criterion] for o in outcomes]
-        worse = worse + 1 if len(scores) > 1 and scores[-1] >= min(scores[:-1]) else 0
-        if worse >= 2:
-            break
-    best = min(outcomes, key=lambda o: o.criterion[criterion])
-    return best, [{"modes": o.model.spec.modes, **o.criterion} for o in outcomes]
+
+    tried = compare([family], data, criterion, after=corrected)
+    return keep(tried, criterion), tried
 
 
 def _autocorrelation(outcome: Outcome) -> None:
@@ -173,11 +167,15 @@ def fit_ting(curves: xr.Dataset, *, curve: int = 0, segment: int | None = None,
                              "reference_frequency": reference_frequency,
                              "newtonian": newtonian}
     fixed = {k: v for k, v in fixed.items() if v is not None}
-    best, selection = _select(data, modes, criterion, fixed)
+    kept, tried = _select(data, modes, criterion, fixed)
+    best = kept.outcome
+    selection = [{"modes": t.modes, **t.outcome.criterion} for t in tried if t.outcome]
     ds = result_dataset(best, data, selection=selection if modes == "auto" else None,
                         profile=profile)
     if modes == "auto":
         ds.attrs["criterion"] = criterion
+        ds.attrs["explanation"] = explain(tried, kept, criterion, 0.0,
+                                          "modes of model 'ting'").explanation
     ds = _describe(ds, best, data)
     warn_fit(ds)
     ds = add_derived_moduli(ds, poisson)
