@@ -74,3 +74,13 @@ def test_readme_quickstart_runs(tmp_path, monkeypatch):
     assert abs(float(namespace["fit"].tau) - 1e-3) < 1e-9
     assert float(namespace["static"].force) == pytest.approx(1.08e-6, abs=5e-9)
     assert (tmp_path / "bode.png").stat().st_size > 0
+
+
+def test_the_particle_and_the_rigid_sphere_tip_are_named_apart():
+    """Issue 36 item 5: one class per name; the earlier name ``Sphere`` still works for both."""
+    import viscoforce as vf
+    from viscoforce.physics import tips
+
+    assert vf.Particle.__name__ == "Particle" and tips.RigidSphere.__name__ == "RigidSphere"
+    assert vf.Sphere is vf.Particle and tips.Sphere is tips.RigidSphere
+    assert tips.tip_from("sphere:5um") == tips.RigidSphere(5e-6)

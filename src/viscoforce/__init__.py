@@ -28,7 +28,7 @@ from viscoforce.exceptions import (
 )
 from viscoforce.physics.materials import Elastic, PronySeries, StandardLinearSolid
 from viscoforce.physics.paper import PAPER, PaperParameters, paper_pressure_law
-from viscoforce.physics.particle import Sphere
+from viscoforce.physics.particle import Particle, Sphere
 from viscoforce.physics.surface_forces import DoubleLayer, SoftWall, SumOfLaws
 from viscoforce.problem import ContactProblem, default_grid
 from viscoforce.radial_grid import RadialGrid
@@ -98,6 +98,7 @@ __all__ = [
     "ModelValidityWarning",
     "PAPER",
     "PaperParameters",
+    "Particle",
     "ParameterError",
     "PronySeries",
     "RadialGrid",

@@ -31,7 +31,7 @@ from viscoforce.exceptions import (
     ParameterError,
 )
 from viscoforce.physics.materials import ViscoelasticMaterial
-from viscoforce.physics.particle import Sphere
+from viscoforce.physics.particle import Particle
 from viscoforce.physics.surface_forces import SurfaceForceLaw
 from viscoforce.radial_grid import RadialGrid, barycentric_weights, gauss_legendre_unit
 from viscoforce.units import format_quantity
@@ -57,21 +57,21 @@ _SURFACE_FORCE_KIND = "SurfaceForceLaw (e.g. DoubleLayer(P, debye_length) + Soft
 _MATERIAL_KIND = "ViscoelasticMaterial (Elastic, StandardLinearSolid or PronySeries)"
 
 
-def _check_geometry(sphere: Sphere, law: SurfaceForceLaw) -> None:
-    require_instance("sphere", sphere, Sphere)
+def _check_geometry(sphere: Particle, law: SurfaceForceLaw) -> None:
+    require_instance("sphere", sphere, Particle)
     # a subnormal R gave an outer radius of 0, 1e300 m a Newton solve that cannot converge
     require_plausible("radius (R)", sphere.radius, SPHERE_RADIUS_RANGE, "m",
                       why="the sphere of the contact problem")
     require_instance("surface_force", law, SurfaceForceLaw, what=_SURFACE_FORCE_KIND)
 
 
-def interaction_length(sphere: Sphere, law: SurfaceForceLaw) -> float:
+def interaction_length(sphere: Particle, law: SurfaceForceLaw) -> float:
     """sqrt(2 R λ) [m]: the radius over which the undeformed gap grows by one decay length λ."""
     _check_geometry(sphere, law)
     return float(np.sqrt(2.0 * sphere.radius * law.decay_length))
 
 
-def default_outer_radius(sphere: Sphere, law: SurfaceForceLaw, deepest_position: float) -> float:
+def default_outer_radius(sphere: Particle, law: SurfaceForceLaw, deepest_position: float) -> float:
     """r_max [m] such that the undeformed gap at r_max exceeds the law's negligible gap.
 
     Since a repulsive force only opens the gap (u ≤ 0), the pressure beyond r_max is below
@@ -85,7 +85,7 @@ def default_outer_radius(sphere: Sphere, law: SurfaceForceLaw, deepest_position:
     return max(r_cut, 3.0 * interaction_length(sphere, law))
 
 
-def default_grid(sphere: Sphere, law: SurfaceForceLaw, deepest_position: float, *,
+def default_grid(sphere: Particle, law: SurfaceForceLaw, deepest_position: float, *,
                  grid_spacing: float | None = None, outer_radius: float | None = None,
                  order: int = DEFAULT_ORDER) -> RadialGrid:
     """The radial grid the physics needs for positions down to ``deepest_position`` [m].
@@ -130,7 +130,7 @@ class ContactProblem:
 
     Parameters
     ----------
-    sphere : Sphere
+    sphere : Particle
         Geometry (radius R, within :data:`~viscoforce._limits.SPHERE_RADIUS_RANGE`).
     surface_force : SurfaceForceLaw
         Pressure law p(h).
@@ -140,7 +140,7 @@ class ContactProblem:
         Discretisation (see :func:`default_grid`, or :meth:`create`).
     """
 
-    sphere: Sphere
+    sphere: Particle
     surface_force: SurfaceForceLaw
     material: ViscoelasticMaterial
     grid: RadialGrid
@@ -157,7 +157,7 @@ class ContactProblem:
                 estimate=float(self.grid.size), limit=float(MAX_NODES))
 
     @classmethod
-    def create(cls, *, sphere: Sphere, surface_force: SurfaceForceLaw,
+    def create(cls, *, sphere: Particle, surface_force: SurfaceForceLaw,
                material: ViscoelasticMaterial, deepest_position: float,
                grid_spacing: float | None = None, outer_radius: float | None = None,
                order: int = DEFAULT_ORDER) -> ContactProblem:

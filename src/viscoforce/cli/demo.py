@@ -90,7 +90,7 @@ def _synthetic(folder: Path, out: Path, report: dict[str, Any]) -> Any:
     from viscoforce.io.instruments import load_instrument
     from viscoforce.physics.materials import StandardLinearSolid
     from viscoforce.physics.paper import PAPER, paper_pressure_law
-    from viscoforce.physics.particle import Sphere
+    from viscoforce.physics.particle import Particle
     from viscoforce.plotting import bode_plot
     from viscoforce.problem import ContactProblem
     from viscoforce.schema import select_curve
@@ -100,7 +100,7 @@ def _synthetic(folder: Path, out: Path, report: dict[str, Any]) -> Any:
     curves = load_instrument(folder / SYNTHETIC)
     spec = modulation_spectrum(select_curve(curves, 0) if curves.sizes["curve"] > 1 else curves)
     spec = spec.isel(curve=0) if "curve" in spec.dims else spec
-    problem = ContactProblem.create(sphere=Sphere(PAPER.R), surface_force=paper_pressure_law(),
+    problem = ContactProblem.create(sphere=Particle(PAPER.R), surface_force=paper_pressure_law(),
                                     material=StandardLinearSolid(1e10, 1e9, 1e-3),
                                     deepest_position=truth["h0"])
     fit = fit_spectrum(spec, "auto", modes="auto", position=truth["h0"], problem=problem)

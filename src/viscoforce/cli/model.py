@@ -80,11 +80,11 @@ def material_from_args(args: argparse.Namespace) -> ViscoelasticMaterial:
 def problem_from_args(args: argparse.Namespace, material: ViscoelasticMaterial,
                       deepest: float) -> ContactProblem:
     """The contact problem of the system and numerics flags, sized for ``deepest`` [m]."""
-    from viscoforce.physics.particle import Sphere
+    from viscoforce.physics.particle import Particle
     from viscoforce.problem import ContactProblem
 
     law = paper_pressure_law(args.P, args.debye_length, args.Pw, args.z0)
-    return ContactProblem.create(sphere=Sphere(args.R), surface_force=law, material=material,
+    return ContactProblem.create(sphere=Particle(args.R), surface_force=law, material=material,
                                  deepest_position=deepest, grid_spacing=args.grid_spacing,
                                  outer_radius=args.outer_radius)
 

@@ -1,7 +1,7 @@
 """The tip shapes of :mod:`viscoforce.physics.tips`: the :class:`Tip` protocol and its shapes.
 
-:class:`Sphere`, :class:`Paraboloid`, :class:`Cone`, :class:`Pyramid` and :class:`Flat`, with
-their contact laws; the conventions, the text form and the references are told in
+:class:`RigidSphere` (also ``Sphere``), :class:`Paraboloid`, :class:`Cone`, :class:`Pyramid` and
+:class:`Flat`, with their contact laws; the conventions, the text form and the references are told in
 :mod:`viscoforce.physics.tips`, the public module that re-exports everything here.
 """
 
@@ -241,7 +241,7 @@ class _RadiusTip(Tip):
 
 
 @dataclass(frozen=True)
-class Sphere(_RadiusTip):
+class RigidSphere(_RadiusTip):
     """Rigid sphere of radius R, Sneddon's exact solution (not the paraboloid of Hertz).
 
     The contact radius a < R follows from δ = (a/2)·ln((R + a)/(R − a)) and the load is
@@ -347,13 +347,17 @@ def _solve_s_tanh_s(x: FloatArray) -> FloatArray:
     return np.where(x > 0, s, 0.0).reshape(shape)
 
 
+#: The earlier name of :class:`RigidSphere` (``viscoforce.physics.tips.Sphere``, ``--tip sphere:R``).
+Sphere = RigidSphere
+
+
 @dataclass(frozen=True)
 class Paraboloid(_RadiusTip):
     """Paraboloid of apex radius R: Hertz contact (Johnson 1985, §4.2, Eqs. 4.22–4.23).
 
     F = (4/3)·E_star·√R·δ^{3/2} = (2/3)·E·√R·δ^{3/2}, a = √(Rδ), and S = dF/dδ / E = √(Rδ) — the
     contact stiffness the viscoforce contact model uses. It is the small-δ limit of
-    :class:`Sphere`.
+    :class:`RigidSphere`.
 
     Parameters
     ----------
@@ -560,4 +564,4 @@ class Pyramid(_AngledTip):
 
 
 _CLASSES: dict[str, type[Tip]] = {
-    "sphere": Sphere, "paraboloid": Paraboloid, "cone": Cone, "pyramid": Pyramid, "flat": Flat}
+    "sphere": RigidSphere, "paraboloid": Paraboloid, "cone": Cone, "pyramid": Pyramid, "flat": Flat}

@@ -11,7 +11,7 @@ from dataclasses import dataclass
 
 from viscoforce._validation import require_positive, require_sls_moduli
 from viscoforce.physics.materials import StandardLinearSolid
-from viscoforce.physics.particle import Sphere
+from viscoforce.physics.particle import Particle
 from viscoforce.physics.surface_forces import DoubleLayer, SoftWall, SumOfLaws
 
 
@@ -56,9 +56,9 @@ class PaperParameters:
         object.__setattr__(self, "E_inf", e_inf)
         object.__setattr__(self, "tau", tau)
 
-    def sphere(self) -> Sphere:
+    def sphere(self) -> Particle:
         """The sphere of radius R."""
-        return Sphere(self.R)
+        return Particle(self.R)
 
     def pressure_law(self) -> SumOfLaws:
         """Eq. 13: double layer plus soft wall."""

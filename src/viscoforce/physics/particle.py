@@ -1,4 +1,9 @@
-"""Geometry of the interacting bodies: a sphere (or two spheres) facing a flat."""
+"""Geometry of the interacting bodies: a sphere (or two spheres) facing a flat.
+
+:class:`Particle` is the particle's paraboloidal apex (paper Eq. 1); ``Sphere`` is its earlier
+name, kept (``viscoforce.Sphere``). The rigid spherical *tip* of indentation fits is another
+thing: :class:`viscoforce.physics.tips.RigidSphere`.
+"""
 
 from __future__ import annotations
 
@@ -13,7 +18,7 @@ from viscoforce.exceptions import ParameterError
 
 
 @dataclass(frozen=True)
-class Sphere:
+class Particle:
     """Paraboloidal apex of radius R: undeformed gap h0(r) = h0 + r²/2R (paper Eq. 1).
 
     Parameters
@@ -29,7 +34,7 @@ class Sphere:
         object.__setattr__(self, "radius", require_positive("radius (R)", self.radius))
 
     @classmethod
-    def effective(cls, radius_1: float, radius_2: float) -> Sphere:
+    def effective(cls, radius_1: float, radius_2: float) -> Particle:
         """Two spheres of radii R1, R2 [m] → the equivalent sphere against a flat."""
         r1 = require_positive("radius_1", radius_1)
         r2 = require_positive("radius_2", radius_2)
@@ -48,3 +53,7 @@ class Sphere:
         position = require_finite("position (h0)", position)
         gap = require_finite("gap", gap)
         return float(np.sqrt(max(2.0 * self.radius * (gap - position), 0.0)))
+
+
+#: The earlier name of :class:`Particle` (``viscoforce.Sphere``, ``ContactProblem.create(sphere=...)``).
+Sphere = Particle

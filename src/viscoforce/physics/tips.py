@@ -1,7 +1,8 @@
 """Tip shapes: indentation → load, contact stiffness and contact radius of an elastic half-space.
 
-Every tip is a small frozen dataclass implementing :class:`Tip`: :class:`Sphere` (Sneddon's exact
-sphere), :class:`Paraboloid` (Hertz), :class:`Cone` (Sneddon), :class:`Pyramid` (four-sided,
+Every tip is a small frozen dataclass implementing :class:`Tip`: :class:`RigidSphere` (Sneddon's exact
+sphere; ``Sphere`` is its earlier name, not the particle :class:`viscoforce.Particle`),
+:class:`Paraboloid` (Hertz), :class:`Cone` (Sneddon), :class:`Pyramid` (four-sided,
 Bilodeau) and :class:`Flat` (flat cylindrical punch). Each gives, vectorised over the indentation
 δ [m] (array_like, finite, δ ≥ 0, δ > 0 into the sample):
 
@@ -61,6 +62,7 @@ from viscoforce.physics._tip_shapes import (
     Flat,
     Paraboloid,
     Pyramid,
+    RigidSphere,
     Sphere,
     Tip,
 )
@@ -80,6 +82,7 @@ __all__ = [
     "Flat",
     "Paraboloid",
     "Pyramid",
+    "RigidSphere",
     "Sphere",
     "Tip",
     "paper_from_young",
