@@ -1,15 +1,15 @@
-"""The force-curve models of the SPEC table: relaxation, creep, hertz, step (and ting's entry).
+"""What the force-curve models share: the exponential relaxation/creep builder, Hertz's guesses and
+windows, the step response of a measured drive.
 
-Each builder takes a :class:`~viscoforce.fitting.base.ModelSpec` and returns a
-:class:`~viscoforce.fitting.base.FitModel` of a force over time (relaxation, step), a force over
-the tip position (hertz) or a tip position over time (creep); build them with
-:func:`viscoforce.fitting.models.make_model`.
+The builders themselves live with their models, one module each in
+:mod:`viscoforce.fitting.models` (``relaxation``, ``creep``, ``hertz``, ``step``); build a model
+with :func:`viscoforce.fitting.models.make_model`.
 """
 
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Mapping
+from collections.abc import Mapping
 from typing import Any
 
 import numpy as np
@@ -21,10 +21,8 @@ from viscoforce.fitting.base import (
     FitModel,
     ModelSpec,
     material_from,
-    material_layout,
-    need,
 )
-from viscoforce.fitting.guesses import solve_modulus, spread, time_window
+from viscoforce.fitting.guesses import spread, time_window
 from viscoforce.problem import ContactProblem
 
 
@@ -57,45 +55,6 @@ def _exponential_model(spec: ModelSpec, level: str, step: str) -> FitModel:
     layout: list[P.Item] = [P.Signed(level), *(P.Signed(df) for df in dfs),
                             P.Chain(tuple(taus))]
     return FitModel(spec, function, layout, "t", guesser, time_window)
-
-
-def _relaxation_model(spec: ModelSpec) -> FitModel:
-    return _exponential_model(spec, "F_inf", "dF")
-
-
-def _creep_model(spec: ModelSpec) -> FitModel:
-    return _exponential_model(spec, "z_inf", "dz")
-
-
-def _hertz_model(spec: ModelSpec) -> FitModel:
-    """F(z) = b + s·(z − c) + E·shape(max(z − c, 0)) over the tip position z toward the sample.
-
-    ``E`` the paper's modulus, ``contact_point`` c [m], ``baseline`` b [N] (the free-cantilever
-    force at contact) and ``baseline_slope`` s [N/m] (a tilted baseline, kept in contact); the
-    tip's ``force_shape`` (:mod:`viscoforce.physics.tips`) gives the indentation law.
-    """
-    (tip,) = need(spec, "tip")
-    window = spec.fixed.get("contact_window")
-
-    def function(z: np.ndarray, v: Mapping[str, float]) -> np.ndarray:
-        z = np.asarray(z, dtype=float)
-        delta = np.maximum(z - v["contact_point"], 0.0)
-        return (v["baseline"] + v["baseline_slope"] * (z - v["contact_point"])
-                + v["E"] * tip.force_shape(delta))
-
-    def guesser(f: np.ndarray, z: np.ndarray) -> dict[str, float]:
-        return hertz_start(tip, np.asarray(z, dtype=float), np.asarray(f, dtype=float))
-
-    def windows(z: np.ndarray, f: np.ndarray | None = None) -> dict[str, tuple[float, float]]:
-        out = {"contact_point": window if window is not None else contact_window(tip, z)}
-        if f is not None:
-            out.update(baseline_windows(f, z))
-        return out
-
-    layout: list[P.Item] = [P.Chain(("E",)), P.Bounded("contact_point", -1.0, 1.0),
-                            P.Bounded("baseline", -1.0, 1.0),
-                            P.Bounded("baseline_slope", -1.0, 1.0)]
-    return FitModel(spec, function, layout, "z", guesser, bounded_windows=windows)
 
 
 def baseline_windows(f: np.ndarray, z: np.ndarray) -> dict[str, tuple[float, float]]:
@@ -351,36 +310,3 @@ class StepResponse:
         return dict(zip(("E0", "E_inf", "tau"), grad.T, strict=True))
 
 
-def _step_model(spec: ModelSpec) -> FitModel:
-    (problem, position_trace) = need(spec, "problem", "position_trace")
-    from viscoforce.experiments.drives import MeasuredTrace
-
-    trace_t, trace_h = (np.asarray(a, dtype=float) for a in position_trace)
-    response = StepResponse(problem, MeasuredTrace(*corners(trace_t, trace_h)),
-                            tol=spec.fixed.get("tol"))
-
-    def guesser(f: np.ndarray, t: np.ndarray) -> dict[str, float]:
-        start = spec.fixed.get("start")
-        if start is not None:
-            return dict(start)
-        from viscoforce.solvers.static import equilibrium_gap
-
-        f = np.asarray(f, dtype=float)
-        i_peak = int(np.argmax(np.abs(f - f[0])))
-        end = float(np.interp(t[-1], trace_t, trace_h))
-        peak_position = float(np.interp(t[i_peak], trace_t, trace_h))
-
-        def load(position: float) -> Callable[[float], float]:
-            return lambda e: abs(float(problem.load(problem.pressure(
-                equilibrium_gap(problem, position, e).gap))))
-
-        e_inf = solve_modulus(load(end), max(abs(float(f[-1])), 1e-15), 1e9)
-        e0 = solve_modulus(load(peak_position), max(abs(float(f[i_peak])), 1e-15), 2 * e_inf)
-        tail = np.abs(f[i_peak:] - f[-1])
-        below = np.flatnonzero(tail < tail[0] / math.e)
-        tau = float(t[i_peak + below[0]] - t[i_peak]) if below.size else float(np.ptp(t)) / 5
-        return {"E_inf": e_inf, "E0": max(e0, 1.05 * e_inf), "tau": max(tau, 1e-9)}
-
-    model = FitModel(spec, response.force, material_layout(1), "t", guesser, time_window)
-    model.response = response  # type: ignore[attr-defined]
-    return model

@@ -1,43 +1,28 @@
-"""The spectrum models of the SPEC table: svda, exact, contact (with its materials) and prony.
+"""What the spectrum models share: the SVDA's position and levels, the exact stiffness, the contact
+tip and the structural and viscosity guesses.
 
-Each builder takes a :class:`~viscoforce.fitting.base.ModelSpec` and returns a
-:class:`~viscoforce.fitting.base.FitModel` of k*(ω) [N/m]; build them with
-:func:`viscoforce.fitting.models.make_model`.
+The builders themselves live with their models, one module each in
+:mod:`viscoforce.fitting.models` (``svda``, ``exact``, ``contact``, ``prony``); build a model
+with :func:`viscoforce.fitting.models.make_model`.
 """
 
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Mapping
+from collections.abc import Mapping
 from typing import Any
 
 import numpy as np
-from scipy.special import gamma
 
-from viscoforce._limits import INDENTATION_RANGE
-from viscoforce._validation import require_plausible
 from viscoforce.exceptions import ModelValidityError, ParameterError
-from viscoforce.fitting import _params as P
 from viscoforce.fitting.base import (
-    CONTACT_MATERIALS,
-    EXPONENT_BOUNDS,
     MODULUS_BOUNDS,
-    REFERENCE_FREQUENCY,
-    FitModel,
     ModelSpec,
-    material_from,
-    material_layout,
     moduli_names,
-    need,
     tau_names,
 )
 from viscoforce.fitting.guesses import (
-    SpectrumFeatures,
     geometric,
-    material_guess,
-    moduli_from_levels,
-    omega_window,
-    spread,
 )
 from viscoforce.physics.materials import ViscoelasticMaterial
 from viscoforce.problem import ContactProblem
@@ -108,37 +93,6 @@ def svda_moduli_from_levels(k_relaxed: float, k_glassy: float, radius: float, P:
     return e_inf, max(min(max(e0, lo), hi), 1.05 * e_inf)
 
 
-def _svda_model(spec: ModelSpec) -> FitModel:
-    radius, p_amp, debye = need(spec, "radius", "P", "debye_length")
-    position, mean_force = _position_choice(spec)
-
-    def mean_position(v: Mapping[str, float]) -> float:
-        if position is not None:
-            return float(position)
-        return svda_position(mean_force, v["E_inf"], radius, p_amp, debye)
-
-    from viscoforce.closed_form import require_exponential_law
-    from viscoforce.svda import svda_stiffness_kernel
-
-    radius, p_amp, kappa = require_exponential_law(radius, p_amp, debye)  # once, not per call
-
-    def function(omega: np.ndarray, v: Mapping[str, float]) -> np.ndarray:
-        return svda_stiffness_kernel(np.asarray(omega, dtype=float), mean_position(v), v["E0"],
-                                     v["E_inf"], v["tau"], radius, p_amp, kappa)
-
-    def guesser(k: np.ndarray, omega: np.ndarray) -> dict[str, float]:
-        feats = SpectrumFeatures.of(k, omega)
-        e_inf, e0 = svda_moduli_from_levels(feats.k_low, max(feats.k_high, 1.01 * feats.k_low),
-                                            radius, p_amp, debye, position=position,
-                                            mean_force=mean_force)
-        check_svda_precontact(mean_position({"E_inf": e_inf}), e_inf, radius, p_amp, debye)
-        return {"E_inf": e_inf, "E0": e0, "tau": feats.sls_tau()}
-
-    model = FitModel(spec, function, material_layout(1), "omega", guesser, omega_window)
-    model.mean_position = mean_position  # type: ignore[attr-defined]
-    return model
-
-
 def check_svda_precontact(position: float, E_inf: float, radius: float, P: float,  # noqa: N803
                           debye_length: float) -> None:
     """Raise ModelValidityError if the SVDA mean state is in contact (centre gap < 1/κ).
@@ -154,25 +108,6 @@ def check_svda_precontact(position: float, E_inf: float, radius: float, P: float
             f"the svda model describes only pre-contact spectra: at h0 = {position:.3g} m with "
             f"E_inf = {E_inf:.3g} Pa the centre gap would be {gap:.3g} m < the contact threshold "
             f"1/kappa = {debye_length:.3g} m; use --model exact (any position) or contact")
-
-
-def _exact_model(spec: ModelSpec) -> FitModel:
-    (problem,) = need(spec, "problem")
-    position, mean_force = _position_choice(spec)
-    modes = spec.modes
-
-    def function(omega: np.ndarray, v: Mapping[str, float]) -> np.ndarray:
-        full = dict(v)
-        if modes > 1 and "tau" in full:  # the level search passes one-mode names
-            full = _expand_one_mode(full, modes)
-        return exact_stiffness(problem, position, mean_force, material_from(full, modes), omega)
-
-    def guesser(k: np.ndarray, omega: np.ndarray) -> dict[str, float]:
-        feats = SpectrumFeatures.of(k, omega)
-        e_inf, e0 = moduli_from_levels(function, feats, problem.material.relaxed_modulus)
-        return material_guess(e0, e_inf, feats.sls_tau(), modes, omega_window(omega))
-
-    return FitModel(spec, function, material_layout(modes), "omega", guesser, omega_window)
 
 
 def _expand_one_mode(v: Mapping[str, float], modes: int) -> dict[str, float]:
@@ -194,48 +129,6 @@ def exact_stiffness(problem: ContactProblem, position: float | None, mean_force:
     return state.stiffness(2.0 * np.asarray(material.complex_compliance(omega), dtype=complex))
 
 
-def _contact_model(spec: ModelSpec) -> FitModel:
-    (depth,) = need(spec, "indentation")
-    tip = contact_tip(spec.fixed.get("radius"), spec.fixed.get("tip"))
-    drag = float(spec.fixed.get("drag") or 0.0)
-    kind = spec.fixed.get("material", "sls")
-    newtonian = bool(spec.fixed.get("newtonian") or False)
-    f_ref = float(spec.fixed.get("reference_frequency") or REFERENCE_FREQUENCY)
-    if kind not in CONTACT_MATERIALS:
-        raise ParameterError(f"material must be one of {', '.join(CONTACT_MATERIALS)}, "
-                             f"got {kind!r}")
-    if spec.fixed.get("reference_frequency") is not None and kind != "structural":
-        raise ParameterError(f"reference_frequency is the f_ref of material 'structural'; "
-                             f"material {kind!r} has none")
-    if newtonian and kind != "power-law":
-        raise ParameterError(f"newtonian=True adds a viscosity to material 'power-law'; "
-                             f"material {kind!r} has {'one' if kind == 'structural' else 'none'}")
-    if not depth > 0:
-        raise ModelValidityError(
-            f"the contact model needs a positive operating indentation, got {depth!r} m: this "
-            "spectrum is pre-contact (use --model svda or exact), or give --indentation D0")
-    # a positive but subnormal δ0 makes S(δ0) underflow to 0: no modulus to fit
-    depth = require_plausible("indentation", depth, INDENTATION_RANGE, "m",
-                              why="the operating indentation of the contact model")
-    root = float(tip.contact_stiffness_factor(depth))  # S(δ0) = (dF/dδ)/E: √(Rδ0) for Hertz
-    modes = spec.modes if kind == "prony" else 1
-    moduli = _contact_modulus_function(kind, modes, newtonian, f_ref)
-
-    def function(omega: np.ndarray, v: Mapping[str, float]) -> np.ndarray:
-        return root * moduli(omega, v) + 1j * omega * drag
-
-    def guesser(k: np.ndarray, omega: np.ndarray) -> dict[str, float]:
-        modulus = (k - 1j * omega * drag) / root
-        return _contact_guess(kind, modes, newtonian, f_ref, modulus, omega)
-
-    window = omega_window if kind in ("sls", "prony") else None
-    fixed = {**spec.fixed, "reference_frequency": f_ref} if kind == "structural" else dict(
-        spec.fixed)
-    fixed["tip"] = tip
-    return FitModel(ModelSpec(spec.name, modes, fixed), function,
-                    _contact_layout(kind, modes, newtonian), "omega", guesser, window)
-
-
 def contact_tip(radius: float | None, tip: Any = None):
     """The tip of the contact model: ``tip``, or the paper's sphere of ``radius``.
 
@@ -255,65 +148,6 @@ def contact_tip(radius: float | None, tip: Any = None):
             "cone:ANGLE | pyramid:ANGLE | flat:RADIUS) or radius= (--R, the paper's sphere), "
             + ("not both" if radius is not None else "neither was given"))
     return Paraboloid(radius) if tip is None else tip_from(tip)
-
-
-def _contact_modulus_function(kind: str, modes: int, newtonian: bool, f_ref: float
-                              ) -> Callable[[np.ndarray, Mapping[str, float]], np.ndarray]:
-    """E*(ω) [Pa] of a contact material from its SPEC values (the paper's E)."""
-    from viscoforce.closed_form import (
-        power_law_complex_modulus,
-        prony_compliance_core,
-        structural_complex_modulus,
-    )
-
-    if kind == "structural":
-        return lambda omega, v: structural_complex_modulus(omega, v["E_ref"], v["alpha"],
-                                                           v["mu"], f_ref)
-    if kind == "power-law":
-        return lambda omega, v: power_law_complex_modulus(
-            omega, v["E0"], v["C1"], v["m"], v["mu"] if newtonian else 0.0)
-
-    moduli, taus = moduli_names(modes), tau_names(modes)
-
-    def prony(omega: np.ndarray, v: Mapping[str, float]) -> np.ndarray:
-        # the fit loop's values are ordered and positive by the layout: no material object
-        # (its validation costs more than the closed form), C* = 1/E0 + Σ ΔJ_i/(1 + iωτ_i)
-        full = _expand_one_mode(v, modes) if modes > 1 and "tau" in v else v
-        e = np.array([full[n] for n in moduli])
-        tau = np.array([full[n] for n in taus])
-        compliance = prony_compliance_core(np.asarray(omega, dtype=float), 1.0 / e[0],
-                                           1.0 / e[1:] - 1.0 / e[:-1], tau)
-        return 1.0 / compliance
-
-    return prony
-
-
-def _contact_layout(kind: str, modes: int, newtonian: bool) -> list[P.Item]:
-    if kind == "structural":
-        return [P.Chain(("E_ref",), MODULUS_BOUNDS), P.Bounded("alpha", *EXPONENT_BOUNDS),
-                P.Chain(("mu",))]
-    if kind == "power-law":
-        return [P.Chain(("E0",)), P.Chain(("C1",)), P.Bounded("m", *EXPONENT_BOUNDS),
-                *([P.Chain(("mu",))] if newtonian else [])]
-    return material_layout(modes)
-
-
-def _contact_guess(kind: str, modes: int, newtonian: bool, f_ref: float, modulus: np.ndarray,
-                   omega: np.ndarray) -> dict[str, float]:
-    """A start for a contact material from E*(ω) = (k* − iωB)/√(Rδ0) alone."""
-    feats = SpectrumFeatures.of(modulus, omega)
-    if kind == "structural":
-        return structural_guess(modulus, omega, f_ref)
-    if kind == "power-law":  # |E| falls like ω^−m … rises like ω^m: slope of log|E|
-        slope = np.polyfit(np.log(omega), np.log(np.abs(modulus)), 1)[0]
-        m = min(max(float(slope), 0.05), 0.95)
-        c1 = 1.0 / (feats.k_low * gamma(m + 1)) * feats.omega_low ** m
-        out = {"E0": 2.0 * feats.k_high, "C1": c1, "m": m}
-        if newtonian:
-            out["mu"] = _viscosity_guess(modulus, omega)
-        return out
-    e_inf, e0 = feats.k_low, max(feats.k_high, 1.05 * feats.k_low)
-    return material_guess(e0, e_inf, feats.sls_tau(), modes, omega_window(omega))
 
 
 def structural_guess(modulus: np.ndarray, omega: np.ndarray, reference_frequency: float
@@ -356,27 +190,3 @@ def _viscosity_guess(modulus: np.ndarray, omega: np.ndarray) -> float:
     return max(0.1 * abs(float(modulus[i].imag)), 1e-6 * abs(modulus[i])) / float(omega[i])
 
 
-def _prony_model(spec: ModelSpec) -> FitModel:
-    modes = spec.modes
-    dks = [f"dk_{i}" for i in range(1, modes + 1)]
-    taus = [f"tau_{i}" for i in range(1, modes + 1)]
-
-    def function(omega: np.ndarray, v: Mapping[str, float]) -> np.ndarray:
-        k = np.full(np.shape(omega), v["k_inf"], dtype=complex)
-        for dk, tau in zip(dks, taus, strict=True):
-            x = 1j * omega * v[tau]
-            k += v[dk] * x / (1.0 + x)
-        return k
-
-    def guesser(k: np.ndarray, omega: np.ndarray) -> dict[str, float]:
-        feats = SpectrumFeatures.of(k, omega)
-        k_inf = feats.k_low
-        total = max(feats.k_high - feats.k_low, 0.05 * feats.k_low)
-        tau = 1.0 / (feats.omega_peak * math.sqrt(max(feats.k_high / feats.k_low, 1.0001)))
-        out = {"k_inf": k_inf, **{dk: total / modes for dk in dks}}
-        out.update(zip(taus, spread(tau, modes, omega_window(omega)), strict=True))
-        return out
-
-    layout: list[P.Item] = [P.Chain(("k_inf",)), *(P.Chain((dk,)) for dk in dks),
-                            P.Chain(tuple(taus))]
-    return FitModel(spec, function, layout, "omega", guesser, omega_window)

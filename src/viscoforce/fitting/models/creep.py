@@ -1,7 +1,15 @@
 """``creep``: the tip position on a constant-force pause, z_inf + sum dz_i exp(-t/tau_i)."""
 
-from viscoforce.fitting.base import MAX_MODES
-from viscoforce.fitting.curve_models import _creep_model
+from __future__ import annotations
+
+from viscoforce.fitting.base import (
+    MAX_MODES,
+    FitModel,
+    ModelSpec,
+)
+from viscoforce.fitting.curve_models import (
+    _exponential_model,
+)
 from viscoforce.fitting.registry import ModelEntry, register
 from viscoforce.fitting.segments import creep_data
 
@@ -10,6 +18,10 @@ def parameters(modes: int, material: str | None = None) -> list[str]:
     """z_inf, dz_1 ... dz_n, tau_1 ... tau_n (creep times)."""
     return ["z_inf", *(f"dz_{i}" for i in range(1, modes + 1)),
             *(f"tau_{i}" for i in range(1, modes + 1))]
+
+
+def _creep_model(spec: ModelSpec) -> FitModel:
+    return _exponential_model(spec, "z_inf", "dz")
 
 
 ENTRY = register(ModelEntry(

@@ -1,7 +1,15 @@
 """``relaxation``: the force on a hold, F_inf + sum dF_i exp(-t/tau_i) (force-relaxation times)."""
 
-from viscoforce.fitting.base import MAX_MODES
-from viscoforce.fitting.curve_models import _relaxation_model
+from __future__ import annotations
+
+from viscoforce.fitting.base import (
+    MAX_MODES,
+    FitModel,
+    ModelSpec,
+)
+from viscoforce.fitting.curve_models import (
+    _exponential_model,
+)
 from viscoforce.fitting.registry import ModelEntry, register
 from viscoforce.fitting.segments import hold_data
 
@@ -10,6 +18,10 @@ def parameters(modes: int, material: str | None = None) -> list[str]:
     """F_inf, dF_1 ... dF_n, tau_1 ... tau_n."""
     return ["F_inf", *(f"dF_{i}" for i in range(1, modes + 1)),
             *(f"tau_{i}" for i in range(1, modes + 1))]
+
+
+def _relaxation_model(spec: ModelSpec) -> FitModel:
+    return _exponential_model(spec, "F_inf", "dF")
 
 
 ENTRY = register(ModelEntry(
