@@ -69,3 +69,23 @@ def test_the_cycle_finder_finds_a_cycle():
             return self.edges.get(module, set())
 
     assert _cycles(Graph()) == [["a", "b", "c"]]
+
+
+def test_the_cli_contract_names_every_private_module_of_the_packages_below():
+    """The import-linter contract "the CLI uses only public modules …" lists them all (a new
+    private module is covered the day it is written), and the CLI imports none of them."""
+    import tomllib
+    from pathlib import Path
+
+    config = tomllib.loads((Path(__file__).resolve().parents[1] / "pyproject.toml").read_text(
+        encoding="utf-8"))
+    contract = next(c for c in config["tool"]["importlinter"]["contracts"]
+                    if c["name"].startswith("the CLI uses only public modules"))
+    graph = grimp.build_graph("viscoforce")
+    private = {m for m in graph.modules if m.count(".") >= 2 and not m.startswith("viscoforce.cli")
+               and any(p.startswith("_") and not p.startswith("__") for p in m.split(".")[2:])}
+    top = {m for m in private if not any(m.startswith(o + ".") for o in private)}
+    assert set(contract["forbidden_modules"]) == top
+    used = {(m, i) for m in graph.modules if m.startswith("viscoforce.cli")
+            for i in graph.find_modules_directly_imported_by(m) if i in private}
+    assert not used
