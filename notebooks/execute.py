@@ -10,7 +10,7 @@ The kernel is ``python3`` and runs with ``notebooks/`` as working directory (as 
 and nbmake do); ``VISCOFORCE_NB_QUICK`` is removed from the kernel's environment, so each notebook
 uses its full settings. Volatile metadata (per-cell execution timestamps) is not recorded, so a
 re-run changes only what the outputs themselves change. The test suite keeps running the
-notebooks in quick mode (tests/test_notebooks.py); this script regenerates what readers see.
+notebooks in quick mode (tests/project/test_notebooks.py); this script regenerates what readers see.
 """
 
 from __future__ import annotations

@@ -1,6 +1,6 @@
 """The two examples that end each command's ``--help`` (one table; the test suite runs them).
 
-Each example is one shell line, run verbatim by ``tests/test_cli_examples.py`` (several commands
+Each example is one shell line, run verbatim by ``tests/cli/test_cli_examples.py`` (several commands
 joined by ``&&`` run one after the other). Paths under ``data_examples/`` are the example files
 shipped inside viscoforce: the repository's ``data_examples`` folder links to them, and an
 installed copy is at ``python -c "import viscoforce; print(viscoforce.example_path())"``.

@@ -136,7 +136,7 @@ def _demodulate_halves(t: np.ndarray, stacked: np.ndarray, frequency: float, *, 
     ``detrend``) gives two halves of ⌊m/2⌋ whole periods: its first and its last ⌊m/2⌋ periods
     (the middle period is left out when m is odd), each demodulated with its own standard errors.
     Where those errors hold, (k*_A − k*_B)/√(σ_A² + σ_B²) per real component has rms 1 over
-    many segments (``tests/test_modulation_stderr.py``, ``benchmarks/split_half.py``).
+    many segments (``tests/measured/test_modulation_stderr.py``, ``benchmarks/split_half.py``).
 
     Parameters
     ----------

@@ -73,7 +73,7 @@ of m) of |R_F(k)|²/a_k. What this assumes and gives:
 
 On the real JPK map of a cell (16 curves, 1–300 Hz, 4–19 periods) the white formula is 2–6×
 too small: the two halves of each window differ by an rms 2.1–6.4 of their stated errors; with
-the residual-spectrum errors by 0.9–1.9 (``tests/test_modulation_stderr.py``,
+the residual-spectrum errors by 0.9–1.9 (``tests/measured/test_modulation_stderr.py``,
 ``benchmarks/split_half.py``). The 1.9 is at 300 Hz, where the halves differ systematically
 (same sign on every curve: the force response grows by ≈ 10 % through the segment), a drift
 of k* the errors count only through its sidebands.

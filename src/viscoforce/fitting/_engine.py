@@ -17,7 +17,7 @@ varies — values with optional bounds, no expressions — and nothing else:
 
 The result has the attributes of :class:`lmfit.minimizer.MinimizerResult` that the fitting code
 reads, and its ``params`` are the given Parameters, set to the best values with their stderr
-and correlations. ``tests/test_fit_engine.py`` checks it against ``lmfit.minimize`` (values,
+and correlations. ``tests/fitting/test_fit_engine.py`` checks it against ``lmfit.minimize`` (values,
 covariance, statistics) on every closed-form model. Where a model needs lmfit itself
 (expressions, an analytic Jacobian), the callers use lmfit.
 """

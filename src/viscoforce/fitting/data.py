@@ -195,7 +195,7 @@ def clean_pixels_fit_data(omega: np.ndarray, arrays: Mapping[str, np.ndarray],
     The pixels of :func:`pixel_fit_data` (``weights=None``) whose spectrum is as expected: some
     point unflagged, no NaN/inf stiffness or phase and no stiffness ≤ 0 among the unflagged, a
     usable stderr at each of them. Their FitData hold the same values, from the same elementwise
-    operations on the (pixel, ω) arrays (``tests/test_fitting.py`` compares them bit for bit);
+    operations on the (pixel, ω) arrays (``tests/fitting/test_fitting.py`` compares them bit for bit);
     every other pixel is None, for :func:`pixel_fit_data` to describe or refuse. One NumPy call
     per operation for the map instead of one per pixel: a 4096-pixel map's preparation took
     0.17 s, serial beside the fits (issue 22 item 3).

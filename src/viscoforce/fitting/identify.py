@@ -79,7 +79,7 @@ PROFILE_NFEV = 100
 PENALTY = 1e-6
 #: ``"auto"`` profiles a positive parameter whose local 2σ spans more than this [decades]: over
 #: a narrower range a smooth model is close to linear in log q, so the curvature's ±2σ and the
-#: profile agree (to ≈ 1 % of the width on the test cases; tests/test_fit_statistics.py).
+#: profile agree (to ≈ 1 % of the width on the test cases; tests/fitting/test_fit_statistics.py).
 QUADRATIC_DECADES = 0.1
 #: ``"auto"`` profiles both members of a pair correlated beyond this (a long, possibly curved
 #: valley, along which the curvature at the minimum says little).

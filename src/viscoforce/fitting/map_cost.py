@@ -20,7 +20,7 @@ benchmarks/bench_maps.py (2-core Linux machine, Python 3.11, dask.distributed 20
 
 Everything here is plain arithmetic on given costs (no clock, no dask; whether a local cluster
 has run in this process already is the caller's to say): the decisions are deterministic for
-given inputs and tested so (tests/test_maps_cost.py).
+given inputs and tested so (tests/fitting/test_maps_cost.py).
 """
 
 from __future__ import annotations

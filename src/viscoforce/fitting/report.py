@@ -151,7 +151,7 @@ def _accessor(ds: xr.Dataset) -> LmfitAccessor:
     The first ``ds.lmfit`` of a new dataset looks ``_cache`` up through the dataset's
     ``__getattr__``, whose miss builds a did-you-mean message over every variable name (issue
     22: a sizeable part of a small fit). The cache is the slot xarray's accessor descriptor
-    reads, so ``ds.lmfit`` afterwards returns this same object (``tests/test_fit_engine.py``).
+    reads, so ``ds.lmfit`` afterwards returns this same object (``tests/fitting/test_fit_engine.py``).
     """
     try:
         cache = object.__getattribute__(ds, "_cache")

@@ -447,7 +447,7 @@ def assemble(data_vars: Mapping[str, Any], coords: Mapping[str, Any] | None = No
     dimension sizes are checked here, each 1-D coordinate named after its dim gets the default
     pandas index, and xarray's ``Dataset._construct_direct`` (private, and used by xarray's own
     methods since 0.x) makes the object. Anything else, or an xarray without that constructor,
-    takes the public one. ``tests/test_schema_assemble.py`` checks that both give identical
+    takes the public one. ``tests/schema/test_schema_assemble.py`` checks that both give identical
     datasets.
 
     Parameters
@@ -516,7 +516,7 @@ def _float_index(dim: str, values: np.ndarray) -> PandasIndex:
     The same index (a float64 ``pd.Index`` named ``dim``, the coordinate's dtype) without the
     public constructor's casts, which concern datetimes, text and extension arrays only
     (they were a quarter of assembling a small fit's dataset, issue 22).
-    ``tests/test_schema_assemble.py`` compares both.
+    ``tests/schema/test_schema_assemble.py`` compares both.
     """
     return PandasIndex(_pandas_index_type()(values, copy=True, name=dim), dim, values.dtype,
                        fastpath=True)

@@ -142,7 +142,7 @@ def make_fit_result(params: Mapping[str, tuple[float, float | None]], *,
         result's attributes stay apart from them).
     check : bool
         Validate the dataset (:func:`validate_fit_result`). The fitting code passes False for
-        the results it assembles from checked pieces; ``tests/test_schema_assemble.py``
+        the results it assembles from checked pieces; ``tests/schema/test_schema_assemble.py``
         validates every model's result instead.
 
     Returns

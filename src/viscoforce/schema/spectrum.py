@@ -125,7 +125,7 @@ def make_spectrum(omega: ArrayLike, complex_stiffness: ArrayLike, mean_force: Ar
     check : bool
         Validate the dataset (:func:`validate_spectrum`). The solvers pass False for the spectra
         they build from their own checked arrays (``linear_response``);
-        ``tests/test_schema_assemble.py`` validates what they return.
+        ``tests/schema/test_schema_assemble.py`` validates what they return.
 
     Returns
     -------
