@@ -51,6 +51,7 @@ _LAZY = {
     "modulation_spectrum": "viscoforce.experiments.modulation",
     "stream_spectrum": "viscoforce.experiments.stream",
     "fit": "viscoforce.fitting.front",
+    "open_data": "viscoforce.measured.open",
     "fit_spectrum": "viscoforce.fitting.fit",
     "fit_hold": "viscoforce.fitting.curves",
     "fit_step": "viscoforce.fitting.curves",

@@ -21,41 +21,17 @@ _MATERIALS = ("sls", "prony", "power-law", "structural")
 
 
 def read_data(path: str, fmt: str | None = None):
-    """The dataset of DATA: netCDF as written, instrument files through ``load``'s route.
+    """The dataset of DATA: :func:`viscoforce.measured.open.open_data` (a single curve squeezed).
 
-    Measured data in a netCDF file (``source`` an instrument format, not "simulation" or absent)
-    pass the checks the instrument readers apply (:func:`viscoforce.io.quality.check_measured`):
-    a file written elsewhere, or edited, may hold values no measurement gives.
+    A netCDF file as written (measured data in it checked), an instrument file through
+    ``load``'s route (a JPK map demodulated in chunks of curves).
     """
-    from pathlib import Path
+    from viscoforce.measured.open import OptionError, open_data
 
-    from viscoforce.cli.analysis import has_modulation, streamed_spectrum
-    from viscoforce.exceptions import EffortError
-    from viscoforce.io.instruments import load_instrument
-    from viscoforce.io.netcdf import open_netcdf
-    from viscoforce.io.quality import check_measured
-
-    if Path(path).suffix.lower() == ".nc" and fmt is None:
-        if not Path(path).is_file():
-            raise UsageError(f"DATA {path}: no such file")
-        try:
-            ds = open_netcdf(path)
-        except EffortError:
-            raise
-        except (OSError, ValueError) as exc:
-            raise UsageError(f"DATA {path}: not a readable netCDF file ({exc})") from None
-        if str(ds.attrs.get("source", "simulation")) != "simulation":  # measured
-            check_measured(ds, str(path))
-        return one_curve_squeezed(ds)
-    streamed = streamed_spectrum(path, fmt)  # a JPK map: demodulated in chunks of curves
-    if streamed is not None:
-        return one_curve_squeezed(streamed)
-    data = load_instrument(path, format=fmt)
-    if "omega" not in data.dims and has_modulation(data):
-        from viscoforce.experiments.modulation import modulation_spectrum
-
-        data = modulation_spectrum(data)
-    return one_curve_squeezed(data)
+    try:
+        return one_curve_squeezed(open_data(path, format=fmt))
+    except OptionError as exc:
+        raise UsageError(exc.told({"path": "DATA ", "format": "--format"})) from None
 
 
 def one_curve_squeezed(ds):
