@@ -63,9 +63,54 @@ def _given(args: argparse.Namespace, *names: str) -> list[str]:
             if getattr(args, n, None) not in (None, False)]
 
 
+#: System flags with a default (the parser cannot tell them given): every model may take them.
+_DEFAULTED = ("--P", "--debye-length")
+
+
+def _flag_dest(flag: str) -> str:
+    return "R" if flag == "--R" else flag[2:].replace("-", "_")
+
+
+def _honoured(name: str) -> set[str]:
+    """The model-input flags the registry entry of model ``name`` takes.
+
+    Its inputs' flags; ``--R`` where it takes a tip (a sphere of that radius) or builds a
+    ContactProblem from the system flags (``problem``, with ``--P`` and ``--debye-length``).
+    """
+    from viscoforce.fitting.registry import MODELS
+
+    entry = MODELS[name]
+    own = set(entry.flags)
+    if "tip" in entry.keys or "problem" in entry.keys:
+        own.add("--R")
+    if "problem" in entry.keys:
+        own.update(_DEFAULTED)
+    return own
+
+
+def _refuse_unhonoured(args: argparse.Namespace, name: str) -> None:
+    """Refuse the model-input flags (of any registry entry) that model ``name`` does not take."""
+    from viscoforce.fitting.registry import MODELS
+
+    every = set().union(*(e.flags for e in MODELS.values())) | {"--R"}
+    given = sorted(f for f in every - set(_DEFAULTED)
+                   if getattr(args, _flag_dest(f), None) not in (None, False))
+    own = _honoured(name)
+    bad = [f for f in given if f not in own]
+    if bad:
+        raise UsageError(f"--model {name} cannot honour {', '.join(bad)} (its flags: "
+                         f"{', '.join(sorted(own)) or 'none'})")
+
+
 def _fixed(args: argparse.Namespace, ds, kind: str) -> dict[str, Any]:
-    """The model's fixed inputs from the flags (and the data); flags a model cannot honour fail."""
+    """The model's fixed inputs from the flags (and the data); flags a model cannot honour fail.
+
+    Which flags a named model takes is its registry entry's (:func:`_honoured`); the values are
+    resolved here (the tip from --tip, --R or the file; the problem from the system flags).
+    """
     model = args.model
+    if model != "auto":
+        _refuse_unhonoured(args, model)
     if args.h0 is not None and args.mean_force is not None:
         raise UsageError("give --h0 or --mean-force, not both")
     if args.material is not None and args.material not in _MATERIALS:
@@ -81,9 +126,6 @@ def _fixed(args: argparse.Namespace, ds, kind: str) -> dict[str, Any]:
                 "material": args.material, "reference_frequency": args.reference_frequency,
                 "debye_length": args.debye_length}
     if model == "ting":
-        bad = _given(args, "indentation", "newtonian", "h0", "mean_force")
-        if bad:
-            raise UsageError(f"--model ting cannot honour {', '.join(bad)}")
         if args.material not in (None, "sls", "prony", "structural"):
             raise UsageError(f"--model ting takes --material sls, prony or structural, got "
                              f"{args.material}")
@@ -94,14 +136,12 @@ def _fixed(args: argparse.Namespace, ds, kind: str) -> dict[str, Any]:
                 "contact_point": args.contact_point,
                 "reference_frequency": args.reference_frequency,
                 "newtonian": False if args.no_newtonian else None}
-    if model != "contact":
-        bad = _given(args, *contact_only)
-        if model == "auto":
-            bad = [b for b in bad if b != "--drag"]
+    if model == "auto":
+        bad = [b for b in _given(args, *contact_only) if b != "--drag"]
         if bad:
-            raise UsageError(f"--model {model} cannot honour {', '.join(bad)} (contact-model "
-                             "flags" + ("; --model auto takes them on measured data, without "
-                                        "--h0/--mean-force" if model == "auto" else "") + ")")
+            raise UsageError(f"--model auto cannot honour {', '.join(bad)} (contact-model "
+                             "flags; --model auto takes them on measured data, without "
+                             "--h0/--mean-force)")
     fixed: dict[str, Any] = {}
     if model in ("svda", "exact", "auto"):
         if args.h0 is None and args.mean_force is None:
@@ -132,9 +172,6 @@ def _fixed(args: argparse.Namespace, ds, kind: str) -> dict[str, Any]:
         fixed["drag"] = args.drag
     if model == "hertz":
         fixed["tip"] = _hertz_tip(args, ds)
-    if model in ("relaxation", "creep") and (args.tip is not None or args.R is not None):
-        raise UsageError(f"--model {model} fits {'forces' if model == 'relaxation' else 'the tip position'}"
-                         " over time: it takes no --tip or --R")
     if model == "contact":
         fixed.update(**_tip_inputs(args, ds), indentation=args.indentation, drag=args.drag,
                      material=args.material or "sls", debye_length=args.debye_length)
