@@ -20,18 +20,21 @@ _CURVE_MODELS = ("relaxation", "hertz", "creep", "ting")
 _MATERIALS = ("sls", "prony", "power-law", "structural")
 
 
-def read_data(path: str, fmt: str | None = None):
+def read_data(path: str, fmt: str | None = None, *, height_channel: str | None = None):
     """The dataset of DATA: :func:`viscoforce.measured.open.open_data` (a single curve squeezed).
 
     A netCDF file as written (measured data in it checked), an instrument file through
-    ``load``'s route (a JPK map demodulated in chunks of curves).
+    ``load``'s route (a JPK map demodulated in chunks of curves); ``height_channel`` the
+    reader's (``--height-channel``).
     """
     from viscoforce.measured.open import OptionError, open_data
 
+    options = {} if height_channel is None else {"height_channel": height_channel}
     try:
-        return one_curve_squeezed(open_data(path, format=fmt))
+        return one_curve_squeezed(open_data(path, format=fmt, **options))
     except OptionError as exc:
-        raise UsageError(exc.told({"path": "DATA ", "format": "--format"})) from None
+        raise UsageError(exc.told({"path": "DATA ", "format": "--format",
+                                   "height_channel": "--height-channel"})) from None
 
 
 def one_curve_squeezed(ds):

@@ -56,7 +56,7 @@ def _single_json(result) -> dict[str, Any]:
     for key in ("material", "candidate", "residual_lag1", "effective_samples", "validity",
                 "identifiability_method", "ting_error",
                 "depth_check", "depth_check_E", "depth_check_shift", "precontact_rise",
-                "creep_force", "segment_type"):
+                "creep_force", "segment_type", "split_half_z", "split_half_check"):
         if key in result.attrs:
             value = result.attrs[key]
             out[key] = value if isinstance(value, str) else float(value)
@@ -129,6 +129,12 @@ def _print_single(info: dict[str, Any]) -> None:
         print(f"  depth check: {info['depth_check']}")
     if "validity" in info:
         print(f"  validity: {info['validity']}")
+    if "height_record" in info:
+        print(f"  {info['height_record']}")
+    if info.get("budget_notes"):
+        print(f"  error budget ({info['budget_sources']}):")
+        for note in info["budget_notes"]:
+            print(f"    {note}")
 
 
 def _print_map(info: dict[str, Any]) -> None:

@@ -27,6 +27,14 @@ from viscoforce.cli._args import (
     integer_type,
     real_type,
 )
+from viscoforce.cli._fit_budget import (
+    HEIGHT_RECORDS,
+    budget_json,
+    choose_height_record,
+    height_channel,
+    uncertainty_type,
+    with_budget,
+)
 from viscoforce.cli._fit_inputs import (  # noqa: F401 - read_data, one_curve_squeezed: public here
     _CURVE_MODELS,
     _MATERIALS,
@@ -171,6 +179,15 @@ def _add_fit_flags(parser: argparse.ArgumentParser, *, required: bool, batch: bo
     parser.add_argument("--newtonian", action="store_true",
                         help="contact --material power-law: fit a Newtonian viscosity mu in "
                              "parallel")
+    parser.add_argument("--height-channel", choices=tuple(HEIGHT_RECORDS), default=None,
+                        help="force curves: the tip height from the calibrated sensor or the "
+                             "piezo (default: both fitted, the one leaving the smaller residual "
+                             "kept, the other's values in the error budget)")
+    parser.add_argument("--uncertainty", type=uncertainty_type, action="append", default=None,
+                        metavar="SOURCE=REL",
+                        help="relative calibration uncertainty of the error budget: "
+                             "spring-constant (default 10%%), sensitivity (5%%), tip (10%%), "
+                             "poisson (0.05); repeat for several")
     add_flags(parser, FIT_SYSTEM_FLAGS)
     add_flags(parser, NUMERICS_FLAGS)
 
@@ -296,7 +313,7 @@ def run_fit(args: argparse.Namespace) -> int:
     if len(paths) > 1:
         return run_batch(args, paths)
     args.data = paths[0]
-    ds = read_data(args.data, args.format)
+    ds = read_data(args.data, args.format, height_channel=height_channel(args))
     kind = _kind(ds)
     _check_model(args, kind)
     ds = _select_curve(ds, kind, args.curve)
@@ -331,7 +348,12 @@ def run_fit(args: argparse.Namespace) -> int:
         info = _map_json(result)
     else:
         result, texts = _fit_recording(fit_one, args, ds, kind)
+        result, other, why = choose_height_record(args, ds, kind, result, fit_one, read_data)
+        result = with_budget(args, result, {"height_record": other}, {"height_record": why})
         info = _single_json(result)
+        info.update(budget_json(result, info["params"]))
+        if why:
+            info["height_record"] = why
     info["warnings"] = texts
     if args.out and args.out.lower().endswith(".csv"):
         write_table(result, args.out)

@@ -1,0 +1,139 @@
+"""What ``fit`` adds to a single fit: the height record the data support, and the error budget.
+
+A force curve of a file that records the tip's height twice (a calibrated sensor and the piezo's
+own, ``height``) is fitted with both unless ``--height-channel`` names one: the record kept is the
+one whose fit leaves the smaller residual (the same forces are fitted, so the residuals compare
+directly), the output says which and why, and the other fit's values are the ``height_record``
+source of the budget. Every single fit then carries its systematic budget
+(:mod:`viscoforce.fitting.budget`: the calibration sources, with ``--uncertainty SOURCE=REL``
+replacing the field's defaults).
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import warnings
+from collections.abc import Callable
+from typing import Any
+
+from viscoforce.cli._args import UsageError
+
+#: ``--height-channel`` → the reader's height_channel (None: the first calibrated sensor).
+HEIGHT_RECORDS = {"sensor": None, "piezo": "height"}
+
+
+def height_channel(args: argparse.Namespace) -> str | None:
+    """The reader's ``height_channel`` of ``--height-channel`` (None: the default sensor)."""
+    return HEIGHT_RECORDS[args.height_channel] if getattr(args, "height_channel", None) else None
+
+
+def uncertainty_type(text: str) -> tuple[str, float]:
+    """``--uncertainty SOURCE=REL`` (``spring-constant=0.05``, ``tip=5%``)."""
+    source, sep, value = text.partition("=")
+    key = source.strip().replace("-", "_")
+    try:
+        rel = float(value[:-1]) / 100 if value.strip().endswith("%") else float(value)
+    except ValueError:
+        rel = math.nan
+    if not sep or not 0.0 <= rel < 1.0:
+        raise argparse.ArgumentTypeError(
+            f"expected SOURCE=REL with REL a relative uncertainty in [0, 1) or a percentage "
+            f"(spring-constant=0.05, tip=10%), got {text!r}")
+    return key, rel
+
+
+def _residual_rms(result) -> float:
+    """√(χ²/(n − k)) of an unweighted curve fit [N].
+
+    Its residuals are forces: two fits of the same forces with the same parameters compare by it.
+    """
+    redchi = float(result["redchi"]) if "redchi" in result else math.nan
+    return math.sqrt(redchi) if redchi >= 0 else math.nan
+
+
+def choose_height_record(args: argparse.Namespace, ds, kind: str, result,
+                         fit: Callable[[argparse.Namespace, Any, str], Any],
+                         read: Callable[..., Any]):
+    """(result kept, the other record's result or None, a sentence) for a force curve.
+
+    Only where ``--height-channel`` is not given, the data are curves, and the file has both a
+    sensor and the piezo height: otherwise ``(result, None, "")``.
+    """
+    used = str(ds.attrs.get("height_channel", ""))
+    if kind != "curves" or getattr(args, "height_channel", None) or not used:
+        return result, None, ""
+    other = "height" if used != "height" else None
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            alt_ds = read(args.data, args.format, height_channel=other)
+            if args.curve is not None and "curve" in alt_ds.dims:
+                from viscoforce.schema import select_curve
+
+                alt_ds = select_curve(alt_ds, args.curve)
+            if str(alt_ds.attrs.get("height_channel", "")) == used:
+                return result, None, ""
+            alt = fit(args, alt_ds, kind)
+    except (UsageError, Exception) as exc:  # noqa: BLE001 - no second record: no choice
+        if isinstance(exc, KeyboardInterrupt):
+            raise
+        return result, None, ""
+    name = str(alt_ds.attrs.get("height_channel", other))
+    a, b = _residual_rms(result), _residual_rms(alt)
+    if not (math.isfinite(a) and math.isfinite(b)):
+        return result, alt, ""
+    keep_alt = b < a
+    kept, dropped = (alt, result) if keep_alt else (result, alt)
+    kept_name, dropped_name = (name, used) if keep_alt else (used, name)
+    why = (f"height record {_label(kept_name)}: its fit leaves a residual rms of "
+           f"{min(a, b):.3g} N against {max(a, b):.3g} N with {_label(dropped_name)} (the same "
+           "forces fitted; --height-channel sensor|piezo to choose)")
+    kept.attrs["height_record"] = why
+    return kept, dropped, why
+
+
+def _label(channel: str) -> str:
+    return f"piezo ({channel})" if channel == "height" else f"sensor ({channel})"
+
+
+def with_budget(args: argparse.Namespace, result, alternatives: dict[str, Any] | None = None,
+                descriptions: dict[str, str] | None = None):
+    """The single fit with its systematic budget (:func:`viscoforce.fitting.budget.add_budget`)."""
+    from viscoforce.exceptions import ParameterError
+    from viscoforce.fitting.budget import (
+        add_budget,
+        alternative_shifts,
+        calibration_descriptions,
+        calibration_shifts,
+    )
+
+    given = dict(getattr(args, "uncertainty", None) or [])
+    try:
+        shifts = calibration_shifts(result, given)
+        text = calibration_descriptions(given)
+    except ParameterError as exc:
+        raise UsageError(f"--uncertainty: {exc}") from None
+    for source, other in (alternatives or {}).items():
+        if other is not None:
+            shifts[source] = alternative_shifts(result, other)
+            text[source] = (descriptions or {}).get(source, source)
+    return add_budget(result, shifts, text)
+
+
+def budget_json(result, params: dict[str, dict[str, Any]]) -> dict[str, Any]:
+    """``params.<name>.systematic`` {source: shift}, ``interval``, ``determined``; the notes."""
+    if "budget_source" not in result.coords:
+        return {}
+    sources = [str(s) for s in result["budget_source"].values]
+    for name, entry in params.items():
+        if f"{name}_systematic" not in result:
+            continue
+        row = result[f"{name}_systematic"].values
+        entry["systematic"] = {s: float(v) for s, v in zip(sources, row, strict=True)}
+        entry["interval"] = [float(result[f"{name}_budget_lower"]),
+                             float(result[f"{name}_budget_upper"])]
+        entry["determined"] = bool(int(result[f"{name}_budget_determined"]))
+    notes = str(result.attrs.get("budget_notes", "none"))
+    return {"budget_sources": str(result.attrs.get("budget_sources", "")),
+            "budget_notes": [] if notes == "none" else notes.split(" | ")}

@@ -1,0 +1,234 @@
+"""The systematic error budget of a fit: what the choices the data do not settle do to each number.
+
+A fit's stderr covers the noise only. Beside it, every parameter carries the *shift* it takes
+when a choice the data do not settle is made the other way, one per source (issue 37 item 1):
+
+- ``spring_constant``, ``sensitivity``: the force scale. Every force is k·s·V, so a relative
+  error ε in k (thermal calibration: ±10 % is the field's usual figure) or in the deflection
+  sensitivity s (±5 % for a sensitivity from a hard-surface ramp) scales every parameter in
+  newtons or pascals by 1 + ε, to first order (the deflection's share of the indentation,
+  smaller than the indentation itself on a soft sample, is neglected);
+- ``tip``: the tip's size (a radius R or tan of a half-angle, ±10 % by default): a modulus
+  scales as R^(−1/2) (sphere, paraboloid), 1/tan θ (cone, pyramid) or 1/a (flat punch),
+  the power of the size in the tip's force shape (:mod:`viscoforce.physics.tips`);
+- ``poisson``: Poisson's ratio of the sample (0.5 − 0.05 by default) moves the Young's and shear
+  moduli, not the paper's E;
+- ``height_record``, ``model``, … : a refit with the other choice (the sensor or the piezo
+  height; another model within ΔBIC 6), given as the other fit's values
+  (:func:`alternative_shifts`).
+
+Each shift is the signed change of the parameter (its own unit); the calibration shifts are
+those of the + direction (their − direction is the mirror to first order). The total interval
+(:func:`add_budget`) is the envelope of the estimates under every choice, each widened by 2
+stderr. A parameter that a choice moves by more than 2 stderr gets one sentence naming the
+choice; one whose total interval spans more than a factor 2 (or 0.1 in an exponent) is *not
+determined by these data*, reported with its range.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from typing import Any
+
+import numpy as np
+import xarray as xr
+
+from viscoforce.exceptions import ParameterError
+
+__all__ = ["CALIBRATION_DEFAULTS", "EXPONENTS", "add_budget", "alternative_shifts",
+           "calibration_descriptions", "calibration_shifts", "check_uncertainties"]
+
+#: Relative uncertainties used where the user gives none: (value, where the figure comes from).
+CALIBRATION_DEFAULTS: dict[str, tuple[float, str]] = {
+    "spring_constant": (0.10, "thermal-noise calibration, the field's usual +-10 %"),
+    "sensitivity": (0.05, "deflection sensitivity from a hard-surface ramp, +-5 %"),
+    "tip": (0.10, "nominal tip radius or half-angle tangent, +-10 %"),
+    "poisson": (0.05, "Poisson's ratio 0.5 of a near-incompressible sample, -0.05"),
+}
+#: Parameters that are exponents (their spread is judged in absolute terms, 0.1).
+EXPONENTS = ("alpha", "beta", "m")
+#: Parameters that describe the instrument, not the sample: budgeted, not told in sentences.
+NUISANCE = ("baseline", "baseline_slope", "contact_point", "F_inf", "z_inf", "drag")
+#: How a source reads in a sentence ("moves ... with the <label>").
+LABELS = {"spring_constant": "spring constant", "sensitivity": "deflection sensitivity",
+          "tip": "tip size", "poisson": "Poisson's ratio", "height_record": "height record",
+          "model": "model among the near-ties"}
+#: A choice that moves a parameter by more than this many stderr is said to.
+SAY_Z = 2.0
+#: A total interval wider than this factor (positive parameters) is "not determined".
+FACTOR = 2.0
+#: ... or wider than this for an exponent.
+EXPONENT_SPAN = 0.1
+
+
+def check_uncertainties(given: Mapping[str, Any] | None) -> dict[str, float]:
+    """The relative uncertainties: the defaults, replaced by ``given`` (each in [0, 1))."""
+    out = {k: v for k, (v, _) in CALIBRATION_DEFAULTS.items()}
+    for key, value in (given or {}).items():
+        if key not in out:
+            raise ParameterError(f"uncertainties: {key!r} is not a calibration source; the "
+                                 f"sources: {', '.join(out)}")
+        try:
+            v = float(value)
+        except (TypeError, ValueError):
+            v = math.nan
+        if not 0.0 <= v < 1.0:
+            raise ParameterError(f"uncertainties[{key!r}] must be a relative uncertainty in "
+                                 f"[0, 1), got {value!r}")
+        out[key] = v
+    return out
+
+
+def _parameters(ds: xr.Dataset) -> list[str]:
+    return [str(n) for n in ds["param_i"].values] if "param_i" in ds else []
+
+
+def _derived(ds: xr.Dataset) -> list[str]:
+    return [str(n) for n in ds.data_vars if str(n).endswith(("_young", "_shear"))
+            or str(n) in ("ting_E0", "beta")]
+
+
+def _unit(ds: xr.Dataset, name: str) -> str:
+    return str(ds[name].attrs.get("units", ""))
+
+
+def _force_like(unit: str) -> bool:
+    """A quantity proportional to the force scale: its unit has newtons or pascals."""
+    words = unit.replace("*", " ").replace("/", " ").replace(".", " ").split()
+    return any(w.split("^")[0] in ("N", "Pa") for w in words)
+
+
+def _modulus_like(unit: str) -> bool:
+    """A modulus or a viscosity (the tip's size enters it): Pa or Pa s."""
+    return unit.split(" ")[0] in ("Pa",) or unit.startswith("Pa")
+
+
+def _tip_exponent(ds: xr.Dataset) -> float | None:
+    """The power of the tip's size a modulus scales with (None: no tip recorded)."""
+    shape = str(ds.attrs.get("tip_shape", ""))
+    return {"sphere": -0.5, "paraboloid": -0.5, "cone": -1.0, "pyramid": -1.0,
+            "flat": -1.0}.get(shape)
+
+
+def calibration_shifts(ds: xr.Dataset, uncertainties: Mapping[str, float] | None = None
+                       ) -> dict[str, dict[str, float]]:
+    """{source: {parameter: shift}} of the calibration sources (module docstring), first order.
+
+    Sources that do not apply are left out: ``tip`` without a recorded tip shape, ``poisson``
+    without Young's moduli.
+    """
+    rel = check_uncertainties(uncertainties)
+    names = _parameters(ds) + _derived(ds)
+    values = {n: float(ds[n]) for n in names if ds[n].size == 1}
+    out: dict[str, dict[str, float]] = {}
+    for source in ("spring_constant", "sensitivity"):
+        out[source] = {n: v * rel[source] for n, v in values.items()
+                       if _force_like(_unit(ds, n))}
+    power = _tip_exponent(ds)
+    if power is not None:
+        out["tip"] = {n: v * ((1.0 + rel["tip"]) ** power - 1.0) for n, v in values.items()
+                      if _modulus_like(_unit(ds, n))}
+    if any(n.endswith(("_young", "_shear")) for n in values):
+        nu = float(ds.attrs.get("poisson", 0.5))
+        other = max(nu - rel["poisson"], 0.0)
+        young = (1.0 - other ** 2) / (1.0 - nu ** 2) - 1.0
+        shear = (1.0 + young) * (1.0 + nu) / (1.0 + other) - 1.0  # G = E_Y / 2(1 + nu)
+        out["poisson"] = {n: v * (young if n.endswith("_young") else shear)
+                          for n, v in values.items() if n.endswith(("_young", "_shear"))}
+    return {k: v for k, v in out.items() if v}
+
+
+def calibration_descriptions(uncertainties: Mapping[str, float] | None = None
+                             ) -> dict[str, str]:
+    """{source: what was assumed}, with the relative uncertainty used and where it comes from."""
+    rel = check_uncertainties(uncertainties)
+    given = set(uncertainties or ())
+    return {k: f"+-{100 * rel[k]:.3g} %" + (" (given)" if k in given else
+                                           f" ({CALIBRATION_DEFAULTS[k][1]})")
+            for k in CALIBRATION_DEFAULTS}
+
+
+def alternative_shifts(ds: xr.Dataset, other: xr.Dataset) -> dict[str, float]:
+    """{parameter: other's value − this one's} over the parameters both fits report."""
+    out = {}
+    for n in _parameters(ds) + _derived(ds):
+        if n in other and other[n].size == 1 and ds[n].size == 1:
+            a, b = float(ds[n]), float(other[n])
+            if math.isfinite(a) and math.isfinite(b):
+                out[n] = b - a
+    return out
+
+
+def _undetermined(name: str, lo: float, hi: float) -> bool:
+    if name in EXPONENTS or name.startswith(EXPONENTS):
+        return hi - lo > EXPONENT_SPAN
+    if lo > 0 and hi > 0:
+        return hi / lo > FACTOR
+    return False
+
+
+def add_budget(ds: xr.Dataset, shifts: Mapping[str, Mapping[str, float]],
+               descriptions: Mapping[str, str] | None = None) -> xr.Dataset:
+    """The fit result with its systematic budget (module docstring).
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        One fit result (scalar parameters).
+    shifts : mapping
+        {source: {parameter: shift}} (:func:`calibration_shifts`, :func:`alternative_shifts`).
+    descriptions : mapping, optional
+        {source: what the choice was} (stated in ``attrs["budget_sources"]``).
+
+    Returns
+    -------
+    xarray.Dataset
+        A copy with ``<name>_systematic`` over ``budget_source`` [the parameter's unit],
+        ``<name>_budget_lower``/``_upper`` (the total interval), ``<name>_budget_determined``
+        (1, or 0: not determined by these data) and attrs ``budget_sources`` and
+        ``budget_notes`` (one sentence per choice that moves a parameter by more than 2 stderr
+        and per parameter not determined).
+    """
+    sources = [s for s in shifts if shifts[s]]
+    out = ds.copy()
+    if not sources:
+        return out
+    notes: list[str] = []
+    for name in _parameters(ds) + _derived(ds):
+        if ds[name].size != 1 or not any(name in shifts[s] for s in sources):
+            continue
+        value = float(ds[name])
+        stderr = float(ds[f"{name}_stderr"]) if f"{name}_stderr" in ds else math.nan
+        row = np.array([float(shifts[s].get(name, 0.0)) for s in sources])
+        attrs = {"units": _unit(ds, name),
+                 "long_name": f"shift of {name} when each source's choice is made otherwise"}
+        out[f"{name}_systematic"] = xr.DataArray(row, dims=("budget_source",), attrs=attrs)
+        width = 2.0 * stderr if math.isfinite(stderr) else 0.0
+        estimates = np.concatenate([[value], value + row])
+        mirrored = [s for s in sources if s in ("spring_constant", "sensitivity", "tip")]  # ±
+        estimates = np.concatenate([estimates, value - np.array(
+            [shifts[s].get(name, 0.0) for s in mirrored])])
+        lo, hi = float(estimates.min() - width), float(estimates.max() + width)
+        out[f"{name}_budget_lower"] = xr.DataArray(lo, attrs={
+            "units": attrs["units"], "long_name": f"lower end of {name}'s total interval"})
+        out[f"{name}_budget_upper"] = xr.DataArray(hi, attrs={
+            "units": attrs["units"], "long_name": f"upper end of {name}'s total interval"})
+        determined = not _undetermined(name, lo, hi)
+        out[f"{name}_budget_determined"] = xr.DataArray(int(determined), attrs={
+            "units": "1", "long_name": f"1: {name} determined by these data within its budget"})
+        if name in NUISANCE:  # in the budget, not in the sentences
+            continue
+        for s, shift in zip(sources, row, strict=True):
+            if math.isfinite(stderr) and stderr > 0 and abs(shift) > SAY_Z * stderr:
+                notes.append(f"{name} moves by {shift:+.3g} ({shift / stderr:+.1f} stderr) with "
+                             f"the {LABELS.get(s, s.replace('_', ' '))}")
+        if not determined:
+            notes.append(f"{name} is not determined by these data: the choices they do not "
+                         f"settle put it anywhere in [{lo:.4g}, {hi:.4g}]")
+    out = out.assign_coords(budget_source=("budget_source", np.asarray(sources, dtype=str)))
+    out.attrs["budget_sources"] = "; ".join(
+        f"{s}: {(descriptions or {}).get(s, CALIBRATION_DEFAULTS.get(s, ('', s))[1])}"
+        for s in sources)
+    out.attrs["budget_notes"] = " | ".join(notes) if notes else "none"
+    return out
