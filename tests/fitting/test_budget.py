@@ -132,3 +132,28 @@ def test_ting_on_the_real_map_reports_the_height_record_dependence_of_beta(capsy
     assert math.isclose(piezo["params"]["alpha"]["value"], alpha["value"] + shift,
                         rel_tol=1e-6) or math.isclose(
         piezo["params"]["alpha"]["value"], alpha["value"], rel_tol=1e-6)
+
+
+def test_near_ties_of_the_measured_chooser_are_the_model_source():
+    from types import SimpleNamespace
+
+    from viscoforce.fitting.measured import MARGIN, _near_ties
+    from viscoforce.fitting.selection import Tried
+
+    def tried(label, score, **values):
+        return Tried(label, SimpleNamespace(criterion={"bic": score}, values=values))
+
+    kept = tried("sls", 100.0, E0=1e4, E_inf=1e3, tau=0.1)
+    near = tried("prony 2", 100.0 + MARGIN - 1, E0=1.3e4, E_inf=0.9e3, tau_1=0.01)
+    far = tried("structural", 100.0 + MARGIN + 1, E_ref=5e3)
+    ds = _result({"E0": 1e4, "E_inf": 1e3, "tau": 0.1}, {"E0": 100.0, "E_inf": 10.0,
+                                                         "tau": 0.001},
+                 {"E0": "Pa", "E_inf": "Pa", "tau": "s"})
+    out = _near_ties(ds, [kept, near, far], kept, "bic")
+    assert list(out["budget_source"].values) == ["model"]
+    assert float(out["E0_systematic"].sel(budget_source="model")) == pytest.approx(3e3)
+    assert float(out["tau_systematic"].sel(budget_source="model")) == 0.0
+    assert "prony 2" in out.attrs["budget_sources"] and "structural" not in out.attrs[
+        "budget_sources"]
+    assert "E0 moves by +3e+03 (+30.0 stderr) with the model among the near-ties" in out.attrs[
+        "budget_notes"]

@@ -161,11 +161,32 @@ def alternative_shifts(ds: xr.Dataset, other: xr.Dataset) -> dict[str, float]:
 
 
 def _undetermined(name: str, lo: float, hi: float) -> bool:
-    if name in EXPONENTS or name.startswith(EXPONENTS):
+    if name in EXPONENTS:
         return hi - lo > EXPONENT_SPAN
     if lo > 0 and hi > 0:
         return hi / lo > FACTOR
     return False
+
+
+def _merged(ds: xr.Dataset, shifts: Mapping[str, Mapping[str, float]],
+            descriptions: Mapping[str, str] | None
+            ) -> tuple[dict[str, dict[str, float]], dict[str, str]]:
+    """The budget ``ds`` already carries, with ``shifts`` added (a source given again replaces)."""
+    old: dict[str, dict[str, float]] = {}
+    text: dict[str, str] = {}
+    if "budget_source" in ds.coords:
+        names = [str(s) for s in ds["budget_source"].values]
+        for var in ds.data_vars:
+            if str(var).endswith("_systematic"):
+                param = str(var)[:-len("_systematic")]
+                for s, v in zip(names, ds[var].values, strict=True):
+                    old.setdefault(s, {})[param] = float(v)
+        for part in str(ds.attrs.get("budget_sources", "")).split("; "):
+            key, sep, what = part.partition(": ")
+            if sep:
+                text[key] = what
+    merged = {**old, **{k: dict(v) for k, v in shifts.items()}}
+    return merged, {**text, **dict(descriptions or {})}
 
 
 def add_budget(ds: xr.Dataset, shifts: Mapping[str, Mapping[str, float]],
@@ -190,13 +211,16 @@ def add_budget(ds: xr.Dataset, shifts: Mapping[str, Mapping[str, float]],
         ``budget_notes`` (one sentence per choice that moves a parameter by more than 2 stderr
         and per parameter not determined).
     """
+    shifts, descriptions = _merged(ds, shifts, descriptions)
     sources = [s for s in shifts if shifts[s]]
-    out = ds.copy()
+    out = ds.drop_vars([v for v in ds.variables if str(v).endswith(
+        ("_systematic", "_budget_lower", "_budget_upper", "_budget_determined"))
+        or v == "budget_source"])
     if not sources:
         return out
     notes: list[str] = []
     for name in _parameters(ds) + _derived(ds):
-        if ds[name].size != 1 or not any(name in shifts[s] for s in sources):
+        if ds[name].size != 1:
             continue
         value = float(ds[name])
         stderr = float(ds[f"{name}_stderr"]) if f"{name}_stderr" in ds else math.nan

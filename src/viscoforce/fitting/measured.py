@@ -154,8 +154,34 @@ def fit_measured_auto(spectrum: xr.Dataset, *, modes: int | str = "auto", criter
     if decay is not None:
         _warn_model_bias(ds, "contact", *contact_bias(ds, {**base, **inputs}, data.x, decay))
     ds.attrs["validity"] = validity_note("contact", ds)
+    ds = _near_ties(ds, tried, chosen, criterion)
     warn_fit(ds, stacklevel=5)
     return ds
+
+
+def _near_ties(ds: xr.Dataset, tried, chosen, criterion: str) -> xr.Dataset:
+    """The budget's ``model`` source: the other candidates within :data:`MARGIN` of the best.
+
+    Their values of the parameters they share with the kept one, as shifts (the largest in size
+    per parameter over the near-ties); the data do not settle the choice among them.
+    """
+    from viscoforce.fitting.budget import add_budget
+
+    best = min(t.score(criterion) for t in tried if t.outcome is not None and t.robust)
+    ties = [t for t in tried if t.outcome is not None and t is not chosen
+            and t.score(criterion) <= best + MARGIN]
+    shifts: dict[str, float] = {}
+    for t in ties:
+        for name, value in t.outcome.values.items():
+            if name in chosen.outcome.values:
+                shift = float(value) - float(chosen.outcome.values[name])
+                if abs(shift) > abs(shifts.get(name, 0.0)):
+                    shifts[name] = shift
+    if not shifts:
+        return ds
+    return add_budget(ds, {"model": shifts}, {"model": "the candidates within "
+                      f"{criterion.upper()} {MARGIN:g} of the best: "
+                      + ", ".join(t.label for t in ties)})
 
 
 def _with_selection(ds: xr.Dataset, kept: list[tuple[str, Outcome, dict[str, Any]]],
