@@ -157,3 +157,21 @@ def test_near_ties_of_the_measured_chooser_are_the_model_source():
         "budget_sources"]
     assert "E0 moves by +3e+03 (+30.0 stderr) with the model among the near-ties" in out.attrs[
         "budget_notes"]
+
+
+def test_a_map_carries_the_budget_per_pixel_and_flags_pixels_on_the_same_rule():
+    from viscoforce.fitting.budget import add_map_budget
+
+    e = xr.DataArray([[1e4, 2e4], [3e4, 4e4]], dims=("y", "x"), attrs={"units": "Pa"})
+    s = xr.DataArray([[1e2, 1e2], [1e2, 2e4]], dims=("y", "x"), attrs={"units": "Pa"})
+    ds = xr.Dataset({"E0": e, "E0_stderr": s}).assign_coords(param_i=("param_i", ["E0"]))
+    ds.attrs["tip_shape"] = "cone"
+    out = add_map_budget(ds, {"spring_constant": 0.1, "sensitivity": 0.0, "tip": 0.25})
+    np.testing.assert_allclose(out["E0_systematic"].sel(budget_source="spring_constant"),
+                               0.1 * e)
+    np.testing.assert_allclose(out["E0_systematic"].sel(budget_source="tip"), -0.2 * e)
+    # the widest side: 0.2 (tip) each way; the last pixel's 2 stderr make it a factor > 2
+    np.testing.assert_allclose(out["E0_budget_lower"], 0.8 * e - 2 * s)
+    np.testing.assert_allclose(out["E0_budget_upper"], 1.2 * e + 2 * s)
+    np.testing.assert_array_equal(out["E0_budget_determined"], [[1, 1], [1, 0]])
+    assert "E0 is not determined by these data on 1 of 4 pixels" in out.attrs["budget_notes"]

@@ -121,6 +121,24 @@ def with_budget(args: argparse.Namespace, result, alternatives: dict[str, Any] |
     return add_budget(result, shifts, text)
 
 
+def with_map_budget(args: argparse.Namespace, result, fixed: dict[str, Any]):
+    """A map's fit result with its tip recorded and its calibration budget per pixel."""
+    from viscoforce.exceptions import ParameterError
+    from viscoforce.fitting.budget import add_map_budget
+    from viscoforce.physics.tips import tip_from
+
+    tip = fixed.get("tip")
+    if tip is not None and "tip_shape" not in result.attrs:
+        tip = tip_from(tip)
+        result = result.assign_attrs(**tip.as_attrs(), tip=tip.describe())
+    elif fixed.get("radius") is not None and "tip_shape" not in result.attrs:
+        result = result.assign_attrs(tip_shape="paraboloid", tip_radius=float(fixed["radius"]))
+    try:
+        return add_map_budget(result, dict(getattr(args, "uncertainty", None) or []))
+    except ParameterError as exc:
+        raise UsageError(f"--uncertainty: {exc}") from None
+
+
 def budget_json(result, params: dict[str, dict[str, Any]]) -> dict[str, Any]:
     """``params.<name>.systematic`` {source: shift}, ``interval``, ``determined``; the notes."""
     if "budget_source" not in result.coords:

@@ -83,10 +83,29 @@ def _single_json(result) -> dict[str, Any]:
 
 
 def _map_json(result) -> dict[str, Any]:
+    import numpy as np
+
     from viscoforce.fitting.pixels import map_summary
 
-    return {"model": result.attrs["model"], **map_summary(result),
+    info = {"model": result.attrs["model"], **map_summary(result),
             "n_failed": int(result.attrs["n_failed"])}
+    if "budget_source" in result.coords:  # the calibration budget per pixel, summarised
+        budget = {}
+        for var in result.data_vars:
+            name = str(var)
+            if name.endswith("_budget_determined"):
+                param = name[:-len("_budget_determined")]
+                flags = result[name].values
+                rows = result[f"{param}_systematic"]
+                budget[param] = {
+                    "systematic_median": {str(s): float(np.nanmedian(rows.sel(
+                        budget_source=s).values)) for s in result["budget_source"].values},
+                    "not_determined": int(np.sum(flags == 0))}
+        info["budget"] = budget
+        info["budget_sources"] = str(result.attrs.get("budget_sources", ""))
+        notes = str(result.attrs.get("budget_notes", "none"))
+        info["budget_notes"] = [] if notes == "none" else notes.split(" | ")
+    return info
 
 
 def _print_single(info: dict[str, Any]) -> None:

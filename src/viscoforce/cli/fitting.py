@@ -34,6 +34,7 @@ from viscoforce.cli._fit_budget import (
     height_channel,
     uncertainty_type,
     with_budget,
+    with_map_budget,
 )
 from viscoforce.cli._fit_inputs import (  # noqa: F401 - read_data, one_curve_squeezed: public here
     _CURVE_MODELS,
@@ -58,10 +59,7 @@ from viscoforce.cli._fit_report import (
     show_value,
 )
 from viscoforce.cli._fit_tables import _write_csv, table_rows, write_table  # noqa: F401
-from viscoforce.cli._output import (
-    print_json,
-    print_written,
-)
+from viscoforce.cli._output import print_json, print_written
 
 __all__ = ["SUBCOMMANDS", "modes_type", "read_data"]
 
@@ -345,6 +343,7 @@ def run_fit(args: argparse.Namespace) -> int:
             criterion=args.criterion, scheduler=args.scheduler, workers=args.workers,
             progress=progress, segment=args.segment, poisson=args.poisson,
             reports=args.reports, **options, **fixed)
+        result = with_map_budget(args, result, fixed)
         info = _map_json(result)
     else:
         result, texts = _fit_recording(fit_one, args, ds, kind)

@@ -36,8 +36,9 @@ import xarray as xr
 
 from viscoforce.exceptions import ParameterError
 
-__all__ = ["CALIBRATION_DEFAULTS", "EXPONENTS", "add_budget", "alternative_shifts",
-           "calibration_descriptions", "calibration_shifts", "check_uncertainties"]
+__all__ = ["CALIBRATION_DEFAULTS", "EXPONENTS", "add_budget", "add_map_budget",
+           "alternative_shifts", "calibration_descriptions", "calibration_factors",
+           "calibration_shifts", "check_uncertainties"]
 
 #: Relative uncertainties used where the user gives none: (value, where the figure comes from).
 CALIBRATION_DEFAULTS: dict[str, tuple[float, str]] = {
@@ -111,6 +112,32 @@ def _tip_exponent(ds: xr.Dataset) -> float | None:
             "flat": -1.0}.get(shape)
 
 
+def calibration_factors(ds: xr.Dataset, uncertainties: Mapping[str, float] | None = None
+                        ) -> dict[str, dict[str, float]]:
+    """{source: {parameter: relative shift}} of the calibration sources, first order.
+
+    Sources that do not apply are left out: ``tip`` without a recorded tip shape, ``poisson``
+    without Young's moduli.
+    """
+    rel = check_uncertainties(uncertainties)
+    names = _parameters(ds) + _derived(ds)
+    out: dict[str, dict[str, float]] = {}
+    for source in ("spring_constant", "sensitivity"):
+        out[source] = {n: rel[source] for n in names if _force_like(_unit(ds, n))}
+    power = _tip_exponent(ds)
+    if power is not None:
+        out["tip"] = {n: (1.0 + rel["tip"]) ** power - 1.0 for n in names
+                      if _modulus_like(_unit(ds, n))}
+    if any(n.endswith(("_young", "_shear")) for n in names):
+        nu = float(ds.attrs.get("poisson", 0.5))
+        other = max(nu - rel["poisson"], 0.0)
+        young = (1.0 - other ** 2) / (1.0 - nu ** 2) - 1.0
+        shear = (1.0 + young) * (1.0 + nu) / (1.0 + other) - 1.0  # G = E_Y / 2(1 + nu)
+        out["poisson"] = {n: young if n.endswith("_young") else shear for n in names
+                          if n.endswith(("_young", "_shear"))}
+    return {k: v for k, v in out.items() if v}
+
+
 def calibration_shifts(ds: xr.Dataset, uncertainties: Mapping[str, float] | None = None
                        ) -> dict[str, dict[str, float]]:
     """{source: {parameter: shift}} of the calibration sources (module docstring), first order.
@@ -118,25 +145,8 @@ def calibration_shifts(ds: xr.Dataset, uncertainties: Mapping[str, float] | None
     Sources that do not apply are left out: ``tip`` without a recorded tip shape, ``poisson``
     without Young's moduli.
     """
-    rel = check_uncertainties(uncertainties)
-    names = _parameters(ds) + _derived(ds)
-    values = {n: float(ds[n]) for n in names if ds[n].size == 1}
-    out: dict[str, dict[str, float]] = {}
-    for source in ("spring_constant", "sensitivity"):
-        out[source] = {n: v * rel[source] for n, v in values.items()
-                       if _force_like(_unit(ds, n))}
-    power = _tip_exponent(ds)
-    if power is not None:
-        out["tip"] = {n: v * ((1.0 + rel["tip"]) ** power - 1.0) for n, v in values.items()
-                      if _modulus_like(_unit(ds, n))}
-    if any(n.endswith(("_young", "_shear")) for n in values):
-        nu = float(ds.attrs.get("poisson", 0.5))
-        other = max(nu - rel["poisson"], 0.0)
-        young = (1.0 - other ** 2) / (1.0 - nu ** 2) - 1.0
-        shear = (1.0 + young) * (1.0 + nu) / (1.0 + other) - 1.0  # G = E_Y / 2(1 + nu)
-        out["poisson"] = {n: v * (young if n.endswith("_young") else shear)
-                          for n, v in values.items() if n.endswith(("_young", "_shear"))}
-    return {k: v for k, v in out.items() if v}
+    return {source: {n: float(ds[n]) * f for n, f in row.items() if ds[n].size == 1}
+            for source, row in calibration_factors(ds, uncertainties).items()}
 
 
 def calibration_descriptions(uncertainties: Mapping[str, float] | None = None
@@ -160,11 +170,16 @@ def alternative_shifts(ds: xr.Dataset, other: xr.Dataset) -> dict[str, float]:
     return out
 
 
-def _undetermined(name: str, lo: float, hi: float) -> bool:
+def _undetermined(name: str, value: float, lo: float, hi: float) -> bool:
+    """Whether the total interval leaves the parameter not determined by the data.
+
+    An exponent's interval wider than 0.1; a positive quantity's (a modulus, a time, a
+    viscosity: not an instrument's offset) wider than a factor 2 or reaching zero.
+    """
     if name in EXPONENTS:
         return hi - lo > EXPONENT_SPAN
-    if lo > 0 and hi > 0:
-        return hi / lo > FACTOR
+    if value > 0 and name not in NUISANCE:
+        return lo <= 0 or hi > FACTOR * lo
     return False
 
 
@@ -238,7 +253,7 @@ def add_budget(ds: xr.Dataset, shifts: Mapping[str, Mapping[str, float]],
             "units": attrs["units"], "long_name": f"lower end of {name}'s total interval"})
         out[f"{name}_budget_upper"] = xr.DataArray(hi, attrs={
             "units": attrs["units"], "long_name": f"upper end of {name}'s total interval"})
-        determined = not _undetermined(name, lo, hi)
+        determined = not _undetermined(name, value, lo, hi)
         out[f"{name}_budget_determined"] = xr.DataArray(int(determined), attrs={
             "units": "1", "long_name": f"1: {name} determined by these data within its budget"})
         if name in NUISANCE:  # in the budget, not in the sentences
@@ -254,5 +269,57 @@ def add_budget(ds: xr.Dataset, shifts: Mapping[str, Mapping[str, float]],
     out.attrs["budget_sources"] = "; ".join(
         f"{s}: {(descriptions or {}).get(s, CALIBRATION_DEFAULTS.get(s, ('', s))[1])}"
         for s in sources)
+    out.attrs["budget_notes"] = " | ".join(notes) if notes else "none"
+    return out
+
+
+def add_map_budget(ds: xr.Dataset, uncertainties: Mapping[str, float] | None = None
+                   ) -> xr.Dataset:
+    """A map's fit result with its calibration budget per pixel (the rules of :func:`add_budget`).
+
+    ``<name>_systematic`` over (``budget_source``, the pixel dims), ``<name>_budget_lower`` /
+    ``_upper`` and ``<name>_budget_determined`` per pixel (0: the pixel's value is not determined
+    by these data); ``attrs["budget_notes"]`` counts the pixels per rule.
+    """
+    factors = calibration_factors(ds, uncertainties)
+    sources = list(factors)
+    out = ds.copy()
+    if not sources:
+        return out
+    notes = []
+    mirrored = [s for s in sources if s in ("spring_constant", "sensitivity", "tip")]
+    for name in _parameters(ds) + _derived(ds):
+        value = ds[name]
+        stderr = ds[f"{name}_stderr"] if f"{name}_stderr" in ds else xr.zeros_like(value)
+        shifts = xr.concat([value * factors[s].get(name, 0.0) for s in sources],
+                           dim="budget_source")
+        out[f"{name}_systematic"] = shifts.assign_attrs(
+            units=_unit(ds, name),
+            long_name=f"shift of {name} when each source's choice is made otherwise")
+        up = shifts.clip(min=0).max("budget_source")
+        mirror = [abs(value * factors[s].get(name, 0.0)) for s in mirrored]
+        down = xr.concat([(-shifts).clip(min=0).max("budget_source"), *mirror],
+                         dim="m").max("m")
+        up = xr.concat([up, *mirror], dim="m").max("m")
+        width = 2.0 * stderr.fillna(0.0)
+        lo, hi = value - down - width, value + up + width
+        unit = _unit(ds, name)
+        out[f"{name}_budget_lower"] = lo.assign_attrs(units=unit)
+        out[f"{name}_budget_upper"] = hi.assign_attrs(units=unit)
+        if name in EXPONENTS:
+            bad = (hi - lo) > EXPONENT_SPAN
+        elif name in NUISANCE:
+            bad = xr.zeros_like(value, dtype=bool)
+        else:
+            bad = (value > 0) & ((lo <= 0) | (hi > FACTOR * lo))
+        out[f"{name}_budget_determined"] = (~bad).astype(int).where(value.notnull()).assign_attrs(
+            units="1", long_name=f"1: {name} determined by these data within its budget")
+        n_bad = int(bad.where(value.notnull(), False).sum())
+        if n_bad and name not in NUISANCE:
+            notes.append(f"{name} is not determined by these data on {n_bad} of "
+                         f"{int(value.notnull().sum())} pixels (calibration budget)")
+    out = out.assign_coords(budget_source=("budget_source", np.asarray(sources, dtype=str)))
+    text = calibration_descriptions(uncertainties)
+    out.attrs["budget_sources"] = "; ".join(f"{s}: {text[s]}" for s in sources)
     out.attrs["budget_notes"] = " | ".join(notes) if notes else "none"
     return out
