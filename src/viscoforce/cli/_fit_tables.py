@@ -15,8 +15,10 @@ def table_rows(result) -> tuple[list[str], list[list[Any]]]:
     """A fit result as table rows: ``name (unit)`` headers and one row per curve/pixel.
 
     Columns: the map's coordinates, each parameter and its stderr, the derived Young's and shear
-    moduli, ``redchi``, ``chi2_pvalue``, ``quality`` (maps), ``success``, ``modes``; every column
-    read over the rows by dim name (:func:`viscoforce.schema.flat_over`).
+    moduli, the total interval of the error budget (``<name>_budget_lower``/``_upper``,
+    ``<name>_budget_determined``), ``redchi``, ``chi2_pvalue``, ``quality`` (maps),
+    ``success``, ``modes``; every column read over the rows by dim name
+    (:func:`viscoforce.schema.flat_over`).
     """
     from viscoforce.schema import flat_over
 
@@ -24,6 +26,8 @@ def table_rows(result) -> tuple[list[str], list[list[Any]]]:
     columns = [n for name in names for n in (name, f"{name}_stderr")]
     columns += [str(n) for n in result.data_vars if str(n).endswith(
         ("_young", "_shear", "_young_stderr", "_shear_stderr"))]
+    columns += [str(n) for n in result.data_vars if str(n).endswith(
+        ("_budget_lower", "_budget_upper", "_budget_determined"))]  # the error budget's interval
     columns += [n for n in ("redchi", "chi2_pvalue", "quality", "success", "modes")
                 if n in result.variables]
     dims = [str(d) for d in result["success"].dims]
