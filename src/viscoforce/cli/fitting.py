@@ -375,7 +375,7 @@ def run_fit(args: argparse.Namespace) -> int:
 
 def _fit_file(args: argparse.Namespace, path: str):
     """The fit result of one file of a batch (a map's curves fitted in this process)."""
-    ds = read_data(path, args.format)
+    ds = read_data(path, args.format, height_channel=height_channel(args))
     kind = _kind(ds)
     _check_model(args, kind)
     ds = _select_curve(ds, kind, args.curve)
@@ -384,11 +384,13 @@ def _fit_file(args: argparse.Namespace, path: str):
 
         options = {} if args.identifiability is None else {
             "identifiability": args.identifiability}
-        return fit_map(ds, args.model, modes=1 if args.modes is None else args.modes,
-                       criterion=args.criterion, scheduler=args.scheduler or "synchronous",
-                       workers=args.workers, progress=False, segment=args.segment,
-                       poisson=args.poisson, **options, **_fixed(args, ds, kind))
-    return fit_one(args, ds, kind)
+        fixed = _fixed(args, ds, kind)
+        return with_map_budget(args, fit_map(
+            ds, args.model, modes=1 if args.modes is None else args.modes,
+            criterion=args.criterion, scheduler=args.scheduler or "synchronous",
+            workers=args.workers, progress=False, segment=args.segment, poisson=args.poisson,
+            **options, **fixed), fixed)
+    return with_budget(args, fit_one(args, ds, kind))  # calibration (no second record: cost)
 
 
 def run_batch(args: argparse.Namespace, paths: list[str]) -> int:
