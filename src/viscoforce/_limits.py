@@ -129,3 +129,7 @@ MAX_CSV_BYTES = 1_000_000_000
 MAX_CSV_ROWS = MAX_SAMPLES
 #: Most rows of a measured drive trace: each sample is at least one time step of simulate.
 MAX_TRACE_ROWS = MAX_STEPS
+#: Thickness h of a sample layer on a rigid support [m] (the bottom-effect correction,
+#: :mod:`viscoforce.physics.bottom_effect`): a nanometre film to a metre (beyond it every tip sees
+#: a half-space); cells are 2-10 µm, gels tens of µm to mm.
+SAMPLE_HEIGHT_RANGE = (1e-9, 1.0)
