@@ -127,7 +127,7 @@ def _fixed(args: argparse.Namespace, ds, kind: str) -> dict[str, Any]:
                              "compares power-law with and without mu itself)")
         return {**_tip_inputs(args, ds), "indentation": args.indentation, "drag": args.drag,
                 "material": args.material, "reference_frequency": args.reference_frequency,
-                "debye_length": args.debye_length}
+                "debye_length": args.debye_length, **_layer(args)}
     if model == "ting":
         if args.material not in (None, "sls", "prony", "structural"):
             raise UsageError(f"--model ting takes --material sls, prony or structural, got "
@@ -182,7 +182,16 @@ def _fixed(args: argparse.Namespace, ds, kind: str) -> dict[str, Any]:
             fixed["newtonian"] = True
         if args.reference_frequency is not None:
             fixed["reference_frequency"] = args.reference_frequency
+        fixed.update(_layer(args))
     return fixed
+
+
+def _layer(args: argparse.Namespace) -> dict[str, Any]:
+    """``sample_height`` and ``sample_base`` of the contact model, where given."""
+    if getattr(args, "sample_base", None) is not None and args.sample_height is None:
+        raise UsageError("--sample-base describes the layer of --sample-height: give both")
+    return {k: getattr(args, k) for k in ("sample_height", "sample_base")
+            if getattr(args, k, None) is not None}
 
 
 def _tip_inputs(args: argparse.Namespace, ds) -> dict[str, Any]:

@@ -49,7 +49,7 @@ MIN_DOF = 2
 FAMILIES = ("sls", "prony", "power-law", "structural")
 #: Inputs the measured-data chooser takes.
 INPUTS = ("radius", "tip", "indentation", "drag", "material", "reference_frequency",
-          "debye_length")
+          "debye_length", "sample_height", "sample_base")
 
 
 def _candidates(family: str, modes: int | str) -> list[tuple[str, int, dict[str, Any]]]:

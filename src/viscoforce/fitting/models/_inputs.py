@@ -19,6 +19,7 @@ from viscoforce._limits import (
     MIN_POSITION_SPAN,
     POSITION_RANGE,
     REFERENCE_FREQUENCY_RANGE,
+    SAMPLE_HEIGHT_RANGE,
     SPHERE_RADIUS_RANGE,
     SURFACE_FORCE_LENGTH_RANGE,
     SURFACE_PRESSURE_RANGE,
@@ -120,6 +121,19 @@ CONTACT_POINT = Input("contact_point", plausible(require_finite, POSITION_RANGE,
                       "the contact point, fixed (tip position at contact)", "--contact-point")
 POSITION_TRACE = Input("position_trace", lambda n, v: v, "",
                        "(t, position) of the measured or simulated drive")
+SAMPLE_HEIGHT = Input("sample_height", plausible(require_positive, SAMPLE_HEIGHT_RANGE, "m"), "m",
+                      "the sample's thickness on a rigid support (bottom-effect correction)",
+                      "--sample-height")
+
+
+def _base(name: str, value: Any) -> str:
+    if value not in ("bonded", "sliding"):
+        raise ParameterError(f"{name} must be 'bonded' or 'sliding', got {value!r}")
+    return str(value)
+
+
+SAMPLE_BASE = Input("sample_base", _base, "", "the layer bonded to or sliding on its support",
+                    "--sample-base")
 FIT_DRAG = Input("fit_drag", require_bool, "", "fit the drag B", "--fit-drag")
 TOLERANCE = Input("tol", require_positive, "", "relative tolerance of the step model's stepper")
 START = Input("start", _step_start, "", "start values {E0, E_inf, tau} of the step model")

@@ -37,6 +37,8 @@ from viscoforce.fitting.models._inputs import (
     NEWTONIAN,
     RADIUS,
     REFERENCE_FREQUENCY,
+    SAMPLE_BASE,
+    SAMPLE_HEIGHT,
     TIP,
     material_input,
 )
@@ -82,6 +84,8 @@ def _contact_model(spec: ModelSpec) -> FitModel:
     depth = require_plausible("indentation", depth, INDENTATION_RANGE, "m",
                               why="the operating indentation of the contact model")
     root = float(tip.contact_stiffness_factor(depth))  # S(δ0) = (dF/dδ)/E: √(Rδ0) for Hertz
+    bottom = _bottom_effect(tip, depth, spec.fixed)
+    root *= bottom
     modes = spec.modes if kind == "prony" else 1
     moduli = _contact_modulus_function(kind, modes, newtonian, f_ref)
 
@@ -96,8 +100,25 @@ def _contact_model(spec: ModelSpec) -> FitModel:
     fixed = {**spec.fixed, "reference_frequency": f_ref} if kind == "structural" else dict(
         spec.fixed)
     fixed["tip"] = tip
+    if spec.fixed.get("sample_height") is not None:
+        fixed["bottom_effect_factor"] = bottom
     return FitModel(ModelSpec(spec.name, modes, fixed), function,
                     _contact_layout(kind, modes, newtonian), "omega", guesser, window)
+
+
+def _bottom_effect(tip, depth: float, fixed: Mapping[str, object]) -> float:
+    """(dF/dδ) on the sample's layer over that of a half-space at δ0 (1 without a height).
+
+    :func:`viscoforce.physics.bottom_effect.stiffness_factor` for an incompressible layer
+    (ν = 0.5, the series' own) bonded to or sliding on its support.
+    """
+    height = fixed.get("sample_height")
+    if height is None:
+        return 1.0
+    from viscoforce.physics.bottom_effect import stiffness_factor
+
+    return float(stiffness_factor(tip, depth, float(height),
+                                  bonded=fixed.get("sample_base", "bonded") == "bonded"))
 
 
 def _contact_modulus_function(kind: str, modes: int, newtonian: bool, f_ref: float
@@ -164,7 +185,7 @@ ENTRY = register(ModelEntry(
     summary="k* = E(omega) sqrt(R delta0) + i omega B: Hertz contact of a viscoelastic material",
     build=_contact_model,
     inputs=(RADIUS, TIP, INDENTATION, DRAG, material_input(CONTACT_MATERIALS), DEBYE_LENGTH,
-            NEWTONIAN, REFERENCE_FREQUENCY),
+            NEWTONIAN, REFERENCE_FREQUENCY, SAMPLE_HEIGHT, SAMPLE_BASE),
     parameters=parameters, max_modes=MAX_MODES, materials=CONTACT_MATERIALS,
     validity="not estimated: Hertz contact's bias needs the surface force's decay length "
              "(debye_length, --debye-length)"))
