@@ -81,7 +81,7 @@ def test_a_garbage_pixel_is_a_bad_fit_and_the_summary_leaves_it_out(rng):
     json.dumps(info, allow_nan=False)  # JSON as it is: no NaN, no numpy types
     assert info["n_fits"] == 6 and info["n_good"] == 5
     assert info["left_out"] == {"optimiser_failed": 0, "bad_fit": 1, "not_determined": 0,
-                                "at_bound": 0}
+                                "at_bound": 0, "depth_dependent": 0}
     assert info["by_modes"]["1"]["n"] == 5 and info["modes"] == 1
     e_inf = result["E_inf"].values[good]
     assert info["params"]["E_inf"]["median"] == pytest.approx(float(np.median(e_inf)))
@@ -351,3 +351,83 @@ def test_pixels_of_different_layouts_put_each_value_and_correlation_under_its_na
         np.testing.assert_array_equal(corr[np.ix_(own, own)], r["correlation"])
         others = [j for j in range(len(names)) if j not in own]
         assert np.isnan(corr[others]).all() and np.isnan(corr[:, others]).all()
+
+
+# ── hertz maps run the single fit's depth check per pixel (issue 37 item 6b) ────────────────────
+
+E_PAPER = 3.0e3  # [Pa], the paper's E = 2 E*
+
+
+def _hertz_approach(shape, rng, *, noise=30e-12, slope=0.0, n=1200, contact=1.8e-6):
+    """Tip position z [m] and F [N]: F = E·shape(δ) on a baseline, white noise [N]."""
+    z = np.linspace(-1.0e-6, 2.6e-6, n)
+    f = -5e-9 + slope * (z - contact) + E_PAPER * shape(np.maximum(z - contact, 0.0))
+    return z, f + rng.normal(0.0, noise, n)
+
+
+def _paraboloid(d):
+    """Hertz's paraboloid (R = 5 µm): F/E = (2/3)√R δ^1.5, E* = E/2 (Johnson 1985)."""
+    return 2 / 3 * np.sqrt(5e-6) * d ** 1.5
+
+
+def _cone(d):
+    """Sneddon's 20° cone: F/E = tan(20°) δ²/π, E* = E/2 (Sneddon 1965)."""
+    return 1 / np.pi * np.tan(np.radians(20.0)) * d ** 2
+
+
+def test_a_hertz_map_flags_the_pixels_whose_single_fit_warns_that_e_depends_on_depth(rng):
+    """Two approaches, both fitted with a paraboloid tip: a paraboloid's (good) and a cone's.
+
+    The cone's δ² curve is not the paraboloid's δ^1.5 law: its single fit warns that E depends
+    on the depth (GoodnessOfFitWarning). Before issue 37 the map ran no depth check and called
+    that pixel good (quality 0); now it is ``depth_dependent`` with the single fit's shift. The
+    untilted baseline (slope 0) leaves both pixels' baseline_slope determined (item 6d: before,
+    a slope within its stderr of 0 made the pixel not_determined).
+    """
+    import warnings
+
+    from viscoforce.exceptions import GoodnessOfFitWarning
+    from viscoforce.fitting.curves import fit_curve
+
+    tip = "paraboloid:5um"
+    curves = [_hertz_approach(_paraboloid, rng), _hertz_approach(_cone, rng)]
+    z = np.concatenate([c[0] for c in curves])
+    f = np.concatenate([c[1] for c in curves])
+    n = curves[0][0].size
+    ds = make_curves(np.tile(np.linspace(0, 1, n), 2), f, -z, np.zeros_like(z), tip_position=z,
+                     segment=0, segment_names=("approach",), sample_count=[n] * 2,
+                     source="synthetic")
+    result = fit_map(ds, "hertz", tip=tip, scheduler="synchronous", progress=False)
+    validate_fit_result(result)
+    assert result["quality"].values.tolist() == [GOOD["good"], GOOD["depth_dependent"]]
+    assert "depth_dependent" in result.attrs["quality_rule"]
+    assert "E depends on the indentation depth" in str(result["message"].values[1])
+    assert map_summary(result)["left_out"]["depth_dependent"] == 1
+    shifts = result["depth_check_shift"].values
+    for i, (zi, fi) in enumerate(curves):
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            single = fit_curve(make_curves(np.linspace(0, 1, n), fi, -zi, np.zeros_like(zi),
+                                           tip_position=zi, segment=0,
+                                           segment_names=("approach",), source="synthetic"),
+                               "hertz", tip=tip)
+        depth = [w for w in caught if issubclass(w.category, GoodnessOfFitWarning)
+                 and "E depends on the indentation depth" in str(w.message)]
+        assert bool(depth) == (i == 1)
+        assert shifts[i] == pytest.approx(single.attrs["depth_check_shift"], rel=1e-6)
+        assert result["depth_check_relative"].values[i] == pytest.approx(
+            single.attrs["depth_check_relative"], rel=1e-6)
+    assert abs(shifts[0]) < 2 < abs(shifts[1])
+    codes = result["identifiability"].sel(param_i="baseline_slope").values
+    assert codes.tolist() == [CODES["determined"]] * 2
+
+
+def test_the_depth_code_comes_after_a_failed_or_bad_fit_and_before_not_determined():
+    base = {"names": ["E"], "success": True, "values": {"E": 1.0}, "stderr": {"E": 0.1},
+            "identifiability": {"E": 0}, "at_bound": []}
+    assert pixel_quality({**base, "depth_dependent": True}) == GOOD["depth_dependent"]
+    assert pixel_quality({**base, "depth_dependent": False}) == GOOD["good"]
+    assert pixel_quality({**base, "depth_dependent": True,
+                          "chi2_pvalue": 1e-6}) == GOOD["bad_fit"]
+    assert pixel_quality({**base, "depth_dependent": True,
+                          "identifiability": {"E": 3}}) == GOOD["depth_dependent"]

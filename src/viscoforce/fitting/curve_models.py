@@ -1,5 +1,7 @@
-"""What the force-curve models share: the exponential relaxation/creep builder, Hertz's guesses and
-windows, the step response of a measured drive.
+"""What the force-curve models share (the builders live with their models).
+
+The exponential relaxation/creep builder, Hertz's guesses and windows, the step response of a
+measured drive.
 
 The builders themselves live with their models, one module each in
 :mod:`viscoforce.fitting.models` (``relaxation``, ``creep``, ``hertz``, ``step``); build a model

@@ -2,9 +2,9 @@
 
 :func:`hertz_checks` checks a Hertz fit of an approach against its own data (the significance of
 the indentation, the direction the force rises in, E against the depth, the baseline before
-contact) and says where E is not determined; :func:`hertz_verdict` is the same verdict without
-warnings (a map's pixels). It refits (the depth check), so it sits above
-:mod:`viscoforce.fitting.fit`.
+contact) and says where E is not determined; :func:`hertz_verdict` and :func:`depth_check` are
+the same verdicts without warnings (a map's pixels). It refits (the depth check), so it sits
+above :mod:`viscoforce.fitting.fit`.
 """
 
 from __future__ import annotations
@@ -27,11 +27,20 @@ from viscoforce.fitting.data import FitData
 from viscoforce.fitting.fit import fit_data
 from viscoforce.fitting.outcome import residual_lag1
 from viscoforce.fitting.report import carry
+from viscoforce.fitting.verdict import CHECKED_ATTR, listed_names
 
 #: Fraction of the maximum contact force up to which the Hertz depth check refits.
 DEPTH_CHECK_FRACTION = 0.5
-#: Shift of E (in its stderr) beyond which the depth check warns.
+#: Shift of E (in standard errors of the difference, :func:`depth_check`) beyond which the
+#: depth check warns.
 DEPTH_CHECK_SIGMA = 2.0
+#: Relative change of E over the depth below which the depth check sees no failure of the
+#: tip's law: added in quadrature to the statistical standard error of the difference
+#: (:func:`depth_check`). The tip's ideal shape (a sphere, a cone, Bilodeau's pyramid), its
+#: calibrated radius or angle and the detector's linearity over a factor 2 of force are not
+#: known better than this; with it a shift of x % is at most x standard errors (20 for 20 %),
+#: however many samples and however little noise the curve has.
+DEPTH_CHECK_RESOLUTION = 0.01
 #: Rise of the fitted baseline before contact (fraction of the contact force) that warns.
 PRECONTACT_RISE_WARN = 0.2
 #: Significance [σ] the indentation must reach for the approach to hold one: √Δχ² of the Hertz
@@ -179,7 +188,11 @@ def _flipped_reason(z: np.ndarray, values: dict[str, float], tip: Any, delta: fl
 
 
 def _not_determined(ds: xr.Dataset, names: tuple[str, ...], why: str) -> None:
-    """Set the identifiability of ``names`` to not determined (3) because ``why``, in place."""
+    """Set the identifiability of ``names`` to not determined (3) because ``why``, in place.
+
+    The names join ``attrs[CHECKED_ATTR]``, so that :func:`~.verdict.warn_fit`'s nuisance rule
+    (:func:`~.verdict.settle_nuisance_codes`) leaves them not determined.
+    """
     codes = np.array(ds["identifiability"].values, copy=True)
     params = [str(n) for n in ds["param_i"].values]
     for name in names:
@@ -188,6 +201,7 @@ def _not_determined(ds: xr.Dataset, names: tuple[str, ...], why: str) -> None:
     method = str(ds.attrs.get("identifiability_method", ""))
     ds.attrs["identifiability_method"] = (
         f"{method}; {', '.join(names)} not determined by the hertz checks ({why})".lstrip("; "))
+    ds.attrs[CHECKED_ATTR] = ", ".join(dict.fromkeys([*listed_names(ds, CHECKED_ATTR), *names]))
 
 
 def hertz_verdict(z: np.ndarray, f: np.ndarray, values: dict[str, float], tip: Any
@@ -268,24 +282,121 @@ def hertz_checks(ds: xr.Dataset, data: FitData, tip: Any) -> xr.Dataset:
     return _depth_checks(out, z, f, values, tip)
 
 
+def _e_variance_factor(jacobian: np.ndarray) -> float:
+    """((JᵀJ)⁻¹)_EE [Pa²/N²]: E's variance per unit noise variance (E is column 0 of J).
+
+    The columns are scaled to unit norm first (E, a contact point, a force and a slope differ
+    by many orders of magnitude). NaN where JᵀJ is singular.
+    """
+    norm = np.linalg.norm(jacobian, axis=0)
+    if not np.all(norm > 0):
+        return math.nan
+    scaled = jacobian / norm
+    try:
+        inverse = np.linalg.inv(scaled.T @ scaled)
+    except np.linalg.LinAlgError:
+        return math.nan
+    return float(inverse[0, 0]) / float(norm[0]) ** 2
+
+
+def _hertz_jacobian(z: np.ndarray, values: dict[str, float], tip: Any) -> np.ndarray:
+    """∂F/∂(E, contact point, baseline, baseline slope) of the Hertz model at ``values``.
+
+    dF/dδ = E·``tip.contact_stiffness_factor``(δ) (the tip's S = (1/E) dF/dδ; equal to the
+    derivative of ``force_shape`` to 1e-9 for every tip shape).
+    """
+    delta = np.maximum(z - values["contact_point"], 0.0)
+    stiffness = np.asarray(tip.contact_stiffness_factor(delta), dtype=float).reshape(z.shape)
+    return np.column_stack([
+        np.asarray(tip.force_shape(delta), dtype=float).reshape(z.shape),
+        -values["E"] * stiffness - values["baseline_slope"],
+        np.ones_like(z),
+        z - values["contact_point"]])
+
+
+def depth_check(z: np.ndarray, f: np.ndarray, values: dict[str, float], e_err: float,
+                tip: Any) -> dict[str, Any]:
+    """E refitted on the shallow part of an approach, against the full fit ``values`` (no warning).
+
+    The approach (z [m], F [N]) is refitted up to :data:`DEPTH_CHECK_FRACTION` of its maximum
+    contact force. The shallow samples are a subset of the full fit's, so the two E share
+    their noise: under a law that describes the curve the variance of their difference is
+    σ²·(A_shallow − A_full), A = ((JᵀJ)⁻¹)_EE with the model's Jacobian J over each fit's
+    samples, both at the full fit's values (:func:`_hertz_jacobian`; for a linear model this is
+    exactly var(E_shallow) − var(E_full) at one noise level, and it is never negative). σ² is
+    the noise variance of the shallow fit's residuals, AR(1)-corrected
+    (:func:`_noise_variance`): the deep samples, where a law that fails departs most, do not
+    inflate it (each fit's own stderr scale with its own residuals, so the full fit's could
+    exceed the shallow fit's and their difference vanish: the shifts of thousands of standard
+    errors of issue 37). Added in quadrature, :data:`DEPTH_CHECK_RESOLUTION` × E: the change
+    over depth below which the check sees no failure of the tip's law.
+
+    Parameters
+    ----------
+    z, f : numpy.ndarray
+        The approach: tip position [m], force [N].
+    values : dict
+        The full Hertz fit: ``E``, ``contact_point``, ``baseline``, ``baseline_slope``.
+    e_err : float
+        The full fit's stderr of E [Pa] (not finite: no check).
+    tip : Tip
+        The tip of the fit.
+
+    Returns
+    -------
+    dict
+        ``made`` (bool) and ``text`` (what was found, or why no check was made); where made
+        also ``E`` [Pa] (the shallow refit's), ``relative`` (E_shallow/E − 1), ``shift`` (the
+        difference in its standard errors) and ``warn`` (|shift| > :data:`DEPTH_CHECK_SIGMA`).
+    """
+    c, b, slope, e = (values[n] for n in ("contact_point", "baseline", "baseline_slope", "E"))
+    excess = f - (b + slope * (z - c))
+    contact = z > c
+    peak = float(np.max(excess[contact])) if contact.any() else 0.0
+    keep = ~contact | (excess <= DEPTH_CHECK_FRACTION * peak)
+    if peak <= 0 or int(np.sum(contact & keep)) < 8 or not math.isfinite(e_err) or e_err <= 0:
+        return {"made": False,
+                "text": "not made (too few contact points, or E without stderr)"}
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            shallow = fit_data(FitData(z[keep], f[keep], None, {}), "hertz", tip=tip,
+                               profile=False)
+    except (ViscoforceError, ValueError, ArithmeticError) as exc:
+        return {"made": False, "text": f"not made: the shallow refit failed ({exc})"}
+    e_half = float(shallow["E"])
+    own = {n: float(shallow[n]) for n in values}
+    jacobian = _hertz_jacobian(z, values, tip)
+    excess_factor = _e_variance_factor(jacobian[keep]) - _e_variance_factor(jacobian)
+    noise = _noise_variance(_hertz_residual(z[keep], f[keep], own, tip), z[keep], 4)
+    statistical = noise * max(excess_factor, 0.0) if math.isfinite(excess_factor) else 0.0
+    spread = math.sqrt(statistical + (DEPTH_CHECK_RESOLUTION * e) ** 2)
+    shift = (e_half - e) / spread
+    relative = e_half / e - 1.0
+    return {"made": True, "E": e_half, "relative": relative, "shift": shift,
+            "warn": abs(shift) > DEPTH_CHECK_SIGMA,
+            "text": (f"E refitted up to {100 * DEPTH_CHECK_FRACTION:.0f} % of the maximum "
+                     f"contact force: {e_half:.4g} Pa, {100 * relative:+.1f} % from the full "
+                     f"fit's {e:.4g} Pa ({shift:+.1f} standard errors of the difference)")}
+
+
 def _depth_checks(out: xr.Dataset, z: np.ndarray, f: np.ndarray, values: dict[str, float],
                   tip: Any) -> xr.Dataset:
     """E against the depth, the baseline before contact (of :func:`hertz_checks`), in ``out``.
 
-    * **Depth**: the approach refitted up to :data:`DEPTH_CHECK_FRACTION` of the maximum
-      contact force; the shift of E in units of the standard error of the difference,
-      √(σ_shallow² − σ_full²) (the shallow points are a subset of the full fit's:
-      ``attrs["depth_check_shift"]``, ``depth_check_E``). A law that describes the curve gives
-      the same E within that error;
-      beyond :data:`DEPTH_CHECK_SIGMA` a :class:`GoodnessOfFitWarning` says that the stderr
-      cover the noise only, not the model error.
+    * **Depth** (:func:`depth_check`): ``attrs["depth_check"]`` (the text),
+      ``depth_check_E``, ``depth_check_relative`` (E_shallow/E − 1) and
+      ``depth_check_shift`` (in standard errors of the difference). A law that describes the
+      curve gives the same E within that error; beyond :data:`DEPTH_CHECK_SIGMA` a
+      :class:`GoodnessOfFitWarning` says that the stderr cover the noise only, not the model
+      error (a map's pixel gets the quality code ``depth_dependent`` on the same rule).
     * **Baseline**: the rise of the tilted baseline from the start of the approach to the
       contact point, as a fraction of the contact force (``attrs["precontact_rise"]``); above
       :data:`PRECONTACT_RISE_WARN` a :class:`DataWarning` says the approach is not a free
       cantilever before contact.
     """
     c, b, slope = values["contact_point"], values["baseline"], values["baseline_slope"]
-    e, e_err = values["E"], float(out["E_stderr"])
+    e = values["E"]
     excess = f - (b + slope * (z - c))
     contact = z > c
     peak = float(np.max(excess[contact])) if contact.any() else 0.0
@@ -299,33 +410,19 @@ def _depth_checks(out: xr.Dataset, z: np.ndarray, f: np.ndarray, values: dict[st
                 "long-range repulsion, a soft layer, or contact from the start of the "
                 "approach), so the contact point and E rest on the tilted baseline",
                 DataWarning, stacklevel=4)
-    keep = ~contact | (excess <= DEPTH_CHECK_FRACTION * peak)
-    if peak <= 0 or int(np.sum(contact & keep)) < 8 or not math.isfinite(e_err) or e_err <= 0:
-        out.attrs["depth_check"] = "not made (too few contact points, or E without stderr)"
+    found = depth_check(z, f, values, float(out["E_stderr"]), tip)
+    out.attrs["depth_check"] = found["text"]
+    if not found["made"]:
         return out
-    try:
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")
-            shallow = fit_data(FitData(z[keep], f[keep], None, {}), "hertz", tip=tip,
-                               profile=False)
-    except (ViscoforceError, ValueError, ArithmeticError) as exc:
-        out.attrs["depth_check"] = f"not made: the shallow refit failed ({exc})"
-        return out
-    e_half, e_half_err = float(shallow["E"]), float(shallow["E_stderr"])
-    # the shallow data are a subset of the full: for efficient estimators the variance of the
-    # difference is var(shallow) − var(full), not var(full) (a Hausman-type test)
-    spread = math.sqrt(max(e_half_err**2 - e_err**2, 0.0)) if math.isfinite(e_half_err) else 0.0
-    shift = (e_half - e) / max(spread, e_err * 1e-3)
-    out.attrs.update(depth_check_E=e_half, depth_check_shift=shift, depth_check=(
-        f"E refitted up to {100 * DEPTH_CHECK_FRACTION:.0f} % of the maximum contact force: "
-        f"{e_half:.4g} Pa, {shift:+.1f} standard errors of the difference "
-        f"({100 * (e_half / e - 1):+.1f} %) from the full fit"))
-    if abs(shift) > DEPTH_CHECK_SIGMA:
+    out.attrs.update(depth_check_E=found["E"], depth_check_relative=found["relative"],
+                     depth_check_shift=found["shift"])
+    if found["warn"]:
         warnings.warn(
-            f"hertz: E depends on the indentation depth: up to {100 * DEPTH_CHECK_FRACTION:.0f} % "
-            f"of the maximum contact force E = {e_half:.4g} Pa, {shift:+.1f} standard errors "
-            f"({100 * (e_half / e - 1):+.1f} %) from the full fit's {e:.4g} Pa. The tip's elastic "
-            "law does not describe this approach (viscoelasticity, a finite thickness, the wrong "
-            "tip, or the contact point), and the stderr cover the noise only: report E with its "
-            "depth range", GoodnessOfFitWarning, stacklevel=4)
+            f"hertz: E depends on the indentation depth: up to "
+            f"{100 * DEPTH_CHECK_FRACTION:.0f} % of the maximum contact force E = "
+            f"{found['E']:.4g} Pa, {100 * found['relative']:+.1f} % from the full fit's "
+            f"{e:.4g} Pa ({found['shift']:+.1f} standard errors of the difference). The tip's "
+            "elastic law does not describe this approach (viscoelasticity, a finite thickness, "
+            "the wrong tip, or the contact point), and the stderr cover the noise only: report "
+            "E with its depth range", GoodnessOfFitWarning, stacklevel=4)
     return out

@@ -36,6 +36,18 @@ coordinates the limits of a positive parameter are found in, log q: a quadratic 
 profile does not call a parameter determined that the local test would not, merely because the
 likelihood rises to Δχ² = 4 somewhere within the window (a noise-only force curve bounded its
 E between 1.4 Pa and 30 kPa, issue 40).
+
+Nuisance parameters (:data:`~viscoforce.fitting.verdict.NUISANCE`: the contact point, the
+baseline and its slope, which place a force curve rather than describe the material) are judged
+by :data:`~viscoforce.fitting.verdict.NUISANCE_RULE`
+(:func:`~viscoforce.fitting.verdict.settle_nuisance`): the local test's stderr > |value|
+measures a value against its own size, which for a term counted from an arbitrary zero (the
+piezo's, the deflection's) or whose natural value is 0 (an untilted baseline) says nothing: an
+untilted baseline's slope, 0 ± its noise, was "not determined" in 28 of 40 Ting fits, and each
+warned (issue 37). Their uncertainty reaches the moduli through the covariance (each modulus'
+stderr is marginal over them), so the moduli's own codes say whether it matters. The profile
+and the curvature's limits here judge every parameter that is not positive this way already
+(bounded on both sides: determined).
 """
 
 from __future__ import annotations

@@ -27,9 +27,12 @@ Every pixel gets a ``quality`` code (:data:`~viscoforce.fitting.pixels.MAP_QUALI
 in :data:`~viscoforce.fitting.pixels.QUALITY_RULE`), so that a map warns pixel by pixel where a
 single fit would warn once: the optimiser failed, the χ² p-value says the model does not
 describe the pixel's data (``chi2_pvalue`` < :data:`~viscoforce.fitting.verdict.PVALUE_WARN`,
-with known stderr only), a parameter is not determined by the data, or a parameter ended on a
-bound. :func:`~viscoforce.fitting.pixels.map_summary` summarises the good pixels only and counts
-the others by reason. The pixels' data, their fits in blocks and the assembled result are
+with known stderr only), a hertz pixel's E depends on the indentation depth (the single fit's
+depth check, :func:`~viscoforce.fitting.hertz_checks.depth_check`; its shift per pixel in
+``depth_check_shift`` and ``depth_check_relative``), a parameter is not determined by the data
+(nuisance parameters by :data:`~viscoforce.fitting.verdict.NUISANCE_RULE`), or a parameter
+ended on a bound. :func:`~viscoforce.fitting.pixels.map_summary` summarises the good pixels
+only and counts the others by reason. The pixels' data, their fits in blocks and the assembled result are
 :mod:`viscoforce.fitting.pixels`; this module decides where the blocks are fitted.
 """
 

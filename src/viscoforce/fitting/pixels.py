@@ -21,24 +21,34 @@ from viscoforce.exceptions import ParameterError, ViscoforceError
 from viscoforce.fitting.curves import curve_data
 from viscoforce.fitting.data import FitData, clean_pixels_fit_data, pixel_fit_data, spectrum_arrays
 from viscoforce.fitting.fit import local_identifiability, select, summary
-from viscoforce.fitting.hertz_checks import hertz_verdict
+from viscoforce.fitting.hertz_checks import (
+    DEPTH_CHECK_FRACTION,
+    DEPTH_CHECK_SIGMA,
+    depth_check,
+    hertz_verdict,
+)
 from viscoforce.fitting.identify import IDENTIFIABILITY
 from viscoforce.fitting.registry import entry
 from viscoforce.fitting.report import fit_report
-from viscoforce.fitting.verdict import PVALUE_WARN
+from viscoforce.fitting.verdict import NUISANCE_RULE, PVALUE_WARN, settle_nuisance
 from viscoforce.schema import flag_attrs, index_values, validate_fit_result, validate_spectrum
 from viscoforce.schema.fit import SUCCESS_FLAGS, parameter_units
 
-#: Per-pixel ``quality`` codes of a map (CF ``flag_values`` → ``flag_meanings``).
+#: Per-pixel ``quality`` codes of a map (CF ``flag_values`` → ``flag_meanings``); what each
+#: means, and which one a pixel gets, is :data:`QUALITY_RULE`.
 MAP_QUALITY: dict[int, str] = {0: "good", 1: "optimiser_failed", 2: "bad_fit",
-                               3: "not_determined", 4: "at_bound"}
+                               3: "not_determined", 4: "at_bound", 5: "depth_dependent"}
 #: How a pixel's ``quality`` is chosen (``attrs["quality_rule"]`` of a map).
 QUALITY_RULE = (
     "each pixel gets the first code that applies: optimiser_failed (the fit raised or did not "
     f"converge), bad_fit (chi2_pvalue < {PVALUE_WARN:g}: the model does not describe the "
-    "pixel's data), not_determined (a parameter's identifiability is not 'determined', other "
-    "than by ending on a bound), at_bound (a parameter ended on a bound of its window), "
-    "otherwise good")
+    "pixel's data), depth_dependent (hertz: E refitted up to "
+    f"{100 * DEPTH_CHECK_FRACTION:.0f} % of the maximum contact force differs from the full "
+    f"fit's by more than {DEPTH_CHECK_SIGMA:g} standard errors of the difference, the single "
+    "fit's depth-check warning: the tip's elastic law does not describe the approach; "
+    "depth_check_shift and depth_check_relative give the shift), not_determined (a "
+    "parameter's identifiability is not 'determined', other than by ending on a bound; "
+    f"{NUISANCE_RULE}), at_bound (a parameter ended on a bound of its window), otherwise good")
 #: Where a pixel has no fit, or its model lacks the parameter, ``identifiability`` holds this.
 NO_IDENTIFIABILITY = 3
 
@@ -141,8 +151,10 @@ def fit_block(items: Sequence[FitData | str], model: str, modes: int | str, crit
     -------
     list of dict
         Per pixel :func:`~.fit.summary` plus ``modes`` and ``names`` (and ``fit_k``); ``message``
-        is the data's notes (points left out, stderr fallbacks) followed by the optimiser's
-        message.
+        is the data's notes (points left out, stderr fallbacks, the hertz checks) followed by
+        the optimiser's message. The identifiability of the nuisance parameters is
+        :func:`~.verdict.settle_nuisance`'s (the single fit's, :func:`~.verdict.warn_fit`);
+        hertz adds its checks (:func:`_hertz_notes`).
     """
     out = []
     for data in items:
@@ -167,6 +179,8 @@ def fit_block(items: Sequence[FitData | str], model: str, modes: int | str, crit
             info = summary(best)
             notes.append(f"the profile likelihood failed ({str(exc).splitlines()[0]}): the "
                          "identifiability is the local test")
+        info["identifiability"] = settle_nuisance(info["identifiability"], info["stderr"],
+                                                  info["at_bound"], keep=info["profiled"])
         if model == "hertz":  # the single fit's checks (hertz_checks.hertz_checks), without warnings
             notes += _hertz_notes(data, info, own["tip"])
         info["message"] = "; ".join([*notes, info["message"]])
@@ -187,24 +201,37 @@ def fit_block(items: Sequence[FitData | str], model: str, modes: int | str, crit
 
 
 def _hertz_notes(data: FitData, info: dict[str, Any], tip: Any) -> list[str]:
-    """A Hertz pixel's verdict (:func:`~.hertz_checks.hertz_verdict`), as notes.
+    """A Hertz pixel's verdicts (:func:`~.hertz_checks.hertz_verdict`, the depth check), as notes.
 
     E and the contact point become not determined (code 3) where no indentation was measured or
-    the tip position's sign looks flipped (the pixel's quality is then 3).
+    the tip position's sign looks flipped (the pixel's quality is then 3, on a bound or not:
+    ``checked_not_determined`` names them). Otherwise E is refitted on the shallow half of the
+    contact force (:func:`~.hertz_checks.depth_check`, the single fit's check):
+    ``depth_check_shift`` and ``depth_check_relative`` join ``info``, and a shift beyond
+    :data:`~.hertz_checks.DEPTH_CHECK_SIGMA` sets ``depth_dependent`` (the pixel's quality is
+    then 5, unless an earlier code of :data:`QUALITY_RULE` applies).
     """
     from viscoforce.physics.tips import tip_from
 
-    verdict = hertz_verdict(np.asarray(data.x), np.asarray(data.y), info["values"],
-                            tip_from(tip))
+    z, f, shape = np.asarray(data.x), np.asarray(data.y), tip_from(tip)
+    verdict = hertz_verdict(z, f, info["values"], shape)
     reason = (f"the tip position's sign looks flipped ({verdict['flipped']})"
               if verdict["flipped"] is not None else
               f"no detectable indentation ({verdict['indentation_signal']:.2g} sigma over the "
               "baseline alone)" if verdict["no_signal"] else None)
     if reason is None:
-        return []
-    for name in ("E", "contact_point"):
-        if name in info["identifiability"]:
-            info["identifiability"][name] = 3  # IDENTIFIABILITY[3]: "not_determined"
+        err = info["stderr"].get("E")
+        found = depth_check(z, f, info["values"], math.nan if err is None else float(err), shape)
+        if not found["made"]:
+            return [f"depth check {found['text']}"]
+        info.update(depth_check_shift=found["shift"], depth_check_relative=found["relative"],
+                    depth_dependent=found["warn"])
+        return [f"E depends on the indentation depth: {found['text']}" if found["warn"] else
+                f"depth check: {found['text']}"]
+    marked = [n for n in ("E", "contact_point") if n in info["identifiability"]]
+    for name in marked:
+        info["identifiability"][name] = 3  # IDENTIFIABILITY[3]: "not_determined"
+    info["checked_not_determined"] = marked  # on a bound or not (pixel_quality)
     return [f"{reason}: E and the contact point are not determined"]
 
 
@@ -215,7 +242,9 @@ def pixel_quality(result: dict[str, Any]) -> int:
     p = float(result.get("chi2_pvalue", math.nan))
     if math.isfinite(p) and p < PVALUE_WARN:
         return 2
-    bound = set(result.get("at_bound", ()))
+    if result.get("depth_dependent", False):
+        return 5
+    bound = set(result.get("at_bound", ())) - set(result.get("checked_not_determined", ()))
     if any(int(code) != 0 and name not in bound
            for name, code in _identifiability(result).items()):
         return 3
@@ -227,10 +256,10 @@ def _identifiability(result: dict[str, Any]) -> dict[str, int]:
     if "identifiability" in result:
         return {str(k): int(v) for k, v in result["identifiability"].items()}
     names = result["names"]
-    bound = set(result.get("at_bound", ()))
-    return local_identifiability({n: result["values"][n] for n in names},
-                                 {n: result["stderr"][n] for n in names},
-                                 [n for n in names if n in bound])
+    bound = [n for n in names if n in set(result.get("at_bound", ()))]
+    stderr = {n: result["stderr"][n] for n in names}
+    return settle_nuisance(local_identifiability({n: result["values"][n] for n in names},
+                                                 stderr, bound), stderr, bound)
 
 
 def assemble_map(results: list[dict[str, Any]], dims: tuple[str, ...], layout: dict[str, Any],
@@ -315,6 +344,7 @@ def assemble_map(results: list[dict[str, Any]], dims: tuple[str, ...], layout: d
         data[k] = (dims, stats[k].reshape(shape), {"units": "1", "long_name": long_name})
     data["modes"] = (dims, modes.reshape(shape), {"units": "1",
                                                    "long_name": "number of relaxation modes"})
+    data.update(_depth_variables(results, dims, shape))
     if omega is not None and any("fit_k" in r for r in results):
         k = np.full((n, omega.size), np.nan, dtype=complex)
         for i, r in enumerate(results):
@@ -340,6 +370,24 @@ def assemble_map(results: list[dict[str, Any]], dims: tuple[str, ...], layout: d
     return validate_fit_result(xr.Dataset(data, coords=coords, attrs=attrs))
 
 
+#: A hertz map's per-pixel depth check (:func:`_hertz_notes`): result key → long name.
+DEPTH_VARIABLES = {
+    "depth_check_shift": "shift of E refitted up to half the maximum contact force, in standard "
+                         "errors of the difference (NaN: no check made)",
+    "depth_check_relative": "relative change of E refitted up to half the maximum contact force "
+                            "(E_shallow / E - 1; NaN: no check made)"}
+
+
+def _depth_variables(results: list[dict[str, Any]], dims: tuple[str, ...],
+                     shape: tuple[int, ...]) -> dict[str, Any]:
+    """The map's :data:`DEPTH_VARIABLES` (none where no pixel made the depth check)."""
+    if not any("depth_check_shift" in r for r in results):
+        return {}
+    return {key: (dims, np.array([float(r.get(key, math.nan)) for r in results]).reshape(shape),
+                  {"units": "1", "long_name": long_name})
+            for key, long_name in DEPTH_VARIABLES.items()}
+
+
 def map_summary(result: xr.Dataset) -> dict[str, Any]:
     """Medians and quartiles of every parameter over the GOOD pixels of a map (JSON-friendly).
 
@@ -353,8 +401,8 @@ def map_summary(result: xr.Dataset) -> dict[str, Any]:
     dict
         ``n_fits``, ``n_good`` (pixels of quality 0); ``left_out``: how many pixels were left
         out per reason of :data:`MAP_QUALITY` (``optimiser_failed``, ``bad_fit``,
-        ``not_determined``, ``at_bound``); ``by_modes``: per number of modes fitted (key
-        ``"1"``, ``"2"``, …) ``n`` (its good pixels) and ``params`` (each of that model's
+        ``not_determined``, ``at_bound``, ``depth_dependent``); ``by_modes``: per number of
+        modes fitted (key ``"1"``, ``"2"``, …) ``n`` (its good pixels) and ``params`` (each of that model's
         parameters → ``median``, ``q25``, ``q75`` over those good pixels, in the parameter's
         units); ``params``: the same for the number of modes most common among the good pixels
         (the fewer on a tie), which ``modes`` names; ``derived`` (with ``poisson``): the same

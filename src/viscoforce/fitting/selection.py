@@ -35,16 +35,23 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from typing import Any, Literal
 
+import numpy as np
+
 from viscoforce.choice import Choice
 from viscoforce.exceptions import ConvergenceError, ParameterError
 from viscoforce.fitting.data import FitData
 from viscoforce.fitting.outcome import Outcome, fit_once
 
-__all__ = ["CRITERIA", "Candidate", "Tried", "check_criterion", "compare", "explain", "keep",
-           "share_effective_size"]
+__all__ = ["CRITERIA", "HALVES_Z", "Candidate", "Tried", "block_halves", "check_criterion",
+           "compare", "explain", "halves_z", "keep", "mode_robustness", "share_effective_size"]
 
 #: Information criteria a chooser compares by.
 CRITERIA = ("bic", "aic")
+#: A time moving more than this many standard errors (of the difference) between the two halves
+#: of the data is not robust (a 2σ rule: 5 % false alarms per time for honest Gaussian stderr).
+HALVES_Z = 2.0
+#: Blocks of the block split-half (alternate blocks make each half; each spans the whole window).
+HALVES_BLOCKS = 16
 
 
 def check_criterion(criterion: Any) -> str:
@@ -71,6 +78,8 @@ class Tried:
     outcome: Outcome | None = None
     note: str = ""
     inputs: dict[str, Any] = field(default_factory=dict)
+    #: False: fitted, but its modes are not robust (:func:`mode_robustness`): never kept.
+    robust: bool = True
 
     def score(self, criterion: str) -> float:
         """Its criterion (inf when it was not fitted)."""
@@ -103,7 +112,8 @@ def share_effective_size(outcomes: Sequence[Outcome]) -> None:
 def compare(families: Sequence[Sequence[Candidate]], data: FitData, criterion: str, *,
             min_dof: int = 1, on_failure: Literal["stop", "skip"] = "stop",
             failures: tuple[type[BaseException], ...] = (ConvergenceError,),
-            after: Callable[[Outcome], None] | None = None) -> list[Tried]:
+            after: Callable[[Outcome], None] | None = None,
+            robust: Callable[[Outcome], str | None] | None = None) -> list[Tried]:
     """Fit each family's candidates in order of size (module docstring: when a family stops).
 
     Parameters
@@ -123,6 +133,9 @@ def compare(families: Sequence[Sequence[Candidate]], data: FitData, criterion: s
         What counts as a failed fit (anything else propagates).
     after : callable, optional
         ``after(outcome)`` on each fit before it is scored (e.g. a stderr correction).
+    robust : callable, optional
+        ``robust(outcome) -> reason or None``: a family's later candidates (more modes) whose
+        modes are not robust (:func:`mode_robustness`) end its growth, noted with the reason.
 
     Returns
     -------
@@ -154,6 +167,11 @@ def compare(families: Sequence[Sequence[Candidate]], data: FitData, criterion: s
                 continue
             if after is not None:
                 after(outcome)
+            reason = robust(outcome) if robust is not None and comparing and fitted else None
+            if reason is not None:
+                tried.append(Tried(candidate.label, outcome, note=f"not robust: {reason}",
+                                   inputs=candidate.inputs, robust=False))
+                break
             tried.append(Tried(candidate.label, outcome, inputs=candidate.inputs))
             share_effective_size([t.outcome for t in tried if t.outcome is not None])
             score = outcome.criterion[criterion]
@@ -172,7 +190,7 @@ def keep(tried: Sequence[Tried], criterion: str, margin: float = 0.0) -> Tried:
     ConvergenceError
         No candidate was fitted (the notes say why).
     """
-    fitted = [t for t in tried if t.outcome is not None]
+    fitted = [t for t in tried if t.outcome is not None and t.robust]
     if not fitted:
         raise ConvergenceError("no candidate could be fitted: " + "; ".join(
             f"{t.label} {t.note}" for t in tried))
@@ -188,7 +206,7 @@ def explain(tried: Sequence[Tried], kept: Tried, criterion: str, margin: float,
     ``considered`` holds (label, criterion − the best's, verdict) per candidate (inf: not
     fitted); ``score`` names the criterion; ``options`` the kept one's modes and inputs.
     """
-    best = min(t.score(criterion) for t in tried)
+    best = min(t.score(criterion) for t in tried if t.robust)
     name = criterion.upper()
     rows, parts = [], []
     for t in tried:
@@ -197,7 +215,7 @@ def explain(tried: Sequence[Tried], kept: Tried, criterion: str, margin: float,
             parts.append(f"{t.label}: {t.note}")
             continue
         o, score = t.outcome, t.score(criterion)
-        verdict = ("kept" if t is kept else
+        verdict = ("kept" if t is kept else t.note if not t.robust else
                    f"{'+' if score >= best else ''}{score - best:.3g} from the best")
         rows.append((t.label, score - best, verdict))
         p = o.pvalue
@@ -209,3 +227,100 @@ def explain(tried: Sequence[Tried], kept: Tried, criterion: str, margin: float,
     explanation = f"{subject} compared by {name}; kept {kept.label}, {rule}. " + "; ".join(parts)
     return Choice(kept.label, {"modes": kept.modes, **kept.inputs}, math.nan, math.nan,
                   explanation, tuple(rows), score=name)
+
+
+# ── robustness of the modes (issue 37 item 4) ───────────────────────────────────────────────────
+
+def _stderr(outcome: Outcome) -> dict[str, float]:
+    """Each parameter's stderr (NaN where the covariance is singular), AR(1)-corrected."""
+    names = outcome.model.names
+    if outcome.covariance is None:
+        return {n: math.nan for n in names}
+    var = np.diag(outcome.covariance)
+    factor = outcome.stderr_factor if getattr(outcome.model, "autocorrelated", False) else 1.0
+    return {n: float(math.sqrt(v)) * factor if v >= 0 else math.nan
+            for n, v in zip(names, var, strict=True)}
+
+
+def _times(outcome: Outcome) -> list[str]:
+    return [n for n in outcome.model.names if n == "tau" or n.startswith("tau_")]
+
+
+def sampled_span(data: FitData) -> tuple[float, float]:
+    """The times [s] the data resolve.
+
+    (finest sample spacing, window length) of a time series; (1/ω_max, 1/ω_min) of a spectrum.
+    """
+    x = np.sort(np.asarray(data.x, dtype=float))
+    if np.iscomplexobj(data.y):
+        return 1.0 / float(x[-1]), 1.0 / float(x[0])
+    steps = np.diff(x)
+    steps = steps[steps > 0]
+    return (float(steps.min()) if steps.size else 0.0), float(x[-1] - x[0])
+
+
+def block_halves(data: FitData, blocks: int = HALVES_BLOCKS) -> tuple[FitData, FitData]:
+    """Two halves of the data, alternate contiguous blocks each, both spanning the whole window.
+
+    Blocks (rather than alternate samples) keep the halves' noise nearly independent where the
+    residuals are autocorrelated (a measured series in time).
+    """
+    order = np.argsort(np.asarray(data.x, dtype=float), kind="stable")
+    block = np.empty(order.size, dtype=int)
+    block[order] = np.arange(order.size) * blocks // max(order.size, 1)
+    halves = []
+    for parity in (0, 1):
+        keep = block % 2 == parity
+        weights = None if data.weights is None else np.asarray(data.weights)[keep]
+        dof = None if data.sigma_dof is None else np.asarray(data.sigma_dof)[keep]
+        halves.append(FitData(np.asarray(data.x)[keep], np.asarray(data.y)[keep], weights,
+                              data.source, data.weighting, data.notes, dof))
+    return halves[0], halves[1]
+
+
+def halves_z(outcome: Outcome, refit: Callable[[FitData], Outcome],
+             names: Sequence[str] | None = None) -> dict[str, float]:
+    """(a − b)/√(σa² + σb²) of each parameter fitted on the two block halves (NaN: no stderr).
+
+    Raises what ``refit`` raises when a half cannot be fitted.
+    """
+    a, b = (refit(h) for h in block_halves(outcome.data))
+    sa, sb = _stderr(a), _stderr(b)
+    out = {}
+    for n in names if names is not None else outcome.model.names:
+        spread = math.hypot(sa[n], sb[n])
+        out[n] = (a.values[n] - b.values[n]) / spread if spread > 0 else math.nan
+    return out
+
+
+def mode_robustness(outcome: Outcome, refit: Callable[[FitData], Outcome] | None = None
+                    ) -> str | None:
+    """Why the modes of ``outcome`` are not robust, or None.
+
+    Not robust: a time (``tau``, ``tau_i``) outside the span the data resolve
+    (:func:`sampled_span`); amplitudes (``dF_i``, ``dz_i``) of both signs (a relaxation or a
+    creep of one sign cannot need a mode running the other way); with ``refit`` (a fit of the
+    same model to other data), a time moving more than :data:`HALVES_Z` standard errors of the
+    difference between the two block halves (:func:`block_halves`), or a half that cannot be
+    fitted.
+    """
+    values, times = outcome.values, _times(outcome)
+    lo, hi = sampled_span(outcome.data)
+    outside = [n for n in times if not lo <= values[n] <= hi]
+    if outside:
+        return (", ".join(f"{n} = {values[n]:.3g} s" for n in outside)
+                + f" outside the span the data resolve [{lo:.3g}, {hi:.3g}] s")
+    amplitudes = [values[n] for n in outcome.model.names if n.startswith(("dF_", "dz_"))]
+    if len(amplitudes) > 1 and min(amplitudes) < 0 < max(amplitudes):
+        return "amplitudes of both signs (a mode runs against the others)"
+    if refit is None:
+        return None
+    try:
+        z = halves_z(outcome, refit, times)
+    except (ConvergenceError, ParameterError) as exc:
+        return f"cannot be fitted on each half of the data ({str(exc).splitlines()[0]})"
+    moved = {n: v for n, v in z.items() if math.isfinite(v) and abs(v) > HALVES_Z}
+    if moved:
+        return ", ".join(f"{n} moves {v:+.1f} standard errors" for n, v in moved.items()) + (
+            " between the two halves of the data")
+    return None

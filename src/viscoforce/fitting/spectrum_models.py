@@ -1,5 +1,7 @@
-"""What the spectrum models share: the SVDA's position and levels, the exact stiffness, the contact
-tip and the structural and viscosity guesses.
+"""What the spectrum models share (the builders live with their models).
+
+The SVDA's position and levels, the exact stiffness, the contact tip and the structural and
+viscosity guesses.
 
 The builders themselves live with their models, one module each in
 :mod:`viscoforce.fitting.models` (``svda``, ``exact``, ``contact``, ``prony``); build a model

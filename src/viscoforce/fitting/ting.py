@@ -34,7 +34,15 @@ from viscoforce.fitting.fit import result_dataset
 from viscoforce.fitting.moduli import add_derived_moduli
 from viscoforce.fitting.outcome import Outcome, residual_lag1
 from viscoforce.fitting.report import carry
-from viscoforce.fitting.selection import Candidate, Tried, check_criterion, compare, explain, keep
+from viscoforce.fitting.selection import (
+    Candidate,
+    Tried,
+    check_criterion,
+    compare,
+    explain,
+    keep,
+    mode_robustness,
+)
 from viscoforce.fitting.ting_model import (
     TING_FIXED,
     TING_MATERIALS,
@@ -90,7 +98,7 @@ def _select(data: TingData, modes: int | str, criterion: str, fixed: Mapping[str
                                                             False):
             _autocorrelation(outcome)
 
-    tried = compare([family], data, criterion, after=corrected)
+    tried = compare([family], data, criterion, after=corrected, robust=mode_robustness)
     return keep(tried, criterion), tried
 
 

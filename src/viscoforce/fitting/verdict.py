@@ -1,14 +1,17 @@
 """What a single fit says about itself: goodness of fit, identifiability and autocorrelation.
 
-:func:`warn_fit` issues the warnings of one fit's result dataset; :func:`bound_text` words a
-parameter the data bound on one side only ("E0 > 2.1e+04 Pa"). The hertz model's checks of its
-own data are :mod:`viscoforce.fitting.hertz_checks`.
+:func:`warn_fit` issues the warnings of one fit's result dataset (after
+:func:`settle_nuisance_codes`: the nuisance parameters of a force curve are judged by
+:data:`NUISANCE_RULE`, which maps share through :func:`settle_nuisance`); :func:`bound_text`
+words a parameter the data bound on one side only ("E0 > 2.1e+04 Pa"). The hertz model's checks
+of its own data are :mod:`viscoforce.fitting.hertz_checks`.
 """
 
 from __future__ import annotations
 
 import math
 import warnings
+from collections.abc import Mapping, Sequence
 from typing import Any
 
 import numpy as np
@@ -52,13 +55,91 @@ def bound_text(ds: xr.Dataset, name: str) -> str | None:
     return f"{name} not determined"
 
 
+#: Parameters that place a force curve rather than describe the material (hertz, ting): judged
+#: by :data:`NUISANCE_RULE`, not by the local test's stderr > |value|
+#: (:mod:`viscoforce.fitting.identify`'s docstring says why).
+NUISANCE = ("contact_point", "baseline", "baseline_slope")
+#: The rule of :func:`settle_nuisance`, in words (a map's ``quality_rule`` quotes it).
+NUISANCE_RULE = (
+    "a nuisance parameter (contact_point, baseline, baseline_slope) is determined when it has "
+    "a finite stderr and did not end on a bound: stderr > |value| does not apply to it, since "
+    "its value counts from an arbitrary zero or is naturally 0, and its uncertainty is in the "
+    "moduli's stderr already")
+
+
+def settle_nuisance(codes: Mapping[str, int], stderr: Mapping[str, float | None],
+                    at_bound: Sequence[str], keep: Sequence[str] = ()) -> dict[str, int]:
+    """``codes`` with the local test's verdict on the :data:`NUISANCE` parameters replaced.
+
+    A nuisance parameter with a finite stderr that did not end on a bound is determined (0);
+    one without, or on a bound, not determined (3) (:data:`NUISANCE_RULE`). The other
+    parameters, and those in ``keep`` (codes from the profile likelihood, or set by a check of
+    the model's own), keep their codes.
+    """
+    out = {str(n): int(c) for n, c in codes.items()}
+    for name in out:
+        if name not in NUISANCE or name in keep:
+            continue
+        err = stderr.get(name)
+        bounded = err is not None and math.isfinite(err) and name not in at_bound
+        out[name] = 0 if bounded else 3
+    return out
+
+
+#: ``attrs`` of a fit result naming the parameters a check of the model's own set to not
+#: determined (", "-joined; :func:`viscoforce.fitting.hertz_checks.hertz_checks`):
+#: :func:`settle_nuisance_codes` leaves them so.
+CHECKED_ATTR = "not_determined_by_checks"
+#: :data:`NUISANCE_RULE` in a few words (``attrs["identifiability_method"]``).
+NUISANCE_RULE_SHORT = "a finite stderr and not on a bound; stderr > |value| does not apply"
+
+
+def listed_names(ds: xr.Dataset, key: str) -> list[str]:
+    """The names of a ", "-joined attribute of ``ds`` ("none" or absent: none)."""
+    return [n for n in str(ds.attrs.get(key, "")).split(", ") if n and n != "none"]
+
+
+def settle_nuisance_codes(ds: xr.Dataset) -> None:
+    """Judge a fit result's nuisance parameters by :data:`NUISANCE_RULE`, in place.
+
+    The codes of the local test (not those of the profile likelihood, ``profiled`` = 1, nor
+    those a check set, :data:`CHECKED_ATTR`) of the :data:`NUISANCE` parameters become
+    :func:`settle_nuisance`'s; a change is added to ``attrs["identifiability_method"]``. The
+    local test itself (:func:`viscoforce.fitting.fit.local_identifiability`) applies
+    stderr > |value| to every parameter; the profile and the curvature's limits
+    (:mod:`viscoforce.fitting.identify`) already judge a parameter that is not positive by
+    whether it is bounded.
+    """
+    names = parameter_names(ds)
+    if "identifiability" not in ds.variables or not any(n in NUISANCE for n in names):
+        return
+    codes = dict(zip(names, np.asarray(ds.variables["identifiability"].values).reshape(-1)
+                     .tolist(), strict=True))
+    profiled = (np.asarray(ds.variables["profiled"].values).reshape(-1).tolist()
+                if "profiled" in ds.variables else [0] * len(names))
+    keep = [*(n for n, p in zip(names, profiled, strict=True) if int(p)),
+            *listed_names(ds, CHECKED_ATTR)]
+    stderr = {n: scalar_value(ds, f"{n}_stderr") for n in names}
+    settled = settle_nuisance(codes, stderr, listed_names(ds, "at_bound"), keep=keep)
+    changed = [n for n in names if settled[n] != int(codes[n])]
+    if not changed:
+        return
+    ds["identifiability"] = ds["identifiability"].copy(
+        data=np.array([settled[n] for n in names], dtype=ds["identifiability"].dtype))
+    method = str(ds.attrs.get("identifiability_method", ""))
+    ds.attrs["identifiability_method"] = (
+        f"{method}; {', '.join(changed)} by the nuisance rule ({NUISANCE_RULE_SHORT})"
+        .lstrip("; "))
+
+
 def warn_unidentified(ds: xr.Dataset, *, stacklevel: int = 3) -> list[str]:
     """Warn (AccuracyWarning) about fitted parameters the data do not determine; return them.
 
     With the profile likelihood (``identifiability``): a parameter bounded on one side only is
     reported as that bound (e.g. "E0 > 2e4 Pa": the likelihood is flat towards larger values),
     one flat on both sides as not determined. Without it, the local test: stderr above the
-    value, or none (the covariance is singular).
+    value, or none (the covariance is singular); for the nuisance parameters
+    (:data:`NUISANCE_RULE`) no stderr only.
     """
     names = parameter_names(ds)
     if "identifiability" in ds.variables:
@@ -66,8 +147,9 @@ def warn_unidentified(ds: xr.Dataset, *, stacklevel: int = 3) -> list[str]:
         bad = [n for n, c in zip(names, codes, strict=True) if int(c) != 0]
     else:
         bad = [n for n in names
-               if not np.isfinite(scalar_value(ds, f"{n}_stderr")) or
-               abs(scalar_value(ds, f"{n}_stderr")) > abs(scalar_value(ds, n))]
+               if not np.isfinite(scalar_value(ds, f"{n}_stderr")) or (
+                   n not in NUISANCE
+                   and abs(scalar_value(ds, f"{n}_stderr")) > abs(scalar_value(ds, n)))]
     if bad:
         shown = "; ".join(
             f"{bound_text(ds, n) or n} (fitted {scalar_value(ds, n):.4g} ± "
@@ -101,7 +183,12 @@ def _calibrated_text(ds: xr.Dataset) -> str:
 
 
 def warn_fit(ds: xr.Dataset, *, stacklevel: int = 4) -> None:
-    """The warnings of a single fit: autocorrelated residuals, goodness of fit, identifiability."""
+    """The warnings of a single fit: autocorrelated residuals, goodness of fit, identifiability.
+
+    First the nuisance parameters' codes are settled (:func:`settle_nuisance_codes`, in
+    place): an untilted baseline's slope, 0 within its stderr, is no reason to warn.
+    """
+    settle_nuisance_codes(ds)
     rho = float(ds.attrs.get("residual_lag1", math.nan))
     if math.isfinite(rho) and rho > LAG1_WARN:
         warnings.warn(
