@@ -3,15 +3,27 @@
 k* ← k*·e^{−iλ} − iωB with λ [degree] the instrument lag (given as ``phase_lag``, or the median
 phase per frequency of a hard-surface ``phase_reference``) and B [N·s/m] a hydrodynamic
 ``drag``; the ``quality`` flags and their comment are made again after a correction.
+
 :func:`correct_spectrum` applies them to a spectrum already made;
 :func:`viscoforce.experiments.modulation.modulation_spectrum` uses the same helpers. What is in the
 phase, the phase reference and the quality flags are told in
 :mod:`viscoforce.experiments.modulation`, which re-exports :func:`correct_spectrum`.
+
+The error of k* is that of the measurement: the lag turns it with k*, the drag leaves it where it
+is, so after the drag the radial and tangential errors (``stiffness_stderr``, |k*|·
+``phase_stderr``) are those of the old error ellipse seen along the new k*, turned by
+Δ = arg(k*·e^{−iλ}) − arg(k*_new): σ_r'² = c²σ_r² + s²σ_t² − 2cs·C, σ_t'² = s²σ_r² + c²σ_t² + 2cs·C
+and C' = cs(σ_r² − σ_t²) + (c² − s²)·C (c = cos Δ, s = sin Δ, C = ρσ_rσ_t the covariance,
+0 unless the spectrum carries ``stiffness_phase_correlation`` ρ). The new ρ' is written as
+``stiffness_phase_correlation``, which :func:`viscoforce.experiments.moduli.add_complex_modulus`
+uses for E′ and E″. For equal radial and tangential errors (the lock-in's circular noise of the
+JPK path) nothing turns: ρ' = 0 and the tangential error is kept, as there.
 """
 
 from __future__ import annotations
 
 import math
+import warnings
 from collections.abc import Mapping
 from typing import Any
 
@@ -20,11 +32,14 @@ import xarray as xr
 
 from viscoforce._limits import DRAG_RANGE
 from viscoforce._validation import require_plausible
-from viscoforce.exceptions import ParameterError
+from viscoforce.exceptions import DataWarning, ParameterError
 from viscoforce.io.quality import SENSOR_CHANNELS, phase_basis, quality_notes, spectrum_quality
 from viscoforce.schema import QUALITY_FLAGS, validate_spectrum
 
-__all__ = ["MAX_PHASE_LAG", "correct_spectrum"]
+__all__ = ["CORRELATION", "MAX_PHASE_LAG", "correct_spectrum"]
+
+#: The variable holding the correlation of the radial and tangential errors of k*.
+CORRELATION = "stiffness_phase_correlation"
 
 
 def _reference_lags(reference: Any, fr: np.ndarray) -> np.ndarray:
@@ -137,6 +152,51 @@ def _reference_attrs(basis: str, height_channel: Any, phase_lag: Any,
     return out
 
 
+def _turned_errors(ds: xr.Dataset, out: xr.Dataset, k_turned: np.ndarray, k_new: np.ndarray,
+                   dims: tuple) -> xr.Dataset:
+    """``out`` with the radial and tangential errors of k* seen along ``k_new`` (module text).
+
+    ``k_turned`` is k*·e^{−iλ} (the lag turns the error with k*), ``k_new`` after the drag. A
+    pair ``stiffness_stderr``/``phase_stderr`` is turned with its correlation, the ``_white``
+    pair as uncorrelated (it has none of its own); a lone ``phase_stderr`` keeps its tangential
+    error (a DataWarning says the radial one is missing).
+    """
+    turned = not np.array_equal(k_turned, k_new, equal_nan=True)  # a drag was subtracted
+    delta = np.angle(k_turned / k_new) if turned else np.zeros(k_new.shape)
+    c, s = np.cos(delta), np.sin(delta)
+    size = np.abs(k_new)
+    for suffix in ("", "_white"):
+        radial, tangential = f"stiffness_stderr{suffix}", f"phase_stderr{suffix}"
+        if tangential not in ds.variables:
+            continue
+        t_err = np.radians(ds[tangential].broadcast_like(ds["stiffness"]).transpose(
+            *dims).values) * np.abs(k_turned)
+        if radial not in ds.variables:
+            if turned:
+                warnings.warn(f"{tangential} is turned by the drag without {radial}: its "
+                              "tangential error is kept, which holds only for errors equal "
+                              "in all directions", DataWarning, stacklevel=3)
+            out[tangential] = (dims, np.degrees(t_err / size), ds[tangential].attrs)
+            continue
+        r_err = ds[radial].broadcast_like(ds["stiffness"]).transpose(*dims).values
+        rho = (ds[CORRELATION].broadcast_like(ds["stiffness"]).transpose(*dims).values
+               if suffix == "" and CORRELATION in ds.variables else 0.0)
+        cov = rho * r_err * t_err
+        var_r = c**2 * r_err**2 + s**2 * t_err**2 - 2 * c * s * cov
+        var_t = s**2 * r_err**2 + c**2 * t_err**2 + 2 * c * s * cov
+        out[radial] = (dims, np.sqrt(var_r), ds[radial].attrs)
+        out[tangential] = (dims, np.degrees(np.sqrt(var_t) / size), ds[tangential].attrs)
+        if suffix == "" and (turned or CORRELATION in ds.variables):
+            with np.errstate(divide="ignore", invalid="ignore"):
+                corr = (c * s * (r_err**2 - t_err**2) + (c**2 - s**2) * cov) / np.sqrt(
+                    var_r * var_t)
+            out[CORRELATION] = (dims, np.where(np.isfinite(corr), corr, 0.0), {
+                "units": "1", "long_name": "correlation of the stiffness and phase errors",
+                "comment": "of the radial and tangential errors of k*, turned by the drag "
+                           "subtracted (viscoforce.experiments.corrections)"})
+    return out
+
+
 #: Variables computed from an uncorrected k* that :func:`correct_spectrum` cannot update.
 _DERIVED = ("E_storage", "E_loss", "G_storage", "G_loss")
 
@@ -168,8 +228,9 @@ def correct_spectrum(spectrum: xr.Dataset, *,
     -------
     xarray.Dataset
         The spectrum with ``stiffness``, ``phase``, ``force_amplitude`` and ``amplitude``
-        (where present) corrected; ``phase_stderr`` (and ``phase_stderr_white``) scaled by
-        |k*_before|/|k*_after| (the error of k* is unchanged, as in the JPK path); ``phase_lag``
+        (where present) corrected; ``stiffness_stderr`` and ``phase_stderr`` (and their
+        ``_white`` pair) the radial and tangential errors along the new k* with their
+        correlation ``stiffness_phase_correlation`` (module docstring); ``phase_lag``
         [degree] over ``omega`` = all the lag subtracted so far; ``quality`` made again; attrs
         ``phase_lag``, ``drag`` (the total), ``phase_reference``, ``quality_summary``.
 
@@ -213,11 +274,7 @@ def correct_spectrum(spectrum: xr.Dataset, *,
     out = ds.copy()
     out["stiffness"] = (dims, new_stiffness, ds["stiffness"].attrs)
     out["phase"] = (dims, new_phase, ds["phase"].attrs)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        ratio = xr.DataArray(np.abs(k_old) / new_stiffness, dims=dims)
-    for name in ("phase_stderr", "phase_stderr_white"):
-        if name in ds.variables:
-            out[name] = (ds[name] * ratio).assign_attrs(ds[name].attrs)
+    out = _turned_errors(ds, out, k_old * np.exp(-1j * np.radians(lags)), k_new, dims)
     if "force_amplitude" in ds.variables and "drive_amplitude" in ds.variables:
         out["force_amplitude"] = (out["stiffness"] * ds["drive_amplitude"]).transpose(
             *dims).assign_attrs(ds["force_amplitude"].attrs)

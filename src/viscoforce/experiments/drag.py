@@ -32,6 +32,15 @@ the covariance is scaled by the reduced χ² (as lmfit and curve_fit do). Standa
 a_eff, h_eff and b(0) follow to first order from the covariance of (ln c, ln h_eff); a_eff
 scales as η^(−1/2), so give the viscosity of the liquid (b(0) and h_eff do not depend on it).
 
+Intervals (:meth:`DragFit.interval`): when the covariance is scaled by the reduced χ², the error
+is estimated from the n − 2 residuals of n heights, so (estimate − truth)/stderr follows
+Student's t with ν = n − 2 degrees of freedom, not a Gaussian: at 5 heights its rms is
+√(ν/(ν − 2)) = 1.7 and ±1 stderr covers 61 %, ±1.96 stderr 85 % (at 3 heights, ν = 1, a Cauchy
+law: 49 % and 68 %). The interval is therefore ln b(0) ± t_ν((1 + level)/2)·stderr/b(0) (the fit
+is linear in ln b(0) = ln c − ln h_eff), and ``DragFit.dof`` and ``distribution`` say which law
+holds; with given errors (``drag_stderr`` or spectra) the covariance is not rescaled and the
+Gaussian quantile is used.
+
 Limits: the model is the low-Reynolds, quasi-static drag (no frequency dependence: pool only
 frequencies where Im k*/ω is flat, e.g. ``spectrum.sel(omega=...)``); the spectra must be
 corrected for the instrument phase lag first (a lag mixes the real and imaginary parts); the
@@ -48,6 +57,7 @@ from typing import Any
 import numpy as np
 import xarray as xr
 from numpy.typing import ArrayLike, NDArray
+from scipy import stats
 from scipy.optimize import least_squares
 
 from viscoforce._validation import as_float_1d, require_positive
@@ -95,7 +105,8 @@ class DragFit:
     Attributes
     ----------
     drag_at_contact, drag_at_contact_stderr : float
-        b(0) = 6πη a_eff²/h_eff and its standard error: subtract iω·b(0) in contact.
+        b(0) = 6πη a_eff²/h_eff and its standard error: subtract iω·b(0) in contact. With
+        ``distribution == "student-t"`` ±1 stderr covers less than 68 %: use :meth:`interval`.
     a_eff, a_eff_stderr : float
         Effective radius and its standard error (depends on ``viscosity``).
     h_eff, h_eff_stderr : float
@@ -110,6 +121,11 @@ class DragFit:
         Reduced χ² (of the relative residuals when no ``drag_stderr``); dof = n − 2.
     weighting : str
         ``"stderr"`` (absolute errors, covariance not rescaled) or ``"relative"``.
+    dof : int
+        Degrees of freedom of the residuals, n − 2 for n heights.
+    distribution : str
+        The law of (estimate − truth)/stderr: ``"student-t"`` (errors estimated from the
+        residuals, ``weighting == "relative"``: ν = ``dof``) or ``"normal"`` (errors given).
     """
 
     drag_at_contact: float
@@ -125,19 +141,67 @@ class DragFit:
     viscosity: float
     redchi: float
     weighting: str
+    dof: int
+    distribution: str
+
+    def coverage_factor(self, level: float = 0.6826894921370859) -> float:
+        """The number of stderr that cover ``level`` (two-sided): Student-t or Gaussian quantile.
+
+        Parameters
+        ----------
+        level : float
+            Coverage probability in (0, 1) (default one Gaussian σ, 68.3 %).
+
+        Returns
+        -------
+        float
+            t_ν((1 + level)/2) for ``distribution == "student-t"`` (1.84 at ν = 1, 1.32 at
+            ν = 2, 1.20 at ν = 3 for 68.3 %), else the Gaussian quantile (1 at 68.3 %).
+        """
+        if not (isinstance(level, int | float) and 0.0 < level < 1.0):
+            raise ParameterError(f"level must be a probability in (0, 1), got {level!r}")
+        p = 0.5 * (1.0 + float(level))
+        law = stats.t(self.dof) if self.distribution == "student-t" else stats.norm
+        return float(law.ppf(p))
+
+    def interval(self, level: float = 0.6826894921370859) -> tuple[float, float]:
+        """Interval of b(0) [N·s/m] covering ``level``: ln b(0) ± q·stderr/b(0).
+
+        Parameters
+        ----------
+        level : float
+            Coverage probability in (0, 1) (default 68.3 %).
+
+        Returns
+        -------
+        tuple of float
+            (low, high), q = :meth:`coverage_factor` (module docstring).
+        """
+        half = self.coverage_factor(level) * self.drag_at_contact_stderr / self.drag_at_contact
+        return self.drag_at_contact * math.exp(-half), self.drag_at_contact * math.exp(half)
 
     def model(self, height: ArrayLike) -> NDArray[np.float64]:
         """The fitted b(h) [N·s/m] at ``height`` [m] (:func:`scaled_sphere_drag`)."""
         return scaled_sphere_drag(height, self.a_eff, self.h_eff, self.viscosity)
 
     def as_attrs(self) -> dict[str, Any]:
-        """Dataset attrs describing the drag subtracted (numbers and text only)."""
+        """Dataset attrs describing the drag subtracted (numbers and text only).
+
+        ``drag``, ``drag_stderr`` and the fit's terms, ``drag_dof``, ``drag_stderr_distribution``
+        and the 68.3 % and 95 % intervals of b(0) ``drag_interval_68``, ``drag_interval_95``.
+        """
         return {"drag": self.drag_at_contact, "drag_stderr": self.drag_at_contact_stderr,
                 "drag_model": REFERENCE, "drag_a_eff": self.a_eff,
                 "drag_a_eff_stderr": self.a_eff_stderr, "drag_h_eff": self.h_eff,
                 "drag_h_eff_stderr": self.h_eff_stderr, "drag_viscosity": self.viscosity,
                 "drag_heights": self.heights.copy(), "drag_redchi": self.redchi,
-                "drag_weighting": self.weighting}
+                "drag_weighting": self.weighting, "drag_dof": self.dof,
+                "drag_stderr_distribution": self.distribution,
+                "drag_interval_68": np.array(self.interval()),
+                "drag_interval_95": np.array(self.interval(0.95)),
+                "drag_interval": ("ln b(0) +- q*stderr/b(0), q the Student-t quantile with "
+                                  "drag_dof degrees of freedom (errors from the residuals) or "
+                                  "the Gaussian one (errors given)")}
 
 
 def drag_coefficient(spectrum: xr.Dataset) -> tuple[float, float]:
@@ -323,7 +387,8 @@ def drag_from_heights(data: Sequence[xr.Dataset] | ArrayLike, heights: ArrayLike
         h_eff=h_eff, h_eff_stderr=h_eff * math.sqrt(var_h),
         correlation=cov_ch / math.sqrt(var_c * var_h) if var_c > 0 and var_h > 0 else math.nan,
         heights=h, drag=b, drag_stderr=err, viscosity=viscosity, redchi=redchi,
-        weighting="relative" if err is None else "stderr")
+        weighting="relative" if err is None else "stderr", dof=dof,
+        distribution="student-t" if err is None else "normal")
 
 
 def _is_spectra(data: Any) -> bool:

@@ -9,11 +9,18 @@ dynamic stiffness is k*(ω) = E*(ω)·S(δ0) (+ iωB), with S = (dF/dδ)/E the t
 
 with δ0 the point's ``mean_indentation``. ``E_storage`` = Re Y*, ``E_loss`` = Im Y*,
 ``G_storage`` = Re G*, ``G_loss`` = Im G* [Pa] — what PyFMRheo and the cell-rheology literature
-report. Their stderr come from ``stiffness_stderr`` and ``phase_stderr`` (radial and tangential
-errors of k*, as the fits weight them); the error of δ0 is not included (it enters S only as
-δ0^½ for a sphere and is common to all frequencies of a curve). The hydrodynamic drag B is
-subtracted here only when given and the spectrum's own ``attrs["drag"]`` is 0 (it is never
-subtracted twice).
+report. Their stderr come from ``stiffness_stderr`` σ_r and ``phase_stderr`` (σ_t = |k*|·
+phase_stderr: the radial and tangential errors of k*, as the fits weight them) and their
+correlation ρ (``stiffness_phase_correlation``, written when a drag was subtracted from a
+spectrum whose radial and tangential errors differ, :mod:`viscoforce.experiments.corrections`;
+0 without it): with χ = arg k*, C = ρσ_rσ_t,
+
+    σ_Re² = cos²χ σ_r² + sin²χ σ_t² − 2 sinχ cosχ C,   σ_Im² = sin²χ σ_r² + cos²χ σ_t² + 2 sinχ cosχ C,
+
+divided by S. The error of δ0 is not included (it enters S only as δ0^½ for a sphere and is
+common to all frequencies of a curve). The hydrodynamic drag B is subtracted here only when given
+and the spectrum's own ``attrs["drag"]`` is 0 (it is never subtracted twice); it moves k* but
+not its error, so σ_Re and σ_Im are those of the spectrum's own k*.
 """
 
 from __future__ import annotations
@@ -27,6 +34,7 @@ import xarray as xr
 from viscoforce._limits import DRAG_RANGE
 from viscoforce._validation import require_plausible
 from viscoforce.exceptions import ModelValidityError, ParameterError
+from viscoforce.experiments.corrections import CORRELATION
 from viscoforce.physics.tips import DEFAULT_POISSON, Tip, tip_from, young_from_paper
 
 __all__ = ["MODULUS_VARIABLES", "add_complex_modulus"]
@@ -92,9 +100,13 @@ def add_complex_modulus(spectrum: xr.Dataset, tip: Tip | str, *, poisson: float 
     size = xr.apply_ufunc(_contact_size, depth, kwargs={"tip": tip})
     modulus = k / size  # the paper's E*(ω)
     s_err = _stderr(spectrum, "stiffness", stiffness)
-    p_err = np.radians(_stderr(spectrum, "phase", stiffness))
-    sig_re = np.hypot(np.cos(chi) * s_err, stiffness * np.sin(chi) * p_err) / size
-    sig_im = np.hypot(np.sin(chi) * s_err, stiffness * np.cos(chi) * p_err) / size
+    t_err = stiffness * np.radians(_stderr(spectrum, "phase", stiffness))
+    cov = 0.0
+    if CORRELATION in spectrum.variables:
+        cov = spectrum[CORRELATION].broadcast_like(stiffness) * s_err * t_err
+    cos, sin = np.cos(chi), np.sin(chi)
+    sig_re = np.sqrt(cos**2 * s_err**2 + sin**2 * t_err**2 - 2 * sin * cos * cov) / size
+    sig_im = np.sqrt(sin**2 * s_err**2 + cos**2 * t_err**2 + 2 * sin * cos * cov) / size
     out: dict[str, Any] = {}
     for name, factor, part, sigma, what in (
             ("E_storage", young, "real", sig_re, "Young's storage modulus E'"),

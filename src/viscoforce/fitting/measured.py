@@ -33,7 +33,7 @@ from viscoforce.exceptions import ConvergenceError, ModelValidityError, Paramete
 from viscoforce.fitting.base import MAX_AUTO_MODES
 from viscoforce.fitting.data import _data_indentation, spectrum_data
 from viscoforce.fitting.fit import AUTO_CHOOSERS, _check_modes, result_dataset
-from viscoforce.fitting.model_error import _warn_model_bias, contact_bias, validity_note
+from viscoforce.fitting.model_error import validity_note, warn_contact_bias
 from viscoforce.fitting.models import check_fixed, make_model
 from viscoforce.fitting.outcome import Outcome
 from viscoforce.fitting.report import carry
@@ -151,8 +151,7 @@ def fit_measured_auto(spectrum: xr.Dataset, *, modes: int | str = "auto", criter
                     selection_margin=MARGIN, explanation=choice.explanation)
     if inputs.get("newtonian"):
         ds.attrs["newtonian"] = 1
-    if decay is not None:
-        _warn_model_bias(ds, "contact", *contact_bias(ds, {**base, **inputs}, data.x, decay))
+    warn_contact_bias(ds, {**base, **inputs}, data.x, decay)  # the paper's 1 nm if not given
     ds.attrs["validity"] = validity_note("contact", ds)
     ds = _near_ties(ds, tried, chosen, criterion)
     warn_fit(ds, stacklevel=5)

@@ -3,18 +3,23 @@
 :class:`RelaxationKernel` (a relaxation modulus E(t) and what the integral needs from it),
 :class:`PronyRelaxation`, :class:`PowerLawRelaxation`, their sums of exponentials
 (:class:`Exponentials`) and :func:`relaxation_from_creep` (creep Prony series → relaxation Prony
-series). The conventions, the numerics and the references are told in
-:mod:`viscoforce.physics.ting`, the public module that re-exports everything here.
+series); then the numerics of a piecewise-linear history against a kernel: the corners located
+between samples (:func:`locate_kinks`), the product integration on the history's nodes
+(:func:`history_sums`) and the exponential filters of the retract (:func:`filtered`). The
+conventions, the numerics and the references are told in :mod:`viscoforce.physics.ting`, the
+public module that re-exports the kernels and :func:`locate_kinks`.
 """
 
 from __future__ import annotations
 
 import math
 from abc import ABC, abstractmethod
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import ArrayLike
+from scipy.signal import fftconvolve
 from scipy.special import gamma
 
 from viscoforce._limits import REFERENCE_FREQUENCY_RANGE
@@ -31,11 +36,18 @@ from viscoforce.exceptions import ParameterError
 
 __all__ = [
     "DEFAULT_RTOL",
+    "KINK_MARGIN",
+    "KINK_RTOL",
     "SECULAR_STEPS",
     "Exponentials",
     "PowerLawRelaxation",
     "PronyRelaxation",
     "RelaxationKernel",
+    "filtered",
+    "history_nonuniform",
+    "history_sums",
+    "interval_sums",
+    "locate_kinks",
     "relaxation_from_creep",
 ]
 
@@ -416,3 +428,165 @@ def relaxation_from_creep(glassy_compliance: float, delta_compliances: ArrayLike
     moduli = 1.0 / (rates * np.sum(dj * u / d**2, axis=1))
     back = np.argsort(rates)[::-1]  # ascending relaxation time
     return e_inf, moduli[back], 1.0 / rates[back]
+
+
+# ── a piecewise-linear history against a kernel ──────────────────────────────────────────────
+
+
+#: Tolerance on the slopes of a straight run of samples, relative to the trace's largest speed,
+#: when a kink is located between two samples (:func:`locate_kinks`).
+KINK_RTOL = 1e-9
+#: A located kink closer to a sample than this fraction of the interval is left on the sample.
+KINK_MARGIN = 1e-9
+
+
+def locate_kinks(t: FloatArray, z: FloatArray) -> tuple[np.ndarray, FloatArray, FloatArray]:
+    """Velocity jumps of a piecewise-linear trace that fall between two samples.
+
+    The sample interval i (from t_i to t_i+1) holds a kink when the samples i − 2, i − 1, i lie
+    on one straight line (slope a) and i + 1, i + 2, i + 3 on another (slope b ≠ a), to
+    :data:`KINK_RTOL` of the trace's largest speed, and the two lines meet strictly inside the
+    interval, at the fraction θ = (s_i − b)/(a − b) of it (s_i the interval's chord slope): the
+    turning point of an approach–retract ramp or the end of a dwell sampled off its corner.
+    Noisy traces have no such lines and keep the chord.
+
+    Parameters
+    ----------
+    t, z : ndarray
+        Sample times [s] (strictly increasing) and positions [m] of the trace.
+
+    Returns
+    -------
+    cell : ndarray of int
+        The interval index i of each kink.
+    time, position : ndarray
+        Its time t* [s] and position z(t*) [m].
+    """
+    slope = np.diff(z) / np.diff(t)
+    i = np.arange(2, slope.size - 2)
+    if not i.size:
+        return np.empty(0, dtype=int), np.empty(0), np.empty(0)
+    tol = KINK_RTOL * float(np.max(np.abs(slope)))
+    a, b = slope[i - 1], slope[i + 1]
+    lines = ((np.abs(slope[i - 1] - slope[i - 2]) <= tol)
+             & (np.abs(slope[i + 2] - slope[i + 1]) <= tol) & (np.abs(a - b) > 100 * tol))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        theta = (slope[i] - b) / (a - b)
+    inside = lines & (theta > KINK_MARGIN) & (theta < 1 - KINK_MARGIN)
+    i, a, theta = i[inside], a[inside], theta[inside]
+    h = t[i + 1] - t[i]
+    return i, t[i] + theta * h, z[i] + a * theta * h
+
+
+def history_sums(t: FloatArray, dx: FloatArray, kernel: RelaxationKernel, soe: Exponentials,
+                 base: np.ndarray, step: float | None) -> FloatArray:
+    """Σ_i Δx_i/h_i [R(t_n − t_{i−1}) − R(t_n − t_i)] at the samples t_n = ``t[base]``.
+
+    One row per history in ``dx`` (increments over the intervals of ``t``): on a uniform grid
+    :func:`interval_sums` (FFT), otherwise :func:`history_nonuniform` over every node.
+    """
+    if step is None:
+        return np.array([history_nonuniform(t, x, kernel, soe) for x in dx])[:, base]
+    r = kernel.primitive
+    return interval_sums(t, dx, base, step, lambda h, u: (r(u + h) - r(u)) / h)
+
+
+def interval_sums(t: FloatArray, x: FloatArray, base: np.ndarray, step: float | None,
+                  response: Callable[[float, FloatArray], FloatArray]) -> FloatArray:
+    """Σ_i x_i·response(h_i, t_n − t_i+1) over the intervals i of ``t`` that end by t_n = t[base].
+
+    One row per history in ``x``. On a uniform grid (``step``) the whole sample intervals are one
+    FFT convolution and the pieces of an interval split by a node are added one by one; on any
+    other grid every interval is added one by one (O(N²)).
+    """
+    nb = base.size
+    out = np.zeros((x.shape[0], nb))
+    pieces = np.arange(t.size - 1)
+    if step is not None:
+        whole = np.diff(base) == 1
+        cells = np.where(whole[None, :], x[:, base[:-1]], 0.0)
+        weights = response(step, step * np.arange(nb - 1))
+        out[:, 1:] = fftconvolve(cells, weights[None, :], axes=1)[:, :nb - 1]
+        split = np.ones(t.size - 1, dtype=bool)
+        split[base[:-1][whole]] = False
+        pieces = np.flatnonzero(split)
+    for i in pieces[np.any(x[:, pieces] != 0, axis=0)]:
+        first = int(np.searchsorted(base, i + 1))  # the samples after the interval
+        out[:, first:] += np.outer(x[:, i], response(t[i + 1] - t[i], t[base[first:]] - t[i + 1]))
+    return out
+
+
+def history_nonuniform(t: FloatArray, dx: FloatArray, kernel: RelaxationKernel,
+                       soe: Exponentials) -> FloatArray:
+    """Σ_i Δx_i/h_i [R(t_n − t_{i−1}) − R(t_n − t_i)] on any grid.
+
+    The interval ending at t_n exactly, the earlier ones through the exponentials (their lags are
+    ≥ the shortest interval).
+    """
+    steps = np.diff(t)
+    local = dx / steps * kernel.primitive(steps)  # the interval ending at t_n
+    x, c = soe.rates, soe.amplitudes
+    out = np.zeros(t.size)
+    state = np.zeros(x.size)  # ∫_0^{t_j} e^{−x(t_j − s)} dx/ds ds
+    level = 0.0  # x(t_j) − x(t_0)
+    for j in range(1, t.size):
+        h = steps[j - 1]
+        decay = np.exp(-x * h)
+        out[j] = soe.constant * level + float(c @ (decay * state)) + local[j - 1]
+        state = decay * state + dx[j - 1] / h * (-np.expm1(-x * h)) / x
+        level += dx[j - 1]
+    return out
+
+
+def filtered(t: FloatArray, dx: FloatArray, rates: FloatArray, step: float | None,
+             sample: np.ndarray) -> FloatArray:
+    """A[j, k, :] = ∫_{t_0}^{t_j} e^{−x_k(t_j − s)} dx/ds ds on the nodes ``t`` (x piecewise linear).
+
+    ``dx`` holds the increments over the intervals of ``t`` (one column per history), ``sample``
+    flags the nodes that are samples. On a uniform grid the sums Σ_i b_k a_k^{j−i} u_i over
+    whole sample intervals are one batched FFT convolution, the pieces of intervals split by a
+    node are added through the sample that follows them, and a node inside a split interval
+    decays from the sample before it; on any other grid a recursion over the nodes.
+    """
+    if t.size < 2 or not rates.size:
+        return np.zeros((t.size, rates.size, dx.shape[1]))
+    out = np.empty((t.size, rates.size, dx.shape[1]))
+    out[0] = 0.0
+    steps = np.diff(t)
+    rate_in = dx / steps[:, None]
+    at = np.flatnonzero(sample)
+    if step is None or at.size < 2:
+        gain = -np.expm1(-np.outer(steps, rates)) / rates
+        decay = np.exp(-np.outer(steps, rates))
+        state = np.zeros((rates.size, dx.shape[1]))
+        for j in range(t.size - 1):
+            state = decay[j, :, None] * state + gain[j, :, None] * rate_in[j]
+            out[j + 1] = state
+        return out
+    decay = np.exp(-np.outer(rates, step * np.arange(at.size)))  # e^{−x_k·lag}
+    whole = np.diff(at) == 1
+    cells = np.where(whole[:, None], rate_in[at[:-1]], 0.0)
+    kern = decay[:, :-1] * (-np.expm1(-rates * step) / rates)[:, None]
+    at_samples = np.zeros((at.size, rates.size, dx.shape[1]))
+    at_samples[1:] = fftconvolve(kern[:, :, None], cells[None, :, :], axes=1)[
+        :, :at.size - 1].transpose(1, 0, 2)
+    split = np.ones(t.size - 1, dtype=bool)
+    split[at[:-1][whole]] = False
+    pieces = np.flatnonzero(split)
+    gain = {i: -np.expm1(-rates * steps[i]) / rates for i in pieces}
+    for i in pieces:  # through the first sample after the piece
+        k = int(np.searchsorted(at, i + 1))
+        if k < at.size and rate_in[i].any():
+            piece = np.exp(-rates * (t[at[k]] - t[i + 1]))[:, None] * gain[i][:, None] * rate_in[i]
+            at_samples[k:] += decay[:, :at.size - k].T[:, :, None] * piece[None]
+    if at.size == t.size:
+        return at_samples
+    out[at] = at_samples
+    for j in np.flatnonzero(~sample):  # from the sample before it and the pieces since
+        k = int(np.searchsorted(at, j)) - 1
+        since = at[k] if k >= 0 else 0
+        value = np.exp(-rates * (t[j] - t[since]))[:, None] * at_samples[k] if k >= 0 else 0.0
+        for i in pieces[(pieces >= since) & (pieces < j)]:
+            value = value + (np.exp(-rates * (t[j] - t[i + 1])) * gain[i])[:, None] * rate_in[i]
+        out[j] = value
+    return out

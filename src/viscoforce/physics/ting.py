@@ -36,28 +36,37 @@ Relaxation moduli
 
 Numerics
 --------
-g(δ(t)) and δ(t) are taken piecewise linear between the samples, and every sample interval is
-integrated exactly against the kernel through its primitive R(u) = ∫₀ᵘ E(v) dv (product
-integration): F(t_n) = Σ_i Δg_i/h_i·[R(t_n − t_{i−1}) − R(t_n − t_i)]. This is exact for the
-singular power-law kernel (R(u) = E0 t0^β u^(1−β)/(1 − β)), for which a rectangle or trapezoid
-rule of E(t − s) diverges at s = t. On a uniform grid these sums are discrete convolutions (FFT,
-O(N log N)): the approach load, and for the retract Ting's condition and the load at both ends of
-the loading branch (the last sample out of contact t_j0 and the turning point t_m), which decide
-whether the tip still touches and give the load where t₁ sits at an end. In between, t₁ is found
-for every retract sample at once by bisection over the loading samples (O(N log N)): there the
-kernel at lags ≥ one sample is a sum of exponentials, exact for a Prony kernel and a quadrature
-of t^(−β) = Γ(β)⁻¹∫ x^(β−1) e^(−xt) dx for the power law (trapezoidal in log x, relative error ≤
-``rtol``, about 45 terms over 4 decades), so that the histories ∫ e^{−x(t−s)} dδ over the loading
-branch are recursive (batched FFT convolutions on a uniform grid). Inside the bracketing sample
-interval δ is linear and the condition is solved exactly with R (bisection on the fraction), and
-the load follows with R as well. Non-uniform grids take the exponential recursion for every lag
-beyond the current interval (which stays exact): O(N·K) with a Python loop over the samples.
+g(δ(t)) and δ(t) are taken piecewise linear between nodes, and every node interval is integrated
+exactly against the kernel through its primitive R(u) = ∫₀ᵘ E(v) dv (product integration):
+F(t_n) = Σ_i Δg_i/h_i·[R(t_n − t_{i−1}) − R(t_n − t_i)]. This is exact for the singular power-law
+kernel (R(u) = E0 t0^β u^(1−β)/(1 − β)), for which a rectangle or trapezoid rule of E(t − s)
+diverges at s = t. The nodes are the samples plus, inside a sample interval, (i) the crossing of
+the contact point (δ = max(z − c, 0) of the linear z has a kink there) and (ii) a velocity jump
+located by :func:`locate_kinks` where the samples on each side lie on straight lines: the turning
+point of a triangle or the ends of a dwell sampled off their corners. Taking the chord across such
+a corner instead weighs ~(h/T)^(1−β) of the load on the next samples against a power law (0.06–
+0.18 of the peak at β = 0.7, 250–1000 samples per ramp; ≤ 4e-6 once located).
+On a uniform grid the sums are discrete convolutions (FFT, O(N log N)) with the few split
+intervals added one by one: the approach load, and for the retract Ting's condition and the load
+at both ends of the loading branch (the last node out of contact t_j0 and the turning point t_m),
+which decide whether the tip still touches and give the load where t₁ sits at an end. In
+between, t₁ is found for every retract sample at once by bisection over the loading nodes
+(O(N log N)): there the kernel at lags ≥ one sample is a sum of exponentials, exact for a Prony
+kernel and a quadrature of t^(−β) = Γ(β)⁻¹∫ x^(β−1) e^(−xt) dx for the power law (trapezoidal in
+log x, relative error ≤ ``rtol``, about 45 terms over 4 decades), so that the histories
+∫ e^{−x(t−s)} dδ over the loading branch are recursive (batched FFT convolutions on a uniform
+grid). Inside the bracketing node interval δ is linear and the condition is solved exactly with
+R (bisection on the fraction), and the load follows with R as well. Non-uniform grids take the
+exponential recursion for every lag beyond the current interval (which stays exact): O(N·K) with
+a Python loop over the nodes.
 
 The discretisation error is second order in the sample spacing except near the first contact of
-a curved tip (g ∝ t^{3/2} taken linear between samples: order 1.3 measured for a paraboloid);
-:func:`ting_error` estimates it by the difference from the same history on every other sample.
-Measured on the real curve of ``benchmarks/ting_real.py`` (4000 + 4000 samples, power law): one
-evaluation 2.8 ms, a whole fit 0.3 s; its 4000-sample approach alone 0.3 ms and 0.08 s.
+a curved tip (g ∝ t^{3/2} taken linear between nodes against t^−β: order 1.5 − β for a
+paraboloid); :func:`ting_error` estimates it by the difference from the same history on every
+other sample and bounds it from the shape of the history between nodes, which also covers a
+corner that could not be located (a noisy trace). Measured on the real curve of
+``studies/ting_real/ting_real.py`` (4000 + 4000 samples, power law): one evaluation 2.8 ms, a
+whole fit 0.3 s; its 4000-sample approach alone 0.3 ms and 0.08 s.
 
 References
 ----------
@@ -79,7 +88,6 @@ from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import ArrayLike
-from scipy.signal import fftconvolve
 
 from viscoforce._limits import DRAG_RANGE, POSITION_RANGE
 from viscoforce._typing import FloatArray
@@ -94,10 +102,15 @@ from viscoforce._validation import (
 from viscoforce.exceptions import ParameterError
 from viscoforce.physics._ting_kernels import (
     DEFAULT_RTOL,
+    KINK_RTOL,
     Exponentials,
     PowerLawRelaxation,
     PronyRelaxation,
     RelaxationKernel,
+    filtered,
+    history_sums,
+    interval_sums,
+    locate_kinks,
     relaxation_from_creep,
 )
 from viscoforce.physics._ting_kernels import SECULAR_STEPS as SECULAR_STEPS
@@ -110,6 +123,7 @@ __all__ = [
     "PronyRelaxation",
     "RelaxationKernel",
     "TingSolution",
+    "locate_kinks",
     "relaxation_from_creep",
     "ting_error",
     "ting_force",
@@ -120,6 +134,9 @@ __all__ = [
 UNIFORM_RTOL = 1e-6
 #: Order of the discretisation error assumed by :func:`ting_error` (Richardson factor 2^p − 1).
 ERROR_ORDER = 1.0
+#: A velocity change across a sample interval counts as an unlocated kink in :func:`ting_error`
+#: when it exceeds this many times the median change across the trace's intervals.
+KINK_OUTLIER = 8.0
 
 
 # ── the hereditary integral ───────────────────────────────────────────────────────────────────
@@ -186,6 +203,49 @@ def _inputs(t: ArrayLike, position: ArrayLike, contact_point: float, tip: Tip,
     return t, z, c, b, v
 
 
+@dataclass(frozen=True)
+class _History:
+    """The piecewise-linear indentation history: nodes at the samples and between them.
+
+    ``nodes`` [s], ``delta`` δ [m] and ``g`` = force_shape(δ) [m²]; the first node is a virtual
+    sample one interval before t[0] at δ = 0 (a trace that starts in contact is indented from 0
+    over it). ``base`` indexes the samples among the nodes, ``step`` is their spacing on a
+    uniform grid (else None), ``kinks`` the sample intervals whose kink was located.
+    """
+
+    nodes: FloatArray
+    delta: FloatArray
+    g: FloatArray
+    base: np.ndarray
+    step: float | None
+    kinks: np.ndarray
+
+
+def _history(t: FloatArray, z: FloatArray, c: float, tip: Tip) -> _History:
+    """The history's nodes: the samples, the kinks located in contact and the contact crossings.
+
+    δ is linear on both pieces of a kink in contact; at a crossing of the contact point δ =
+    max(z − c, 0) of the linear z has its own kink.
+    """
+    delta = np.maximum(z - c, 0.0)
+    tt = np.concatenate(([t[0] - (t[1] - t[0])], t))
+    steps = np.diff(tt)
+    uniform = float(np.ptp(steps)) <= UNIFORM_RTOL * float(np.mean(steps))
+    cell, t_kink, z_kink = locate_kinks(t, z)
+    keep = (z_kink > c) & (delta[cell] > 0) & (delta[cell + 1] > 0)
+    cross = np.flatnonzero((z[:-1] - c) * (z[1:] - c) < 0)
+    t_cross = t[cross] + (c - z[cross]) / (z[cross + 1] - z[cross]) * (t[cross + 1] - t[cross])
+    split = np.concatenate((cell[keep], cross))
+    order = np.argsort(split)
+    at = split[order] + 2  # before tt[i + 2]: between the samples i and i + 1
+    nodes = np.insert(tt, at, np.concatenate((t_kink[keep], t_cross))[order])
+    dd = np.insert(np.concatenate(([0.0], delta)), at,
+                   np.concatenate((z_kink[keep] - c, np.zeros(cross.size)))[order])
+    base = np.arange(tt.size) + np.searchsorted(at, np.arange(tt.size), side="right")
+    return _History(nodes, dd, np.asarray(tip.force_shape(dd), dtype=float), base,
+                    float(np.mean(steps)) if uniform else None, cell[keep])
+
+
 def ting_solve(t: ArrayLike, position: ArrayLike, contact_point: float, tip: Tip,
                kernel: RelaxationKernel, *, drag: float = 0.0, velocity: ArrayLike | None = None,
                rtol: float = DEFAULT_RTOL) -> TingSolution:
@@ -229,19 +289,13 @@ def ting_solve(t: ArrayLike, position: ArrayLike, contact_point: float, tip: Tip
     """
     t, z, c, b, v = _inputs(t, position, contact_point, tip, kernel, drag, velocity)
     rtol = require_in_range("rtol", rtol, 1e-15, 1e-2)
-    delta = np.maximum(z - c, 0.0)
-    # a virtual sample one interval before t[0] at zero indentation: a trace that starts in
-    # contact is indented from 0 over that interval (nothing changes otherwise)
-    tt = np.concatenate(([t[0] - (t[1] - t[0])], t))
-    dd = np.concatenate(([0.0], delta))
-    gg = np.concatenate(([0.0], np.asarray(tip.force_shape(delta), dtype=float)))
-    steps = np.diff(tt)
-    uniform = float(np.ptp(steps)) <= UNIFORM_RTOL * float(np.mean(steps))
-    load, t1, contact = _hereditary(tt, dd, gg, kernel, uniform, rtol, flat=isinstance(tip, Flat))
+    history = _history(t, z, c, tip)
+    load, t1, contact = _hereditary(history, kernel, rtol, flat=isinstance(tip, Flat))
+    delta = history.delta[history.base[1:]]
     if v is None:
         v = np.gradient(z, t)
     drag_force = b * v
-    m = max(int(np.argmax(dd)) - 1, 0)
+    m = int(np.argmax(delta))
     return TingSolution(t, load[1:] + drag_force, load[1:], drag_force, delta, t1[1:],
                         contact[1:], m)
 
@@ -290,11 +344,19 @@ def ting_error(t: ArrayLike, position: ArrayLike, contact_point: float, tip: Tip
                kernel: RelaxationKernel, *, rtol: float = DEFAULT_RTOL) -> FloatArray:
     """Estimated discretisation error [N] of the hereditary load at each sample.
 
-    The load on every other sample F_2h is compared with F_h at the shared samples:
-    |F_h − F_2h|/(2^p − 1) with p = :data:`ERROR_ORDER` (1: below the orders measured on the
-    constant-speed ramps, 1.3 near the first contact of a paraboloid and 2 elsewhere, so the
-    estimate is conservative), linearly interpolated to the other samples. The drag term has no discretisation
-    error of its own (it is B times the given velocity) and is left out.
+    The larger of two estimates, plus ``rtol`` of the load (the exponential sum's share):
+
+    * the comparison with the load on every other sample F_2h at the shared samples:
+      |F_h − F_2h|/(2^p − 1) with p = :data:`ERROR_ORDER` (1: below the orders measured on
+      constant-speed ramps), linearly interpolated to the other samples;
+    * a bound (:func:`_error_bound`) on g(δ) taken linear between nodes (it limits the order
+      near the first contact: the comparison alone gave 0.59 of the error there at β = 0.7) and
+      on a velocity jump inside a sample interval that could not be located (a noisy or rippled
+      trace: 0.06–0.18 of the peak at β = 0.7 on the sample after such a turning point, the
+      comparison alone 0.3–0.4 of it; the bound is attained by a kink, 1.005× there).
+
+    The drag term has no discretisation error of its own (it is B times the given velocity) and
+    is left out.
 
     Parameters
     ----------
@@ -315,23 +377,86 @@ def ting_error(t: ArrayLike, position: ArrayLike, contact_point: float, tip: Tip
     if t.size < 6:
         raise ParameterError(f"ting_error needs at least 6 samples (3 on every other one), got "
                              f"{t.size}")
-    fine = ting_solve(t, z, c, tip, kernel, rtol=rtol).contact_force
+    rtol = require_in_range("rtol", rtol, 1e-15, 1e-2)
+    history = _history(t, z, c, tip)
+    fine, t1, _ = _hereditary(history, kernel, rtol, flat=isinstance(tip, Flat))
     coarse = ting_solve(t[::2], z[::2], c, tip, kernel, rtol=rtol).contact_force
-    diff = np.abs(fine[::2] - coarse) / (2.0**ERROR_ORDER - 1.0)
-    return np.interp(t, t[::2], diff)
+    richardson = np.interp(t, t[::2], np.abs(fine[1:][::2] - coarse) / (2.0**ERROR_ORDER - 1.0))
+    bound = _error_bound(history, z, t1, tip, kernel)
+    return np.maximum(richardson, bound) + rtol * np.abs(fine[1:])
+
+
+def _error_bound(history: _History, z: FloatArray, t1: FloatArray, tip: Tip,
+                 kernel: RelaxationKernel) -> FloatArray:
+    """Bound [N] on the load's error from the history's shape between nodes, at each sample.
+
+    Inside a node interval of length h the load's integrand E(t_n − s)·dg/ds differs from the
+    product integration's by E(t_n − s)·w(s), w the deviation of dg/ds from the chord Δg/h: w has
+    zero mean, and since E decreases with the lag, |∫E·w| ≤ max|w|·D(u) with D(u) = 2R(u + h/2)
+    − R(u) − R(u + h) (u = t_n − the interval's end) and, for w ∈ [lo, hi], ≤ the worst case of
+    w = hi near t_n and lo before it. On the retract the load integrates up to t₁, inside an
+    interval [t_j, t_j+1]: there w has no zero mean, and max|w|·(R(t_n − t_j) − R(t_n − t₁)) is
+    added. Two sources of w are bounded:
+
+    * g(δ) between nodes, δ linear there: dg/ds = g'(δ)·δ' runs between its values at the two
+      ends (g' monotone, as for every tip here);
+    * a velocity jump inside a sample interval that no kink was located for: the tip's velocity
+      there is taken within the range of the interval's and its two neighbours' chord slopes,
+      where that range stands out of the trace's own slope changes (> :data:`KINK_OUTLIER`
+      times their median: a turning point or a dwell end, not noise or a smooth bend). It enters
+      the load through g'(δ) (directly, or through Ting's t₁ on the retract:
+      |ΔF| ≤ g'(δ_max)·|ΔΦ|).
+    """
+    t, d, g, base = history.nodes, history.delta, history.g, history.base
+    h = np.diff(t)
+    ends = np.diff(d) / h * np.stack((tip.contact_stiffness_factor(d[:-1]),
+                                      tip.contact_stiffness_factor(d[1:]))) - np.diff(g) / h
+    r = kernel.primitive
+    worst = np.max(np.abs(ends), axis=0)
+    bound = interval_sums(t, worst[None, :], base, history.step,
+                           lambda w, u: 2 * r(u + w / 2) - r(u) - r(u + w))[0]
+    tn = t[base]
+    partial = np.flatnonzero(np.isfinite(t1) & (t1 < tn))  # retract samples in contact
+    j = np.clip(np.searchsorted(t, t1[partial], side="right") - 1, 0, h.size - 1)
+    bound[partial] += worst[j] * (r(tn[partial] - t[j]) - r(tn[partial] - t1[partial]))
+    # velocity jumps inside a sample interval i (samples i, i + 1; nodes base[i + 1], base[i + 2])
+    ts = t[base[1:]]
+    slope = np.diff(z) / np.diff(ts)
+    i = np.arange(1, slope.size - 1)
+    three = np.stack((slope[i - 1], slope[i], slope[i + 1]))
+    lo, hi = three.min(axis=0) - slope[i], three.max(axis=0) - slope[i]
+    spread = hi - lo
+    ds = d[base[1:]]
+    jump = ((spread > KINK_OUTLIER * np.median(spread))
+            & (spread > 100 * KINK_RTOL * float(np.max(np.abs(slope))))
+            & ~np.isin(i, history.kinks) & (ds[i] > 0) & (ds[i + 1] > 0) & (lo < 0) & (hi > 0))
+    for k in np.flatnonzero(jump):
+        n, width = i[k], ts[i[k] + 1] - ts[i[k]]
+        u_end, u_start = ts[n + 1:] - ts[n + 1], ts[n + 1:] - ts[n]
+        extreme = 0.0
+        for top, bottom in ((hi[k], lo[k]), (lo[k], hi[k])):  # `top` on the part next to t_n
+            near = width * bottom / (bottom - top)
+            extreme = np.maximum(extreme, np.abs(top * (r(u_end + near) - r(u_end))
+                                                 + bottom * (r(u_start) - r(u_end + near))))
+        gp = float(tip.contact_stiffness_factor(max(ds[n], ds[n + 1]) + max(hi[k], -lo[k])
+                                                * width))
+        bound[n + 2:] += gp * extreme
+    return bound[1:]
 
 
 # ── the two branches ──────────────────────────────────────────────────────────────────────────
 
 
-def _hereditary(t: FloatArray, delta: FloatArray, g: FloatArray, kernel: RelaxationKernel,
-                uniform: bool, rtol: float, *, flat: bool
+def _hereditary(history: _History, kernel: RelaxationKernel, rtol: float, *, flat: bool
                 ) -> tuple[FloatArray, FloatArray, np.ndarray]:
-    """Load, t₁ (NaN out of contact) and the contact flag on a grid whose first sample has δ = 0."""
+    """Load, t₁ (NaN out of contact) and the contact flag at the samples (the virtual one first)."""
+    t, delta, g, base, step = (history.nodes, history.delta, history.g, history.base,
+                               history.step)
     n = t.size
     dg, dd = np.diff(g), np.diff(delta)
-    h_min = float(np.min(np.diff(t)))
-    soe = kernel.exponentials(h_min, float(t[-1] - t[0]), rtol)
+    # the exponentials serve lags ≥ one sample interval on a uniform grid (the retract's
+    # branch before t_m seen from a later sample), ≥ the shortest node interval otherwise
+    soe = kernel.exponentials(step or float(np.min(np.diff(t))), float(t[-1] - t[0]), rtol)
     m = int(np.argmax(delta))
     retract = not flat and 0 < m < n - 1 and delta[m] > 0
     j0 = int(np.flatnonzero(delta[:m + 1] <= 0)[-1]) if retract else 0
@@ -342,25 +467,19 @@ def _hereditary(t: FloatArray, delta: FloatArray, g: FloatArray, kernel: Relaxat
     parts = [dg]
     if retract:
         parts += [dd * (after > j0), dd * (after > m), dg * (after <= j0), dg * (after <= m)]
-    if uniform:
-        h = float(t[-1] - t[0]) / (n - 1)
-        weights = np.diff(kernel.primitive(h * np.arange(n))) / h  # W_k, k = 0 … n−2
-        sums = fftconvolve(np.array(parts), weights[None, :], axes=1)[:, :n - 1]
-    else:
-        sums = np.array([_history_nonuniform(t, x, kernel, soe)[1:] for x in parts])
-    sums = np.concatenate([np.zeros((len(parts), 1)), sums], axis=1)
-    load = sums[0]
+    sums = history_sums(t, np.array(parts), kernel, soe, base, step)
+    load, tb, db = sums[0], t[base], delta[base]
     if flat:  # constant contact radius: the approach formula throughout, no tension
-        contact = (load > 0) & (np.arange(n) >= int(np.argmax(delta > 0))) & (delta[m] > 0)
-        return np.maximum(load, 0.0), np.where(contact, t, np.nan), contact
-    contact = delta > 0
-    t1 = np.where(contact, t, np.nan)
+        contact = ((load > 0) & (np.arange(base.size) >= int(np.argmax(db > 0)))
+                   & (delta[m] > 0))
+        return np.maximum(load, 0.0), np.where(contact, tb, np.nan), contact
+    contact = db > 0
+    t1 = np.where(contact, tb, np.nan)
     if not retract:
         return load, t1, contact
-    later = slice(m + 1, None)
-    force, t1_retract, lost = _unloading(t, delta, g, dd, dg, m, j0, sums[1, later],
-                                         sums[2, later], sums[3, later], sums[4, later], soe,
-                                         kernel, uniform)
+    later = base > m
+    force, t1_retract, lost = _unloading(t, delta, g, m, j0, tb[later], sums[1:, later], soe,
+                                         kernel, step, base)
     load = load.copy()
     load[later] = force
     t1[later] = np.where(lost, np.nan, t1_retract)
@@ -368,72 +487,22 @@ def _hereditary(t: FloatArray, delta: FloatArray, g: FloatArray, kernel: Relaxat
     return load, t1, contact
 
 
-def _history_nonuniform(t: FloatArray, dx: FloatArray, kernel: RelaxationKernel,
-                        soe: Exponentials) -> FloatArray:
-    """Σ_i Δx_i/h_i [R(t_n − t_{i−1}) − R(t_n − t_i)] on any grid.
-
-    The interval ending at t_n exactly, the earlier ones through the exponentials (their lags are
-    ≥ the shortest interval).
-    """
-    steps = np.diff(t)
-    local = dx / steps * kernel.primitive(steps)  # the interval ending at t_n
-    x, c = soe.rates, soe.amplitudes
-    out = np.zeros(t.size)
-    state = np.zeros(x.size)  # ∫_0^{t_j} e^{−x(t_j − s)} dx/ds ds
-    level = 0.0  # x(t_j) − x(t_0)
-    for j in range(1, t.size):
-        h = steps[j - 1]
-        decay = np.exp(-x * h)
-        out[j] = soe.constant * level + float(c @ (decay * state)) + local[j - 1]
-        state = decay * state + dx[j - 1] / h * (-np.expm1(-x * h)) / x
-        level += dx[j - 1]
-    return out
-
-
-def _filtered(t: FloatArray, dx: FloatArray, rates: FloatArray, uniform: bool) -> FloatArray:
-    """A[j, k, :] = ∫_{t_0}^{t_j} e^{−x_k(t_j − s)} dx/ds ds on the grid ``t`` (x piecewise linear).
-
-    ``dx`` holds the increments over the intervals of ``t`` (one column per history). On a
-    uniform grid the sums Σ_i b_k a_k^{j−i} u_i are one batched FFT convolution.
-    """
-    out = np.zeros((t.size, rates.size, dx.shape[1]))
-    if t.size < 2 or not rates.size:
-        return out
-    steps = np.diff(t)
-    rate_in = dx / steps[:, None]
-    if uniform:
-        h = float(steps[0])
-        lags = np.arange(t.size - 1) * h
-        kern = np.exp(-np.outer(rates, lags)) * (-np.expm1(-rates * h) / rates)[:, None]
-        out[1:] = fftconvolve(kern[:, :, None], rate_in[None, :, :], axes=1)[:, :t.size - 1
-                                                                            ].transpose(1, 0, 2)
-        return out
-    decay = np.exp(-np.outer(steps, rates))
-    gain = -np.expm1(-np.outer(steps, rates)) / rates
-    state = np.zeros((rates.size, dx.shape[1]))
-    for j in range(t.size - 1):
-        state = decay[j, :, None] * state + gain[j, :, None] * rate_in[j]
-        out[j + 1] = state
-    return out
-
-
 #: Bisection steps on the position of t₁ inside its sample interval.
 THETA_STEPS = 30
 
 
-def _unloading(t: FloatArray, delta: FloatArray, g: FloatArray, dd: FloatArray, dg: FloatArray,
-               m: int, j0: int, phi_bottom: FloatArray, phi_top: FloatArray,
-               load_bottom: FloatArray, load_top: FloatArray, soe: Exponentials,
-               kernel: RelaxationKernel, uniform: bool
+def _unloading(t: FloatArray, delta: FloatArray, g: FloatArray, m: int, j0: int,
+               later: FloatArray, ends: FloatArray, soe: Exponentials,
+               kernel: RelaxationKernel, step: float | None, base: np.ndarray
                ) -> tuple[FloatArray, FloatArray, np.ndarray]:
-    """Ting's t₁ and load for the samples after the turning point m.
+    """Ting's t₁ and load at the samples ``later`` after the turning point t_m (node m).
 
-    ``phi_bottom``/``phi_top`` are Φ(t_n, t_j0) and Φ(t_n, t_m), Φ(t_n, t_j) = ∫_{t_j}^{t_n}
-    E(t_n − s) dδ; ``load_bottom``/``load_top`` the loads ∫_0^{t_j} E(t_n − s) dg at j0 and m
-    (all exact, from the product-integration sums). In between, the loading branch's histories
-    since t_j0 go through the exponentials.
+    ``ends`` holds Φ(t_n, t_j0), Φ(t_n, t_m), Φ(t_n, t_j) = ∫_{t_j}^{t_n} E(t_n − s) dδ, and the
+    loads ∫_0^{t_j} E(t_n − s) dg at j0 and m (all exact, from the product-integration sums). In
+    between, the loading branch's histories since t_j0 go through the exponentials.
     """
-    later = t[m + 1:]
+    phi_bottom, phi_top, load_bottom, load_top = ends
+    dd, dg = np.diff(delta), np.diff(g)
     lost = phi_bottom <= 0
     at_top = phi_top >= 0
     force = np.where(lost, load_bottom, load_top)
@@ -443,7 +512,9 @@ def _unloading(t: FloatArray, delta: FloatArray, g: FloatArray, dd: FloatArray, 
         return force, t1, lost
     x, c, c0 = soe.rates, soe.amplitudes, soe.constant
     branch = slice(j0, m + 1)
-    hist = _filtered(t[branch], np.column_stack([dd[j0:m], dg[j0:m]]), x, uniform)
+    sample = np.zeros(t.size, dtype=bool)
+    sample[base] = True
+    hist = filtered(t[branch], np.column_stack([dd[j0:m], dg[j0:m]]), x, step, sample[branch])
     # scaled to the turning point: Q[j, k] = e^{−x_k(t_m − t_j)}·A[j, k] (≤ |A|: no overflow)
     to_m = np.exp(-np.outer(t[m] - t[branch], x))
     qa, qb = to_m * hist[:, :, 0], to_m * hist[:, :, 1]
@@ -470,25 +541,25 @@ def _unloading(t: FloatArray, delta: FloatArray, g: FloatArray, dd: FloatArray, 
         lo[open_[up]], phi_lo[open_[up]] = mid[up], value[up]
         hi[open_[~up]] = mid[~up]
     j = lo
-    step = t[j + 1] - t[j]
+    width = t[j + 1] - t[j]
     lag = tn - t[j]  # t_n − t_j
     # inside [t_j, t_j+1]: Φ(t_n, t_j + θh) = Φ(t_n, t_j) − (Δδ/h)[R(t_n − t_j) − R(t_n − t_j − θh)]
     # exactly (δ linear there): θ by bisection (monotone where Δδ > 0)
     r_lag = kernel.primitive(lag)
-    rate_d = dd[j] / step
+    rate_d = dd[j] / width
     theta_lo, theta_hi = np.zeros(active.size), np.ones(active.size)
     for _ in range(THETA_STEPS):
         mid = 0.5 * (theta_lo + theta_hi)
-        left = phi_lo - rate_d * (r_lag - kernel.primitive(np.maximum(lag - mid * step, 0.0)))
+        left = phi_lo - rate_d * (r_lag - kernel.primitive(np.maximum(lag - mid * width, 0.0)))
         up = left > 0
         theta_lo = np.where(up, mid, theta_lo)
         theta_hi = np.where(up, theta_hi, mid)
     theta = np.where(rate_d > 0, 0.5 * (theta_lo + theta_hi), 0.0)
-    t1_active = t[j] + theta * step
+    t1_active = t[j] + theta * width
     # F(t_n) = ∫_0^{t1} E(t_n − s) dg = load(t_n, t_j0) + ∫_{t_j0}^{t_j} … + (Δg/h)[R(t_n − t_j)
     # − R(t_n − t1)]
     inner = c0 * (g[j] - g[j0]) + np.einsum("nk,nk->n", p, qb[j - j0])
-    edge = dg[j] / step * (r_lag - kernel.primitive(tn - t1_active))
+    edge = dg[j] / width * (r_lag - kernel.primitive(tn - t1_active))
     force[active] = load_bottom[active] + inner + np.where(theta > 0, edge, 0.0)
     t1[active] = t1_active
     return force, t1, lost
