@@ -57,6 +57,7 @@ from __future__ import annotations
 
 from viscoforce.physics._tip_shapes import (
     BILODEAU_COEFFICIENT,
+    PYRAMID_EXACT_COEFFICIENT,
     TIP_SHAPES,
     Cone,
     Flat,
@@ -77,6 +78,7 @@ from viscoforce.physics.moduli import (
 __all__ = [
     "BILODEAU_COEFFICIENT",
     "DEFAULT_POISSON",
+    "PYRAMID_EXACT_COEFFICIENT",
     "TIP_SHAPES",
     "Cone",
     "Flat",
