@@ -112,10 +112,15 @@ def test_real_stress_relaxation_with_modes_auto(capsys):
                           "--json")
     assert code == 0, err
     info = json.loads(out)
-    assert info["success"] and info["modes"] >= 2
-    taus = [info["params"][f"tau_{i}"]["value"] for i in range(1, info["modes"] + 1)]
+    # BIC alone ran this hold to the 4-mode cap (issue 37); the modes beyond the first move by
+    # 10-18 stderr between the block halves of the hold: not robust, said, never kept
+    assert info["success"] and 1 <= info["modes"] < 4
+    assert "not robust" in info["explanation"]
+    names = ["tau"] if "tau" in info["params"] else [f"tau_{i}"
+                                                     for i in range(1, info["modes"] + 1)]
+    taus = [info["params"][n]["value"] for n in names]
     assert taus == sorted(taus) and 0.01 < taus[0] and taus[-1] < 300  # 30 s hold
-    assert len(info["selection"]) == info["modes"] or len(info["selection"]) > info["modes"]
+    assert len(info["selection"]) > info["modes"]  # the candidate not kept is listed
 
 
 @pytest.mark.skipif(not SR_ZIP.is_file(), reason="real data not present")

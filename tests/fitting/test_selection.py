@@ -202,10 +202,12 @@ def test_amplitudes_of_both_signs_are_not_robust():
 
 def test_block_halves_span_the_window_and_split_the_data():
     data = _relaxation_data([0.05], [5e-8], n=160)
-    a, b = selection.block_halves(data)
-    assert a.x.size + b.x.size == 160 and not set(a.x) & set(b.x)
-    for half in (a, b):
-        assert half.x.min() < 0.2 and half.x.max() > 2.8  # both see the whole window
+    for block in (1, 4, 10):
+        a, b = selection.block_halves(data, block)
+        assert a.x.size + b.x.size == 160 and not set(a.x) & set(b.x)
+        assert a.x[:block].tolist() == data.x[:block].tolist()  # the first block is A's
+        for half in (a, b):
+            assert half.x.min() < 0.2 and half.x.max() > 2.8  # both see the whole window
 
 
 def test_honest_halves_agree_and_modes_auto_stops_at_the_truth():

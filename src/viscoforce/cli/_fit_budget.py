@@ -19,6 +19,9 @@ from typing import Any
 
 from viscoforce.cli._args import UsageError
 
+#: A record whose fit leaves a residual more than this many times the other's is settled by the
+#: data (it does not describe them): it is not a systematic of the result.
+SETTLED_RATIO = 2.0
 #: ``--height-channel`` → the reader's height_channel (None: the first calibrated sensor).
 HEIGHT_RECORDS = {"sensor": None, "piezo": "height"}
 
@@ -57,6 +60,9 @@ def choose_height_record(args: argparse.Namespace, ds, kind: str, result,
                          read: Callable[..., Any]):
     """(result kept, the other record's result or None, a sentence) for a force curve.
 
+    The other record's result is None where its residual is more than :data:`SETTLED_RATIO`
+    times the kept one's: the data settle the choice.
+
     Only where ``--height-channel`` is not given, the data are curves, and the file has both a
     sensor and the piezo height: otherwise ``(result, None, "")``.
     """
@@ -82,13 +88,23 @@ def choose_height_record(args: argparse.Namespace, ds, kind: str, result,
     name = str(alt_ds.attrs.get("height_channel", other))
     a, b = _residual_rms(result), _residual_rms(alt)
     if not (math.isfinite(a) and math.isfinite(b)):
-        return result, alt, ""
+        return result, None, ""
     keep_alt = b < a
     kept, dropped = (alt, result) if keep_alt else (result, alt)
     kept_name, dropped_name = (name, used) if keep_alt else (used, name)
+    unit = next((str(kept[v].attrs.get("units", "")) for v in kept.data_vars
+                 if str(v).startswith("fit_")), "")
+    ratio = max(a, b) / min(a, b) if min(a, b) > 0 else math.inf
     why = (f"height record {_label(kept_name)}: its fit leaves a residual rms of "
-           f"{min(a, b):.3g} N against {max(a, b):.3g} N with {_label(dropped_name)} (the same "
-           "forces fitted; --height-channel sensor|piezo to choose)")
+           f"{min(a, b):.3g} {unit} against {max(a, b):.3g} {unit} with "
+           f"{_label(dropped_name)}").replace("  ", " ")
+    if ratio > SETTLED_RATIO:  # the data settle the choice: not a systematic of these data
+        why += (f" ({ratio:.3g}x larger: the data settle the choice, it is not in the error "
+                "budget; --height-channel sensor|piezo to choose)")
+        dropped = None
+    else:
+        why += (" (the data do not settle the choice: the other record's values are in the "
+                "error budget; --height-channel sensor|piezo to choose)")
     kept.attrs["height_record"] = why
     return kept, dropped, why
 

@@ -128,6 +128,14 @@ def _fixed(args: argparse.Namespace, ds, kind: str) -> dict[str, Any]:
         return {**_tip_inputs(args, ds), "indentation": args.indentation, "drag": args.drag,
                 "material": args.material, "reference_frequency": args.reference_frequency,
                 "debye_length": args.debye_length, **_layer(args)}
+    if model == "creep":  # Lee-Radok with a tip (--tip, --R or the file's), else exponentials
+        if args.tip is not None and args.R is not None:
+            raise UsageError("give --tip or --R (a sphere), not both")
+        from viscoforce.physics.tips import RigidSphere
+
+        tip = args.tip if args.tip is not None else (
+            RigidSphere(args.R) if args.R is not None else None)
+        return {"tip": tip, "contact_point": args.contact_point}
     if model == "ting":
         if args.material not in (None, "sls", "prony", "structural"):
             raise UsageError(f"--model ting takes --material sls, prony or structural, got "
@@ -335,6 +343,12 @@ def fit_one(args: argparse.Namespace, ds, kind: str):
             raise UsageError("--model hertz has no modes: leave --modes out")
         if args.model == "relaxation":
             return fit_hold(ds, segment=args.segment, modes=modes, criterion=args.criterion)
+        if args.model == "creep":
+            from viscoforce.fitting.creep import fit_creep
+
+            return fit_creep(ds, segment=args.segment, modes=modes, criterion=args.criterion,
+                             poisson=args.poisson, **{k: v for k, v in fixed.items()
+                                                      if v is not None})
         if args.model == "ting":
             from viscoforce.fitting.ting import fit_ting
 

@@ -223,6 +223,11 @@ def fit_curve(curves: xr.Dataset, model: str, *, curve: int = 0, segment: int | 
         if tip is not None or poisson is not None:
             raise ParameterError("the relaxation model takes no tip or poisson (it fits forces)")
         return fit_hold(curves, curve=curve, segment=segment, modes=modes, criterion=criterion)
+    if model == "creep":  # Lee-Radok with a tip (given or the file's), else phenomenological
+        from viscoforce.fitting.creep import fit_creep
+
+        return fit_creep(curves, curve=curve, segment=segment, tip=tip, modes=modes,
+                         criterion=criterion, poisson=poisson)
     data = curve_data(curves, model, curve=curve, segment=segment)
     fixed: dict[str, Any] = {}
     if model == "hertz":
@@ -232,8 +237,6 @@ def fit_curve(curves: xr.Dataset, model: str, *, curve: int = 0, segment: int | 
         from viscoforce.physics.tips import tip_from
 
         fixed["tip"] = tip_from(required_tip(curves, tip, "hertz"))
-    elif tip is not None or poisson is not None:
-        raise ParameterError("the creep model takes no tip or poisson (it fits the tip position)")
     ds = fit_data(data, model, modes=modes, criterion=criterion, **fixed)
     ds.attrs["validity"] = validity_note(model, ds)
     if model == "hertz":  # first: its verdict on E is part of what warn_fit reports

@@ -42,7 +42,7 @@ from viscoforce.exceptions import ConvergenceError, ParameterError
 from viscoforce.fitting.data import FitData
 from viscoforce.fitting.outcome import Outcome, fit_once
 
-__all__ = ["CRITERIA", "HALVES_Z", "Candidate", "Tried", "block_halves", "check_criterion",
+__all__ = ["CRITERIA", "HALVES_Z", "Candidate", "Tried", "block_halves", "block_length", "check_criterion",
            "compare", "explain", "halves_z", "keep", "mode_robustness", "share_effective_size"]
 
 #: Information criteria a chooser compares by.
@@ -50,7 +50,7 @@ CRITERIA = ("bic", "aic")
 #: A time moving more than this many standard errors (of the difference) between the two halves
 #: of the data is not robust (a 2σ rule: 5 % false alarms per time for honest Gaussian stderr).
 HALVES_Z = 2.0
-#: Blocks of the block split-half (alternate blocks make each half; each spans the whole window).
+#: Fewest blocks of the block split-half (alternate blocks make each half; each spans the window).
 HALVES_BLOCKS = 16
 
 
@@ -167,6 +167,8 @@ def compare(families: Sequence[Sequence[Candidate]], data: FitData, criterion: s
                 continue
             if after is not None:
                 after(outcome)
+            # one effective sample size for every candidate fitted, kept or not (comparable)
+            share_effective_size([*(t.outcome for t in tried if t.outcome is not None), outcome])
             reason = robust(outcome) if robust is not None and comparing and fitted else None
             if reason is not None:
                 tried.append(Tried(candidate.label, outcome, note=f"not robust: {reason}",
@@ -224,6 +226,8 @@ def explain(tried: Sequence[Tried], kept: Tried, criterion: str, margin: float,
                      + (f", p {p:.2g}" if math.isfinite(p) else "") + f" [{verdict}]")
     rule = (f"the simplest within {margin:g} of the best" if margin > 0 else
             f"the lowest {name}")
+    if any(not t.robust for t in tried):
+        rule += " among the candidates whose modes are robust"
     explanation = f"{subject} compared by {name}; kept {kept.label}, {rule}. " + "; ".join(parts)
     return Choice(kept.label, {"modes": kept.modes, **kept.inputs}, math.nan, math.nan,
                   explanation, tuple(rows), score=name)
@@ -232,13 +236,15 @@ def explain(tried: Sequence[Tried], kept: Tried, criterion: str, margin: float,
 # ── robustness of the modes (issue 37 item 4) ───────────────────────────────────────────────────
 
 def _stderr(outcome: Outcome) -> dict[str, float]:
-    """Each parameter's stderr (NaN where the covariance is singular), AR(1)-corrected."""
+    """Each parameter's stderr (NaN where the covariance is singular).
+
+    The covariance of a curve fit already carries its AR(1) factor (``fitting.outcome``).
+    """
     names = outcome.model.names
     if outcome.covariance is None:
         return {n: math.nan for n in names}
     var = np.diag(outcome.covariance)
-    factor = outcome.stderr_factor if getattr(outcome.model, "autocorrelated", False) else 1.0
-    return {n: float(math.sqrt(v)) * factor if v >= 0 else math.nan
+    return {n: float(math.sqrt(v)) if v >= 0 else math.nan
             for n, v in zip(names, var, strict=True)}
 
 
@@ -259,18 +265,33 @@ def sampled_span(data: FitData) -> tuple[float, float]:
     return (float(steps.min()) if steps.size else 0.0), float(x[-1] - x[0])
 
 
-def block_halves(data: FitData, blocks: int = HALVES_BLOCKS) -> tuple[FitData, FitData]:
-    """Two halves of the data, alternate contiguous blocks each, both spanning the whole window.
+def block_length(outcome: Outcome) -> int:
+    """Samples per block of the split-half: a few correlation lengths of the residuals.
 
-    Blocks (rather than alternate samples) keep the halves' noise nearly independent where the
-    residuals are autocorrelated (a measured series in time).
+    3(1 + ρ1)/(1 − ρ1) samples (ρ1 the residuals' lag-1 autocorrelation; 1 for white noise or a
+    spectrum), at most a sixteenth of the data, so that both halves span the window in many
+    short blocks (the information of a decay sits at its start) with nearly independent noise.
+    """
+    rho = outcome.lag1
+    n = int(np.asarray(outcome.data.x).size)
+    if not (math.isfinite(rho) and rho > 0):
+        return 1
+    length = math.ceil(3.0 * (1.0 + rho) / max(1.0 - rho, 1e-6))
+    return max(1, min(length, n // HALVES_BLOCKS))
+
+
+def block_halves(data: FitData, block: int = 1) -> tuple[FitData, FitData]:
+    """Two halves of the data: alternate blocks of ``block`` samples (in x order) each.
+
+    Both span the whole window; blocks longer than the residuals' correlation keep the two
+    halves' noise nearly independent where it is autocorrelated (a measured series in time).
     """
     order = np.argsort(np.asarray(data.x, dtype=float), kind="stable")
-    block = np.empty(order.size, dtype=int)
-    block[order] = np.arange(order.size) * blocks // max(order.size, 1)
+    which = np.empty(order.size, dtype=int)
+    which[order] = (np.arange(order.size) // max(int(block), 1)) % 2
     halves = []
     for parity in (0, 1):
-        keep = block % 2 == parity
+        keep = which == parity
         weights = None if data.weights is None else np.asarray(data.weights)[keep]
         dof = None if data.sigma_dof is None else np.asarray(data.sigma_dof)[keep]
         halves.append(FitData(np.asarray(data.x)[keep], np.asarray(data.y)[keep], weights,
@@ -284,7 +305,7 @@ def halves_z(outcome: Outcome, refit: Callable[[FitData], Outcome],
 
     Raises what ``refit`` raises when a half cannot be fitted.
     """
-    a, b = (refit(h) for h in block_halves(outcome.data))
+    a, b = (refit(h) for h in block_halves(outcome.data, block_length(outcome)))
     sa, sb = _stderr(a), _stderr(b)
     out = {}
     for n in names if names is not None else outcome.model.names:
