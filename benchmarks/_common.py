@@ -1,9 +1,10 @@
-"""Helpers shared by the benchmark scripts bench_static.py, bench_dynamics.py and bench_spectrum.py.
+"""Helpers shared by the timing suites in benchmarks/ and the studies in studies/.
 
 Plain functions only: the common command line, machine facts and the BLAS report, wall/CPU timing
 with the garbage collector paused, the one-off kernel build, and JSON/CSV output. Each script
-imports this module from its own folder (``benchmarks/`` is not a package); the printed text, JSON
-keys and CSV columns the scripts produce are documented in benchmarks/README.md.
+puts ``benchmarks/`` on ``sys.path`` from its own location and imports this module (``benchmarks/``
+is not a package); the printed text, JSON keys and CSV columns the scripts produce are documented
+in benchmarks/README.md (timing suites) and studies/<name>/README.md (studies).
 """
 
 from __future__ import annotations
@@ -29,14 +30,17 @@ from threadpoolctl import threadpool_info
 import viscoforce as vf
 from viscoforce.kernel import _node_matrix_unit
 
-#: Default output folder of every script: benchmarks/out next to the scripts.
+#: Default output folder of the timing suites: benchmarks/out next to the scripts (a study passes
+#: its own, studies/<name>/out).
 OUT_DIR = Path(__file__).resolve().parent / "out"
+#: The repository root (benchmarks/ and studies/ are folders of it).
+REPO = OUT_DIR.parents[1]
 
 
 # ── command line ─────────────────────────────────────────────────────────────────────────────────
 
 def parse_args(argv: list[str] | None, *, doc: str, quick_help: str, repeats_help: str,
-               min_repeats: int = 1) -> argparse.Namespace:
+               min_repeats: int = 1, out_dir: Path = OUT_DIR) -> argparse.Namespace:
     """Parse the options every benchmark takes: ``--quick``, ``--out DIR`` and ``--repeats N``.
 
     Parameters
@@ -50,6 +54,8 @@ def parse_args(argv: list[str] | None, *, doc: str, quick_help: str, repeats_hel
     min_repeats : int
         Smallest accepted ``--repeats``; a smaller value exits with status 2 and the message
         ``--repeats must be >= min_repeats``.
+    out_dir : Path
+        Default of ``--out`` (benchmarks/out; a study passes its studies/<name>/out).
 
     Returns
     -------
@@ -58,13 +64,21 @@ def parse_args(argv: list[str] | None, *, doc: str, quick_help: str, repeats_hel
     """
     parser = argparse.ArgumentParser(description=doc.splitlines()[0])
     parser.add_argument("--quick", action="store_true", help=quick_help)
-    parser.add_argument("--out", type=Path, default=OUT_DIR,
-                        help="output folder (default: benchmarks/out next to this script)")
+    parser.add_argument("--out", type=Path, default=out_dir,
+                        help=f"output folder (default: {_shown(out_dir)})")
     parser.add_argument("--repeats", type=int, default=None, help=repeats_help)
     args = parser.parse_args(argv)
     if args.repeats is not None and args.repeats < min_repeats:
         parser.error(f"--repeats must be >= {min_repeats}")
     return args
+
+
+def _shown(path: Path) -> str:
+    """``path`` relative to the repository root where it is inside it (for help texts)."""
+    try:
+        return path.relative_to(REPO).as_posix()
+    except ValueError:
+        return str(path)
 
 
 # ── timing ───────────────────────────────────────────────────────────────────────────────────────

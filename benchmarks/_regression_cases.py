@@ -20,7 +20,7 @@ The reference (:func:`reference_spectrum`) is the textbook route, independent of
 linear-response module: the library's static Newton solve at E_inf (the one shared step), then
 one dense complex LU solve per frequency of the linearised viscoelastic problem for k*(ω), and
 the finite-amplitude check by direct dense solves (four per checked frequency, as the oracle of
-tests/test_amplitude_bias_modal.py). No eigen-decomposition, no cache.
+tests/theory/test_amplitude_bias_modal.py). No eigen-decomposition, no cache.
 """
 
 from __future__ import annotations

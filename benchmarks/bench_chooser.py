@@ -37,7 +37,18 @@ ROOT = Path(__file__).resolve().parents[1]
 REAL = ROOT / "data_examples" / "real" / "modulation-map.jpk-force-map"
 TARGET_SECONDS = 5.0
 TARGET_RIGHT = 0.9
-QUICK_CURVES = 4  # --quick: the real map's first 4 curves
+#: The case table. ``real``: the chooser timed on the real map's curves (all; ``curves``: the
+#: first so many). ``synthetic``: one family per row, its material's parameters (structural: E_ref
+#: [Pa], α, μ [Pa·s]; sls: E0, E_inf [Pa], τ [s]; prony 2: moduli [Pa], times [s]); its seeded
+#: replicas are fitted and the family kept is counted.
+CASES = (
+    {"part": "real", "curves": None},
+    {"part": "synthetic", "family": "structural", "params": (1e3, 0.15, 0.5)},
+    {"part": "synthetic", "family": "sls", "params": (5e3, 1e3, 0.01)},
+    {"part": "synthetic", "family": "prony 2", "params": ([2e4, 5e3, 1e3], [0.002, 0.2])},
+)
+#: --quick: the real map's first 4 curves (and 5 replicas of each family, :func:`main`).
+QUICK_CASES = tuple({**c, "curves": 4} if c["part"] == "real" else c for c in CASES)
 
 
 def _synthetic():
@@ -47,12 +58,13 @@ def _synthetic():
     radius, depth = 5e-6, 500e-9
     omega = 2 * np.pi * np.geomspace(0.3, 1000.0, 10)
     root = math.sqrt(radius * depth)
-    truths = {
-        "structural": root * structural_complex_modulus(omega, 1e3, 0.15, 0.5),
-        "sls": root / StandardLinearSolid(5e3, 1e3, 0.01).complex_compliance(omega),
-        "prony 2": root / PronySeries.from_moduli([2e4, 5e3, 1e3],
-                                                  [0.002, 0.2]).complex_compliance(omega),
+    families = {
+        "structural": lambda p: root * structural_complex_modulus(omega, *p),
+        "sls": lambda p: root / StandardLinearSolid(*p).complex_compliance(omega),
+        "prony 2": lambda p: root / PronySeries.from_moduli(*p).complex_compliance(omega),
     }
+    truths = {c["family"]: families[c["family"]](c["params"]) for c in CASES
+              if c["part"] == "synthetic"}
     return radius, depth, omega, truths
 
 
@@ -108,14 +120,16 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--quick", action="store_true", help="5 replicas, 4 real curves")
     parser.add_argument("--replicas", type=int, default=None)
-    parser.add_argument("--out", type=Path, default=ROOT / "benchmarks" / "out")
+    parser.add_argument("--out", type=Path, default=ROOT / "benchmarks" / "out",
+                        help="output folder (default: benchmarks/out)")
     args = parser.parse_args(argv)
     replicas = args.replicas or (5 if args.quick else 20)
     args.out.mkdir(parents=True, exist_ok=True)
     with threadpool_limits(1):
         load = ", ".join(f"{v:.2f}" for v in os.getloadavg())
         print(f"BLAS pinned to 1 thread (threadpoolctl); load average {load}")
-        rows = (real_times(QUICK_CURVES if args.quick else None) if REAL.is_file() else [])
+        real = next(c for c in (QUICK_CASES if args.quick else CASES) if c["part"] == "real")
+        rows = real_times(real["curves"]) if REAL.is_file() else []
         right = accuracy(replicas)
     ok = True
     if rows:

@@ -71,13 +71,23 @@ TARGET_SPEEDUP = 5.0  # vs explicit Euler at equal accuracy (error = TARGET_ERRO
 # reference and sweeps
 REF_TOL, REF_CHECK_TOL, REF_MAX_STEP = 1e-18, 1e-17, 1e-6  # [m], [m], [s]
 QUICK_REF_TOL, QUICK_REF_CHECK_TOL, QUICK_REF_MAX_STEP = 1e-16, 1e-15, None
-TOLS = (1e-8, 1e-9, 1e-10, 1e-11, 1e-12, 1e-13)  # [m]
-DTS = (2e-5, 1e-5, 5e-6, 2e-6, 1e-6, 5e-7)  # [s]
-QUICK_TOLS = (1e-10, 1e-12)
-QUICK_DTS = (2e-5, 1e-5)
-#: (method, swept setting) pairs: one line each on the chart
-SERIES = (("exponential", "tol"), ("exponential", "dt"), ("exponential-euler", "tol"),
-          ("exponential-euler", "dt"), ("euler", "dt"))
+TOLS = (1e-8, 1e-9, 1e-10, 1e-11, 1e-12, 1e-13)  # [m]: the adaptive tolerances swept
+DTS = (2e-5, 1e-5, 5e-6, 2e-6, 1e-6, 5e-7)  # [s]: the fixed steps swept
+#: The case table: one line of the sweep per row (one line each on the chart), a stepper
+#: (``method``) and the setting it sweeps (``mode``: the adaptive ``tol`` [m] or the fixed step
+#: ``dt`` [s]) over ``values``; the default method's tol line also gets the library default tol.
+CASES = (
+    {"method": "exponential", "mode": "tol", "values": TOLS},
+    {"method": "exponential", "mode": "dt", "values": DTS},
+    {"method": "exponential-euler", "mode": "tol", "values": TOLS},
+    {"method": "exponential-euler", "mode": "dt", "values": DTS},
+    {"method": "euler", "mode": "dt", "values": DTS},
+)
+#: --quick: two values per line.
+QUICK_CASES = tuple({**c, "values": (1e-10, 1e-12) if c["mode"] == "tol" else (2e-5, 1e-5)}
+                    for c in CASES)
+#: (method, swept setting) pairs of :data:`CASES`: one line each on the chart
+SERIES = tuple((c["method"], c["mode"]) for c in CASES)
 CHEAP_RUN = 0.5  # [s]: runs faster than this get 2·repeats + 1 samples
 ERROR_FLOOR = 1e-9  # errors below this are drawn at this value
 SCHEMA = "viscoforce.bench_dynamics/1"
@@ -163,17 +173,14 @@ def reference(problem, drive, quick: bool) -> dict:
             "max_force": float(np.max(force)), "force_dense": force, "force": force[::stride]}
 
 
-def sweep(problem, drive, ref: dict, tols, dts, repeats: int, extend: bool) -> list[dict]:
+def sweep(problem, drive, ref: dict, cases, repeats: int, extend: bool) -> list[dict]:
     t_eval = output_times(drive, N_OUTPUTS)
     default_tol = DEFAULT_TOL * problem.surface_force.decay_length
     rows = []
-    for method, mode in SERIES:
-        if mode == "dt":
-            values = tuple(dts)
-        elif method == DEFAULT_METHOD and default_tol not in tols:
-            values = (*tols, default_tol)  # the default setting is part of its line
-        else:
-            values = tuple(tols)
+    for case in cases:
+        method, mode, values = case["method"], case["mode"], tuple(case["values"])
+        if mode == "tol" and method == DEFAULT_METHOD and default_tol not in values:
+            values = (*values, default_tol)  # the default setting is part of its line
         for value in values:
             kw = {mode: value}
             row = {"method": method, "mode": "adaptive tol" if mode == "tol" else "fixed dt",
@@ -386,7 +393,9 @@ def main(argv: list[str] | None = None) -> int:
                                    f"than {CHEAP_RUN:g} s get 2*repeats+1")
     repeats = args.repeats or (1 if args.quick else 3)
     extend = not args.quick  # cheap points get 2·repeats + 1 runs (not in a smoke run)
-    tols, dts = (QUICK_TOLS, QUICK_DTS) if args.quick else (TOLS, DTS)
+    cases = QUICK_CASES if args.quick else CASES
+    tols = next(c["values"] for c in cases if c["mode"] == "tol")
+    dts = next(c["values"] for c in cases if c["mode"] == "dt")
     args.out.mkdir(parents=True, exist_ok=True)
     t_start = time.perf_counter()
 
@@ -416,7 +425,7 @@ def main(argv: list[str] | None = None) -> int:
               "median wall time of the whole simulate call; n = runs):")
         print(TABLE_HEAD)
         print("-" * len(TABLE_HEAD))
-        rows = sweep(problem, drive, ref, tols, dts, repeats, extend)
+        rows = sweep(problem, drive, ref, cases, repeats, extend)
         default_row = next(r for r in rows if r["is_default"])
         eq = equal_accuracy(rows, default_row)
         outputs = outputs_effect(problem, drive, ref, repeats, extend)

@@ -115,8 +115,29 @@ REPEATS, QUICK_REPEATS = 7, 1
 #: --quick: the exact model's grid spacing × 2 (half the nodes; a smoke run, its times are not the
 #: default grid's)
 QUICK_GRID_FACTOR = 2.0
-SVDA_MAP, QUICK_SVDA_MAP = 64, 8
-EXACT_MAP, QUICK_EXACT_MAP = 16, 4
+#: The case table. ``single`` (parts 1 and 2): one fit per row, the model with its modes at a
+#: position [m], from 1 % noisy synthetic data of the one- or two-mode truth; ``profiled`` rows are
+#: also profiled. ``map`` (part 3): an n × n map of the svda or the exact one-mode model fitted on
+#: each number of ``workers``. Built (in this order: one seeded generator) by :func:`cases` and
+#: :func:`main`.
+CASES = (
+    {"part": "single", "case": "svda", "model": "svda", "modes": 1, "position": H0_PRE,
+     "profiled": True},
+    {"part": "single", "case": "exact1_2nm", "model": "exact", "modes": 1, "position": H0_PRE,
+     "profiled": True},
+    {"part": "single", "case": "exact1_-5nm", "model": "exact", "modes": 1,
+     "position": H0_CONTACT, "profiled": False},
+    {"part": "single", "case": "exact2_2nm", "model": "exact", "modes": 2, "position": H0_PRE,
+     "profiled": True},
+    {"part": "single", "case": "exact2_-5nm", "model": "exact", "modes": 2,
+     "position": H0_CONTACT, "profiled": False},
+    {"part": "map", "map": "svda", "n": 64, "workers": (1, 2)},
+    {"part": "map", "map": "exact", "n": 16, "workers": (2,)},
+)
+#: --quick: the same single fits (on :data:`QUICK_GRID_FACTOR` × the grid spacing), maps of 8×8
+#: (svda) and 4×4 (exact).
+QUICK_CASES = tuple({**c, "n": {"svda": 8, "exact": 4}[c["map"]]} if c["part"] == "map" else c
+                    for c in CASES)
 SAMPLE_PERIOD = 0.02  # [s] RSS sampling
 PROFILE_TOP = 25
 SCHEMA = "viscoforce.bench_fit/1"
@@ -167,24 +188,30 @@ def svda_truth_k() -> np.ndarray:
                                   PAPER.debye_length)
 
 
-def cases(rng: np.random.Generator, grid_factor: float = 1.0) -> list[dict]:
-    """The single-fit cases: name, model, modes, fixed inputs, spectrum, truth."""
-    out = [{"case": "svda", "model": "svda", "modes": 1, "position": H0_PRE,
-            "fixed": dict(SVDA_FIXED), "ds": spectrum(noisy(svda_truth_k(), rng), 1e-7),
-            "truth": {"E0": E0, "E_inf": E_INF, "tau": TAU}}]
-    for label, h0 in (("2nm", H0_PRE), ("-5nm", H0_CONTACT)):
-        problem = problem_at(h0, one_mode(), grid_factor)
-        k, force = linear_stiffness(problem, h0, omega_grid())
-        out.append({"case": f"exact1_{label}", "model": "exact", "modes": 1, "position": h0,
-                    "fixed": {"problem": problem, "position": h0},
-                    "ds": spectrum(noisy(k, rng), force),
-                    "truth": {"E0": E0, "E_inf": E_INF, "tau": TAU}})
-    for label, h0 in (("2nm", H0_PRE), ("-5nm", H0_CONTACT)):
-        problem = problem_at(h0, one_mode(), grid_factor)  # its material is not used
-        k, force = linear_stiffness(problem.with_material(two_mode()), h0, omega_grid())
-        out.append({"case": f"exact2_{label}", "model": "exact", "modes": 2, "position": h0,
-                    "fixed": {"problem": problem, "position": h0},
-                    "ds": spectrum(noisy(k, rng), force), "truth": dict(TWO_MODE)})
+def cases(rng: np.random.Generator, grid_factor: float = 1.0,
+          rows: tuple[dict, ...] = CASES) -> list[dict]:
+    """The single-fit cases of ``rows``: name, model, modes, fixed inputs, spectrum, truth."""
+    out = []
+    for row in rows:
+        if row["part"] != "single":
+            continue
+        name, model, modes, h0 = row["case"], row["model"], row["modes"], row["position"]
+        case = {"case": name, "model": model, "modes": modes, "position": h0}
+        if model == "svda":
+            out.append({**case, "fixed": dict(SVDA_FIXED),
+                        "ds": spectrum(noisy(svda_truth_k(), rng), 1e-7),
+                        "truth": {"E0": E0, "E_inf": E_INF, "tau": TAU}})
+        elif modes == 1:
+            problem = problem_at(h0, one_mode(), grid_factor)
+            k, force = linear_stiffness(problem, h0, omega_grid())
+            out.append({**case, "fixed": {"problem": problem, "position": h0},
+                        "ds": spectrum(noisy(k, rng), force),
+                        "truth": {"E0": E0, "E_inf": E_INF, "tau": TAU}})
+        else:
+            problem = problem_at(h0, one_mode(), grid_factor)  # its material is not used
+            k, force = linear_stiffness(problem.with_material(two_mode()), h0, omega_grid())
+            out.append({**case, "fixed": {"problem": problem, "position": h0},
+                        "ds": spectrum(noisy(k, rng), force), "truth": dict(TWO_MODE)})
     return out
 
 
@@ -345,10 +372,15 @@ class StepTimers:
     def __init__(self):
         from viscoforce import svda
         from viscoforce.experiments import linear_response
-        from viscoforce.fitting import fit, models, spectrum_models
+        from viscoforce.fitting import fit, models
+
+        try:  # the exact model's own module, which calls exact_stiffness (issue 36 item 1)
+            from viscoforce.fitting.models import exact as exact_model
+        except ImportError:  # the layout before: the builder in spectrum_models
+            from viscoforce.fitting import spectrum_models as exact_model
 
         self.targets = {"evaluations": [(svda, "svda_stiffness_kernel"),
-                                        (spectrum_models, "exact_stiffness")],
+                                        (exact_model, "exact_stiffness")],
                         "states": [(linear_response, "linearized_state")],
                         "guess": [(models.FitModel, "guess")],
                         "spectrum_data": [(fit, "spectrum_data")],
@@ -692,8 +724,11 @@ def main(argv: list[str] | None = None) -> int:
                                    "need >= 5)")
     quick = args.quick
     repeats = args.repeats or (QUICK_REPEATS if quick else REPEATS)
-    n_svda = QUICK_SVDA_MAP if quick else SVDA_MAP
-    n_exact = QUICK_EXACT_MAP if quick else EXACT_MAP
+    rows = QUICK_CASES if quick else CASES
+    map_rows = [r for r in rows if r["part"] == "map"]
+    n_svda = next(r["n"] for r in map_rows if r["map"] == "svda")
+    n_exact = next(r["n"] for r in map_rows if r["map"] == "exact")
+    profiled = {r["case"] for r in rows if r["part"] == "single" and r["profiled"]}
     grid_factor = QUICK_GRID_FACTOR if quick else 1.0
     args.out.mkdir(parents=True, exist_ok=True)
     t_start = time.perf_counter()
@@ -713,13 +748,13 @@ def main(argv: list[str] | None = None) -> int:
         print(f"\n1. Single fits: median of {repeats} runs (exact: state cache cleared before "
               "each, 'warm' = cache kept); plain least_squares from the same guess")
         print(SINGLE_HEAD)
-        single_cases = cases(rng, grid_factor)
+        single_cases = cases(rng, grid_factor, rows)
         single = [bench_single(c, repeats, warm_up=not quick) for c in single_cases]
 
         print("\n2. Where the time goes (one cold fit each: instrumented steps; cProfile listing)")
         profiles = []
         for c in single_cases:
-            if c["case"] not in ("svda", "exact1_2nm", "exact2_2nm"):
+            if c["case"] not in profiled:
                 continue
             try:
                 p = profile_case(c, args.out / f"fit_profile_{c['case']}.txt", quick=quick)
@@ -736,13 +771,15 @@ def main(argv: list[str] | None = None) -> int:
         print("\n3. Maps: fit_map(scheduler=None) on a LocalCluster (start-up timed inside the run)")
         print(MAP_HEAD)
         maps = []
-        ds_svda = svda_map(n_svda, rng)
         truth1 = {"E0": E0, "E_inf": E_INF, "tau": TAU}
-        for workers in (1, 2):
-            maps.append(bench_map("svda", ds_svda, "svda", SVDA_FIXED, workers, truth1))
-        del ds_svda
-        ds_exact, fixed_exact = exact_map(n_exact, rng, grid_factor)
-        maps.append(bench_map("exact", ds_exact, "exact", fixed_exact, 2, truth1))
+        for row in map_rows:
+            if row["map"] == "svda":
+                ds_map, fixed_map = svda_map(row["n"], rng), SVDA_FIXED
+            else:
+                ds_map, fixed_map = exact_map(row["n"], rng, grid_factor)
+            for workers in row["workers"]:
+                maps.append(bench_map(row["map"], ds_map, row["map"], fixed_map, workers, truth1))
+            del ds_map
 
     summary = {**summarise(single, maps, quick), **run_end(t_start)}
     png = args.out / "fit_timings.png"

@@ -26,7 +26,7 @@ Outputs (in ``--out``, default benchmarks/out/): ``linear_benchmark.json`` (SI u
 :data:`JSON_KEYS`), ``linear_timings.csv`` (one row per (position, path)) and
 ``linear_timings.png`` (bar chart, log time axis). Run
 ``python benchmarks/bench_linear.py [--quick] [--repeats N] [--out DIR]``; no test asserts the
-times (tests/test_bench_linear.py runs ``--quick`` and checks the keys and the accuracy).
+times (tests/benchmarks/test_solvers.py runs ``--quick`` and checks the keys and the accuracy).
 """
 
 from __future__ import annotations
@@ -69,7 +69,10 @@ SCHEMA = "viscoforce.bench_linear/1"
 #: Top-level keys of linear_benchmark.json.
 JSON_KEYS = ("schema", "created", "quick", "machine", "target", "settings", "rows", "summary",
              "files")
-POSITIONS = {"Fig. 3": 2e-9, "Fig. 4": -5e-9}  # mean positions h̄0 [m]
+#: The case table: one row per scene, its mean position h̄0 [m]; every path of :data:`PATHS` is
+#: timed at each (--quick times the same cases with fewer samples).
+CASES = ({"scene": "Fig. 3", "h0": 2e-9}, {"scene": "Fig. 4", "h0": -5e-9})
+POSITIONS = {c["scene"]: c["h0"] for c in CASES}  # scene → h̄0 [m]
 N_OMEGA, OMEGA_MIN, OMEGA_MAX = 30, 1.0, 1e6  # [rad/s]
 PATHS = ("direct", "build", "build_at_load", "cached", "public_cached")
 FIT_BUDGET = 0.3  # [s]: an exact one-mode fit of 30 points (issue 13)
@@ -206,7 +209,8 @@ def main(argv: list[str] | None = None) -> int:
         print(head)
         print("-" * len(head))
         rows = []
-        for scene, position in POSITIONS.items():
+        for case in CASES:
+            scene, position = case["scene"], case["h0"]
             for r in bench_position(scene, position, omega, repeats):
                 rows.append(r)
                 print(f"{scene:7} {position * 1e9:7g} {r['nodes']:5d} {r['path']:>14} "

@@ -9,7 +9,7 @@ What it measures:
 2. ``synthetic``: a ``--grid`` x ``--grid`` map (default 64x64) with the real map's segment layout
    (extend, pause, six sine segments 300, 3, 100, 30, 1, 10 Hz, retract; its point counts and
    durations), written into a temporary folder with the property/encoder helpers of
-   tests/test_jpk.py, then read and demodulated in blocks of ``--block`` curves: each block is
+   tests/io/test_jpk.py, then read and demodulated in blocks of ``--block`` curves: each block is
    ``modulation_spectrum(archive, curves=block)`` (the library path: ``jpk_to_curves`` then the
    lock-in; spectra concatenated along ``curve``), timed three ways:
 
@@ -35,7 +35,7 @@ BLAS is pinned to one thread (OPENBLAS_NUM_THREADS=1 before NumPy loads, plus th
 and in the local workers. Outputs (in ``--out``, default benchmarks/out/): ``load.json`` (keys in
 :data:`JSON_KEYS`), ``load.csv`` (one row per timed run) and ``load.png`` (bar chart).
 Run ``python benchmarks/bench_load.py [--quick] [--out DIR] [--scheduler ADDRESS]``. No test
-asserts these times; tests/test_bench_load.py runs it with ``--quick`` and checks the keys.
+asserts these times; tests/benchmarks/test_fits_and_io.py runs it with ``--quick`` and checks the keys.
 """
 
 from __future__ import annotations
@@ -65,7 +65,7 @@ from threadpoolctl import threadpool_info, threadpool_limits  # noqa: E402
 HERE = Path(__file__).resolve().parent
 REPO = HERE.parent
 sys.path.insert(0, str(HERE))   # benchmarks/_common.py
-sys.path.insert(0, str(REPO))   # tests/test_jpk.py (archive helpers)
+sys.path.insert(0, str(REPO))   # tests/io/test_jpk.py (archive helpers)
 from _common import (  # noqa: E402
     OUT_DIR,
     machine_facts,
@@ -100,10 +100,16 @@ HEIGHT0 = 2e-5                # absolute height of the contact point [m]
 #: What a block receives: ``archive`` the JPKArchive read once (its member index travels with
 #: it; one open file per process, kept across blocks), ``path`` the file (read_jpk per block).
 OPEN_MODES = ("archive", "path")
-DEFAULT_GRID, QUICK_GRID = 64, 4
-DEFAULT_BLOCK, QUICK_BLOCK = 16, 4
-DEFAULT_SERIAL, QUICK_SERIAL = 512, 8
-DEFAULT_REOPEN, QUICK_REOPEN = 4, 2
+#: The case table: the real 4x4 map (``--real``, skipped when absent) and the synthetic
+#: ``grid`` × ``grid`` map, demodulated in blocks of ``block`` curves on dask, ``serial`` of its
+#: curves timed in this process and ``reopen`` in one block that reads the map itself (the
+#: command line's --grid, --block, --serial-curves, --reopen-curves override them).
+CASES = ({"map": "real"},
+         {"map": "synthetic", "grid": 64, "block": 16, "serial": 512, "reopen": 4})
+#: --quick: a 4x4 synthetic map in blocks of 4.
+QUICK_CASES = ({"map": "real"},
+               {"map": "synthetic", "grid": 4, "block": 4, "serial": 8, "reopen": 2})
+DEFAULT_GRID, QUICK_GRID = CASES[1]["grid"], QUICK_CASES[1]["grid"]  # for the help texts
 #: Top-level keys of load.json.
 JSON_KEYS = ("schema", "created", "quick", "machine", "target", "settings", "real", "synthetic",
              "summary", "files")
@@ -139,11 +145,14 @@ def traced(box: dict):
         tracemalloc.stop()
 
 
-# ── synthetic archive (helpers of tests/test_jpk.py) ─────────────────────────────────────────────
+# ── synthetic archive (helpers of tests/io/test_jpk.py) ──────────────────────────────────────────
 
 def _helpers():
-    """tests/test_jpk.py, whose serialiser, lcd-info and segment-settings helpers are reused."""
-    from tests import test_jpk
+    """tests/io/test_jpk.py, whose serialiser, lcd-info and segment-settings helpers are reused."""
+    try:
+        from tests.io import test_jpk
+    except ImportError:  # the layout before tests/io/
+        from tests import test_jpk
     return test_jpk
 
 
@@ -445,7 +454,7 @@ def parse(argv: list[str] | None) -> argparse.Namespace:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--quick", action="store_true",
                    help=f"smoke run: {QUICK_GRID}x{QUICK_GRID} synthetic map, blocks of "
-                        f"{QUICK_BLOCK}")
+                        f"{QUICK_CASES[1]['block']}")
     p.add_argument("--out", type=Path, default=OUT_DIR,
                    help="output folder (default: benchmarks/out next to this script)")
     p.add_argument("--scheduler", default=None,
@@ -455,10 +464,10 @@ def parse(argv: list[str] | None) -> argparse.Namespace:
                                                           f"{DEFAULT_GRID}, {QUICK_GRID} quick)")
     p.add_argument("--block", type=int, default=None, help="curves per task")
     p.add_argument("--serial-curves", type=int, default=None,
-                   help=f"curves timed serially (default {DEFAULT_SERIAL}; 0: all)")
+                   help=f"curves timed serially (default {CASES[1]['serial']}; 0: all)")
     p.add_argument("--reopen-curves", type=int, default=None,
                    help=f"curves timed in one block that reads the map itself (default "
-                        f"{DEFAULT_REOPEN}, {QUICK_REOPEN} quick)")
+                        f"{CASES[1]['reopen']}, {QUICK_CASES[1]['reopen']} quick)")
     p.add_argument("--open", dest="open_mode", choices=OPEN_MODES, default="archive",
                    help="what serial and dask blocks receive (default archive: the JPKArchive "
                         "read once, one open zip per process; path: the file, read per block)")
@@ -468,13 +477,13 @@ def parse(argv: list[str] | None) -> argparse.Namespace:
 
 def main(argv: list[str] | None = None) -> int:
     args = parse(argv)
-    grid = args.grid or (QUICK_GRID if args.quick else DEFAULT_GRID)
-    block = args.block or (QUICK_BLOCK if args.quick else DEFAULT_BLOCK)
+    synthetic = next(c for c in (QUICK_CASES if args.quick else CASES) if c["map"] == "synthetic")
+    grid = args.grid or synthetic["grid"]
+    block = args.block or synthetic["block"]
     n = grid * grid
-    serial_n = args.serial_curves if args.serial_curves is not None else (
-        QUICK_SERIAL if args.quick else DEFAULT_SERIAL)
+    serial_n = args.serial_curves if args.serial_curves is not None else synthetic["serial"]
     serial_n = n if serial_n <= 0 else min(serial_n, n)
-    reopen_n = min(args.reopen_curves or (QUICK_REOPEN if args.quick else DEFAULT_REOPEN), n)
+    reopen_n = min(args.reopen_curves or synthetic["reopen"], n)
     t_start = time.perf_counter()
     threadpool_limits(limits=1, user_api="blas")
     machine = machine_facts()

@@ -49,7 +49,7 @@ the cluster's workers and the CLI children). Outputs (in ``--out``, default benc
 ``maps.png`` (median times per size and way). ``--quick``: the 4x4 map in this process and by the
 cost model only, one round (no cluster, no CLI; a smoke run of a few seconds).
 Run ``python benchmarks/bench_maps.py [--quick] [--repeats N] [--out DIR]``. No test asserts
-these times; tests/test_bench_maps.py runs it with ``--quick`` and checks the keys.
+these times; tests/benchmarks/test_fits_and_io.py runs it with ``--quick`` and checks the keys.
 """
 
 from __future__ import annotations
@@ -84,11 +84,12 @@ from _common import (  # noqa: E402
 )
 
 SCHEMA = "viscoforce.bench_maps/1"
-SIZES = (4, 16, 64)
-QUICK_SIZES = (4,)
 DEFAULT_REPEATS = 3
 WAYS = ("in_process", "cluster", "auto", "cli")
-QUICK_WAYS = ("in_process", "auto")
+#: The case table: one n × n svda map per row, timed each of its ``ways`` (of :data:`WAYS`).
+CASES = tuple({"size": n, "ways": WAYS} for n in (4, 16, 64))
+#: --quick: the 4x4 map in this process and by the cost model (no cluster, no CLI).
+QUICK_CASES = ({"size": 4, "ways": ("in_process", "auto")},)
 TARGET = {"cluster_64_s": 10.0, "speedup_64": 1.6, "auto_rel": 0.10, "auto_abs_s": 0.05,
           "cli_margin_s": 0.5}
 OMEGA = np.geomspace(10.0, 1e6, 30)
@@ -378,7 +379,9 @@ def main(argv: list[str] | None = None) -> int:
                                  "(no cluster, no CLI)",
                       repeats_help=f"rounds per map size (default {DEFAULT_REPEATS}; --quick 1)")
     repeats = args.repeats or (1 if args.quick else DEFAULT_REPEATS)
-    sizes, ways = (QUICK_SIZES, QUICK_WAYS) if args.quick else (SIZES, WAYS)
+    cases = QUICK_CASES if args.quick else CASES
+    sizes = [c["size"] for c in cases]
+    ways = tuple(dict.fromkeys(w for c in cases for w in c["ways"]))
     t_start = time.perf_counter()
     machine = machine_facts()
     print("viscoforce maps: svda maps in-process, on 2 workers, by the cost model, by the CLI")
@@ -395,8 +398,9 @@ def main(argv: list[str] | None = None) -> int:
         startup = cli_startup(max(3, repeats), Path(tmp)) if "cli" in ways else None
         if startup is not None:
             print_results({}, startup)
-        for n in sizes:
-            results[f"{n}x{n}"] = time_size(n, ways, repeats, Path(tmp), rows, capacities)
+        for case in cases:
+            n = case["size"]
+            results[f"{n}x{n}"] = time_size(n, case["ways"], repeats, Path(tmp), rows, capacities)
             print_results({f"{n}x{n}": results[f"{n}x{n}"]}, None)
     machine_capacity = ({"median": statistics.median(capacities), "min": min(capacities),
                          "max": max(capacities), "runs": len(capacities)}

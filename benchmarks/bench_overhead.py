@@ -38,7 +38,7 @@ floor; the exact fit ≤ 8× the floor. The summary lines end in PASS/FAIL.
 Run ``python benchmarks/bench_overhead.py [--quick] [--repeats N] [--out DIR]``. Outputs (in
 ``--out``, default benchmarks/out/): ``overhead.json`` (keys :data:`JSON_KEYS`),
 ``overhead.csv`` (one row per case) and ``overhead.png`` (bars: time per fit, each path). No test
-asserts these times; tests/test_bench_overhead.py runs ``--quick`` and checks the keys.
+asserts these times; tests/benchmarks/test_fits_and_io.py runs ``--quick`` and checks the keys.
 """
 
 from __future__ import annotations
@@ -104,6 +104,21 @@ TARGETS = {"closed_form_ratio": 1.5, "exact_ratio": 8.0}
 CLOSED_FORM = ("svda", "contact", "prony", "relaxation")
 RADIUS, DEPTH = 10e-6, 50e-9  # contact and prony cases [m]
 SLS = {"E0": 1e10, "E_inf": 1e9, "tau": 1e-3}
+#: The case table, timed in this order: name, model, modes, fixed inputs and the truth of the
+#: synthetic data (:data:`N_POINTS` points, 1 % noise). ``relaxation`` is a force curve; ``exact``
+#: is the exact model at ``position`` (its problem built at run time).
+CASES = (
+    {"case": "svda", "model": "svda", "modes": 1,
+     "fixed": {"position": 2e-9, "radius": PAPER.R, "P": PAPER.P,
+               "debye_length": PAPER.debye_length}, "truth": SLS},
+    {"case": "contact", "model": "contact", "modes": 1,
+     "fixed": {"radius": RADIUS, "indentation": DEPTH}, "truth": SLS},
+    {"case": "prony", "model": "prony", "modes": 2, "fixed": {},
+     "truth": {"k_inf": 1.0, "dk_1": 2.0, "dk_2": 1.0, "tau_1": 1e-4, "tau_2": 1e-2}},
+    {"case": "relaxation", "model": "relaxation", "modes": 1, "fixed": {},
+     "truth": {"F_inf": 2e-9, "dF_1": 3e-9, "tau_1": 0.01}},
+    {"case": "exact", "model": "exact", "modes": 1, "position": -5e-9, "truth": SLS},
+)
 
 
 # ── the cases ────────────────────────────────────────────────────────────────────────────────────
@@ -130,9 +145,9 @@ def spectrum_case(name: str, model: str, modes: int, fixed: dict, truth: dict,
             "data": lambda: spectrum_data(ds)}
 
 
-def relaxation_case(rng: np.random.Generator) -> dict:
+def relaxation_case(rng: np.random.Generator, row: dict) -> dict:
     t = np.linspace(0.0, 0.05, N_POINTS)
-    truth = {"F_inf": 2e-9, "dF_1": 3e-9, "tau_1": 0.01}
+    truth = dict(row["truth"])
     f = make_model("relaxation", 1).raw(t, truth)
     f = f + NOISE * float(np.max(np.abs(f))) * rng.standard_normal(t.shape)
     data = FitData(t, f, None, {"data_kind": "curve"})
@@ -143,24 +158,28 @@ def relaxation_case(rng: np.random.Generator) -> dict:
             "data": lambda: data}
 
 
-def exact_case(rng: np.random.Generator) -> dict:
-    h0 = -5e-9
+def exact_case(rng: np.random.Generator, row: dict) -> dict:
+    h0, truth = row["position"], row["truth"]
     problem = vf.ContactProblem.create(sphere=Sphere(PAPER.R), surface_force=paper_pressure_law(),
-                                       material=StandardLinearSolid(**SLS), deepest_position=h0)
+                                       material=StandardLinearSolid(**truth), deepest_position=h0)
     k, force = linear_stiffness(problem, h0, omega())
     fixed = {"problem": problem, "position": h0}
-    case = spectrum_case("exact", "exact", 1, fixed, SLS, rng, k=k)
+    case = spectrum_case(row["case"], row["model"], row["modes"], fixed, truth, rng, k=k)
     return case
 
 
 def cases(rng: np.random.Generator) -> list[dict]:
-    svda = {"position": 2e-9, "radius": PAPER.R, "P": PAPER.P, "debye_length": PAPER.debye_length}
-    contact = {"radius": RADIUS, "indentation": DEPTH}
-    return [spectrum_case("svda", "svda", 1, svda, SLS, rng),
-            spectrum_case("contact", "contact", 1, contact, SLS, rng),
-            spectrum_case("prony", "prony", 2, {}, {"k_inf": 1.0, "dk_1": 2.0, "dk_2": 1.0,
-                                                    "tau_1": 1e-4, "tau_2": 1e-2}, rng),
-            relaxation_case(rng), exact_case(rng)]
+    """The cases of :data:`CASES` with their data (one seeded generator, in the table's order)."""
+    out = []
+    for row in CASES:
+        if row["model"] == "relaxation":
+            out.append(relaxation_case(rng, row))
+        elif row["model"] == "exact":
+            out.append(exact_case(rng, row))
+        else:
+            out.append(spectrum_case(row["case"], row["model"], row["modes"], dict(row["fixed"]),
+                                     row["truth"], rng))
+    return out
 
 
 # ── the floor ────────────────────────────────────────────────────────────────────────────────────

@@ -33,7 +33,7 @@ Outputs (in ``--out``, default benchmarks/out/): ``regression_benchmark.json`` (
 :data:`JSON_KEYS`), ``regression_timings.csv`` (one row per case) and ``regression_timings.png``.
 Run ``python benchmarks/bench_regression.py [--quick] [--repeats ROUNDS]
 [--previous REV|none|current] [--out DIR]``; no test asserts the times
-(tests/test_bench_regression.py runs ``--quick``).
+(tests/benchmarks/test_solvers.py runs ``--quick``).
 """
 
 from __future__ import annotations
@@ -81,34 +81,41 @@ SPEEDUP_TARGET = 5.0  # reference / current cold at −5 nm
 MARGIN_FLOOR, MARGIN_CAP = 0.04, 0.05
 REL_TOL = 1e-10
 BOOTSTRAP, SEED = 2000, 20261203
+_BOTH, _CURRENT = ("current", "previous"), ("current",)
+#: The case table: label, case name of _regression_cases.py and its parameters (``n_omega``, None
+#: here, is the run's: :data:`N_OMEGA`, --quick :data:`QUICK_N_OMEGA`), and which workers run it.
+CASES = (
+    {"label": "linear_response -5 nm cold", "case": "linear_response",
+     "params": {"position": POSITION, "eta": ETA, "n_omega": None, "cold": True},
+     "workers": _BOTH},
+    {"label": "linear_response -5 nm warm", "case": "linear_response",
+     "params": {"position": POSITION, "eta": ETA, "n_omega": None, "cold": False},
+     "workers": _BOTH},
+    {"label": "reference -5 nm", "case": "reference",
+     "params": {"position": POSITION, "eta": ETA, "n_omega": None}, "workers": _CURRENT},
+    {"label": "linear_response +2 nm cold", "case": "linear_response",
+     "params": {"position": FREE_POSITION, "eta": ETA, "n_omega": None, "cold": True},
+     "workers": _BOTH},
+    {"label": "linear_response +2 nm warm", "case": "linear_response",
+     "params": {"position": FREE_POSITION, "eta": ETA, "n_omega": None, "cold": False},
+     "workers": _BOTH},
+    {"label": "reference +2 nm", "case": "reference",
+     "params": {"position": FREE_POSITION, "eta": ETA, "n_omega": None}, "workers": _CURRENT},
+    {"label": "linear_stiffness -5 nm cold", "case": "linear_stiffness",
+     "params": {"position": POSITION, "n_omega": None, "cold": True}, "workers": _BOTH},
+    {"label": "linear_stiffness -5 nm warm", "case": "linear_stiffness",
+     "params": {"position": POSITION, "n_omega": None, "cold": False}, "workers": _BOTH},
+    {"label": "static_equilibrium -5 nm", "case": "static_equilibrium",
+     "params": {"position": POSITION}, "workers": _BOTH},
+    {"label": "static_equilibrium +2 nm", "case": "static_equilibrium",
+     "params": {"position": FREE_POSITION}, "workers": _BOTH},
+)
 
 
 def cases(n_omega: int) -> list[dict]:
-    """The timed cases: label, case name and parameters, and which workers run it."""
-    lr = {"eta": ETA, "n_omega": n_omega}
-    both, current = ("current", "previous"), ("current",)
-    return [
-        {"label": "linear_response -5 nm cold", "case": "linear_response",
-         "params": {"position": POSITION, **lr, "cold": True}, "workers": both},
-        {"label": "linear_response -5 nm warm", "case": "linear_response",
-         "params": {"position": POSITION, **lr, "cold": False}, "workers": both},
-        {"label": "reference -5 nm", "case": "reference",
-         "params": {"position": POSITION, **lr}, "workers": current},
-        {"label": "linear_response +2 nm cold", "case": "linear_response",
-         "params": {"position": FREE_POSITION, **lr, "cold": True}, "workers": both},
-        {"label": "linear_response +2 nm warm", "case": "linear_response",
-         "params": {"position": FREE_POSITION, **lr, "cold": False}, "workers": both},
-        {"label": "reference +2 nm", "case": "reference",
-         "params": {"position": FREE_POSITION, **lr}, "workers": current},
-        {"label": "linear_stiffness -5 nm cold", "case": "linear_stiffness",
-         "params": {"position": POSITION, "n_omega": n_omega, "cold": True}, "workers": both},
-        {"label": "linear_stiffness -5 nm warm", "case": "linear_stiffness",
-         "params": {"position": POSITION, "n_omega": n_omega, "cold": False}, "workers": both},
-        {"label": "static_equilibrium -5 nm", "case": "static_equilibrium",
-         "params": {"position": POSITION}, "workers": both},
-        {"label": "static_equilibrium +2 nm", "case": "static_equilibrium",
-         "params": {"position": FREE_POSITION}, "workers": both},
-    ]
+    """The rows of :data:`CASES` with ``n_omega`` filled in (a fresh copy for one run)."""
+    return [{**c, "params": {k: n_omega if k == "n_omega" else v for k, v in c["params"].items()}}
+            for c in CASES]
 
 
 def parse_args(argv: list[str] | None) -> argparse.Namespace:

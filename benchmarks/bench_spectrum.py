@@ -80,20 +80,11 @@ PAPER_PEAK_DEG, PAPER_PEAK_OMEGA = 38.0, 2.0 / TAU  # Fig. 4 text: 38° at ω = 
 N_OMEGA, OMEGA_MIN, OMEGA_MAX = 50, 10.0, 1e5  # [rad/s]
 TARGET_TIME = 50e-3  # [s] per 50-frequency spectrum
 TARGET_ERROR = 1e-4  # max |Δk*|/|k*| against the 4x-refined grid (bounds both rel. errors)
-GRID_FACTORS = (4.0, 3.0, 2.0, 1.5, 1.0)  # node spacing / default spacing
-QUICK_GRID_FACTORS = (2.0, 1.0)
 REFINE = 4.0  # reference grid: default spacing / REFINE
 REF_CHECK_REFINE = 6.0  # full run: the reference checked against default spacing / 6
 LINEAR_REPEATS, QUICK_LINEAR_REPEATS = 21, 10
 # part 2: time domain
 SMALL_ETA = 0.01e-9  # [m]: the linear response is the reference at this amplitude
-TD_OMEGAS = (100.0, 1e3, 1e4)  # [rad/s]
-QUICK_TD_OMEGAS = (1e4,)
-QUICK_PAPER_ETA_OMEGAS = (1e3,)
-SAMPLES = (8, 16, 32, 64, 128)  # samples_per_period of sweep()
-FIXED_STEPS = (8, 16, 32, 64, 128, 256, 512)  # steps per period, dt = period / N
-QUICK_SAMPLES = (32,)
-QUICK_FIXED_STEPS = (16, 32)
 TD_METHODS = ("exponential", "euler")
 MODES = ("sweep", "fixed dt")
 PERIODS = 4  # demodulated periods (sweep's default)
@@ -103,12 +94,28 @@ CHECK_TOL_FACTOR = 0.1  # paper-η check: tol = 0.1 × sweep's default (1e-5 η)
 PEAK_SEARCH_SPAN = 2.0  # time-domain search over [ω_lin / 2, 2 ω_lin]
 PEAK_XATOL, PEAK_MAXITER = 0.01, 12  # bounded searches in ln ω
 QUICK_TD_PEAK_MAXITER, QUICK_EULER_PEAK_MAXITER = 2, 4
-EULER_PEAK_STEPS = (16, 32, 64, 128)
-QUICK_EULER_PEAK_STEPS = (16, 32)
-EULER_SWEEP_SAMPLES = (16, 32)
-QUICK_EULER_SWEEP_SAMPLES = (16,)
 ERROR_FLOOR = 1e-9  # time-domain errors below this are drawn at this value
 LINEAR_ERROR_FLOOR = 1e-15  # linear-method errors below this are drawn at this value
+#: The case table, one row per part, each at both scenes of :data:`SCENES`: ``linear``, the linear
+#: method at each grid spacing factor (node spacing / default spacing); ``time_domain``, at each ω
+#: [rad/s] the library sweep at each ``samples`` per period and the fixed-step stepper at each
+#: ``fixed_steps`` per period (dt = period / N), for every method of :data:`TD_METHODS`;
+#: ``paper_eta``, the paper's η at each ω [rad/s]; ``fig4_peak``, explicit Euler's Fig. 4 peak at
+#: each ``euler_steps`` per period and ``sweep(method="euler")`` at each ``euler_sweep_samples``.
+CASES = (
+    {"part": "linear", "grid_factors": (4.0, 3.0, 2.0, 1.5, 1.0)},
+    {"part": "time_domain", "omegas": (100.0, 1e3, 1e4), "samples": (8, 16, 32, 64, 128),
+     "fixed_steps": (8, 16, 32, 64, 128, 256, 512)},
+    {"part": "paper_eta", "omegas": (100.0, 1e3, 1e4)},
+    {"part": "fig4_peak", "euler_steps": (16, 32, 64, 128), "euler_sweep_samples": (16, 32)},
+)
+#: --quick: grid factors 2 and 1, one frequency, fewer steps.
+QUICK_CASES = (
+    {"part": "linear", "grid_factors": (2.0, 1.0)},
+    {"part": "time_domain", "omegas": (1e4,), "samples": (32,), "fixed_steps": (16, 32)},
+    {"part": "paper_eta", "omegas": (1e3,)},
+    {"part": "fig4_peak", "euler_steps": (16, 32), "euler_sweep_samples": (16,)},
+)
 SCHEMA = "viscoforce.bench_spectrum/1"
 #: Top-level keys of spectrum_benchmark.json (documented in benchmarks/README.md).
 JSON_KEYS = ("schema", "created", "quick", "machine", "target", "settings", "linear",
@@ -394,7 +401,8 @@ PAPER_ETA_HEAD = (f"{'scene':>7} {'η[nm]':>5} {'omega':>7} {'F_lin [N]':>11} {'
 
 # ── part 3: the Fig. 4 phase peak ────────────────────────────────────────────────────────────────
 
-def fig4_peak(problem, quick: bool) -> dict:
+def fig4_peak(problem, quick: bool, case: dict) -> dict:
+    """The Fig. 4 peak: linear, time domain and explicit Euler (``case``: the ``fig4_peak`` row)."""
     h0, eta = SCENES["Fig. 4"]
     # (a) linear peak
     def lin_neg_phase(x: float) -> float:
@@ -439,7 +447,7 @@ def fig4_peak(problem, quick: bool) -> dict:
     # (c) explicit Euler at coarse steps: its phase at ω_lin and its own peak (bounded search)
     euler_rows = []
     euler_iter = QUICK_EULER_PEAK_MAXITER if quick else PEAK_MAXITER
-    for n in (QUICK_EULER_PEAK_STEPS if quick else EULER_PEAK_STEPS):
+    for n in case["euler_steps"]:
         failures: list[str] = []
 
         def euler_phase(w: float, n=n, failures=failures) -> float:
@@ -496,7 +504,7 @@ def fig4_peak(problem, quick: bool) -> dict:
               f"period (dt = {1e6 * extrap['dt_for_paper_peak_s']:.1f} us)", flush=True)
     # the library sweep with method="euler" (its dt is the default, not period/samples)
     lib = []
-    for n in (QUICK_EULER_SWEEP_SAMPLES if quick else EULER_SWEEP_SAMPLES):
+    for n in case["euler_sweep_samples"]:
         ds = sweep(problem, h0, eta, [w_lin], samples_per_period=n, stepper="euler",
                    progress=False)
         dt = min(euler_default_dt(), 2 * math.pi / w_lin / n)
@@ -641,10 +649,12 @@ def main(argv: list[str] | None = None) -> int:
                                    f"{CHEAP_RUN:g} s")
     quick = args.quick
     repeats = args.repeats or (QUICK_LINEAR_REPEATS if quick else LINEAR_REPEATS)
-    factors = QUICK_GRID_FACTORS if quick else GRID_FACTORS
-    omegas = QUICK_TD_OMEGAS if quick else TD_OMEGAS
-    samples = QUICK_SAMPLES if quick else SAMPLES
-    fixed_steps = QUICK_FIXED_STEPS if quick else FIXED_STEPS
+    cases = {c["part"]: c for c in (QUICK_CASES if quick else CASES)}
+    factors = cases["linear"]["grid_factors"]
+    omegas = cases["time_domain"]["omegas"]
+    samples = cases["time_domain"]["samples"]
+    fixed_steps = cases["time_domain"]["fixed_steps"]
+    eta_omegas = cases["paper_eta"]["omegas"]
     args.out.mkdir(parents=True, exist_ok=True)
     t_start = time.perf_counter()
 
@@ -698,12 +708,11 @@ def main(argv: list[str] | None = None) -> int:
               "is the genuine nonlinear effect, not an error. check = |dk*|/|k*| of tol/10.")
         print(PAPER_ETA_HEAD)
         print("-" * len(PAPER_ETA_HEAD))
-        paper_rows = paper_eta(problems, QUICK_PAPER_ETA_OMEGAS if quick else omegas,
-                               check=not quick)
+        paper_rows = paper_eta(problems, eta_omegas, check=not quick)
 
         print(f"\n3. Fig. 4 phase peak (paper: {PAPER_PEAK_DEG:g} deg at omega = 2/tau = "
               f"{PAPER_PEAK_OMEGA:g} rad/s)")
-        peak = fig4_peak(problems["Fig. 4"], quick)
+        peak = fig4_peak(problems["Fig. 4"], quick, cases["fig4_peak"])
 
     png = args.out / "spectrum_speed_accuracy.png"
     lin_csv = args.out / "spectrum_linear.csv"
@@ -728,7 +737,7 @@ def main(argv: list[str] | None = None) -> int:
                      "default_spacing": default_spacing(), "grid_factors": list(factors),
                      "refine": REFINE, "linear_repeats": repeats, "small_eta": SMALL_ETA,
                      "td_omegas": list(omegas), "samples_per_period": list(samples),
-                     "paper_eta_omegas": list(QUICK_PAPER_ETA_OMEGAS if quick else omegas),
+                     "paper_eta_omegas": list(eta_omegas),
                      "fixed_steps_per_period": list(fixed_steps), "periods": PERIODS,
                      "settle_s": settle_time(), "euler_default_dt": euler_default_dt(),
                      "cheap_run_s": CHEAP_RUN, "td_methods": list(TD_METHODS),

@@ -22,7 +22,7 @@ What it measures:
 Outputs (in ``--out``, default benchmarks/out/): ``startup.json`` (SI units; keys in
 :data:`JSON_KEYS`) and ``startup.csv`` (one row per timed run: round, command, wall_s, cpu_s).
 Run ``python benchmarks/bench_startup.py [--quick] [--repeats N] [--out DIR]``. No test asserts
-these times; tests/test_bench_startup.py runs it with ``--quick --repeats 1`` and checks the
+these times; tests/benchmarks/test_fits_and_io.py runs it with ``--quick --repeats 1`` and checks the
 keys.
 """
 
@@ -60,8 +60,14 @@ TARGET_RATIO = 1.15  # median wall time of the CLI / that of the baseline
 DEFAULT_REPEATS = 21
 QUICK_REPEATS = 5
 PINNED_ENV = {"OPENBLAS_NUM_THREADS": "1"}
-CLI_ARGS = ("static", "--h0=-5nm", "--E", "1e9", "--json")
-BASELINE_CODE = "import xarray, scipy.linalg, scipy.special; xarray.Dataset({'a': ('x', [1.0])})"
+#: The case table: the two commands timed alternately, each a fresh process: ``cli``, the
+#: viscoforce console script with ``args``; ``baseline``, this interpreter running ``code`` (the
+#: same --quick, with fewer rounds).
+CASES = ({"name": "cli", "args": ("static", "--h0=-5nm", "--E", "1e9", "--json")},
+         {"name": "baseline",
+          "code": "import xarray, scipy.linalg, scipy.special; xarray.Dataset({'a': ('x', [1.0])})"})
+CLI_ARGS = CASES[0]["args"]
+BASELINE_CODE = CASES[1]["code"]
 TOP_IMPORTS = 12  # largest CLI-only modules listed
 #: Top-level keys of startup.json.
 JSON_KEYS = ("schema", "created", "quick", "machine", "target", "settings", "results", "ratio",
@@ -195,7 +201,8 @@ def main(argv: list[str] | None = None) -> int:
     repeats = args.repeats or (QUICK_REPEATS if args.quick else DEFAULT_REPEATS)
     t_start = time.perf_counter()
     machine = machine_facts()
-    commands = {"cli": cli_command(), "baseline": [sys.executable, "-c", BASELINE_CODE]}
+    commands = {c["name"]: cli_command() if c["name"] == "cli" else [sys.executable, "-c", c["code"]]
+                for c in CASES}
     print("viscoforce start-up: a whole `viscoforce static` process against a bare "
           "xarray/scipy one")
     print_machine(machine)

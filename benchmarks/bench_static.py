@@ -58,18 +58,26 @@ from _common import (  # noqa: E402
 )
 
 RADIUS = vf.PAPER.R  # sphere radius [m]
-MODULI = (1e9, 1e10)  # E [Pa], paper convention
-POSITIONS_NM = (-10.0, -7.0, -5.0, -3.0, 0.0, 2.0, 5.0, 10.0)  # h0 [nm]
+#: The case table. Part 1, ``default_grid``: the default grid at each position h0 [nm] for each
+#: modulus E [Pa] (paper convention), timed in this order. Part 2, ``sweep``: at each (h0 [m],
+#: E [Pa]) every grid spacing (``factors`` × the default node spacing) at every Gauss order.
+CASES = (
+    *({"part": "default_grid", "h0_nm": h0_nm, "E": modulus}
+      for h0_nm in (-10.0, -7.0, -5.0, -3.0, 0.0, 2.0, 5.0, 10.0) for modulus in (1e9, 1e10)),
+    {"part": "sweep", "h0": -10e-9, "E": 1e10, "factors": (4.0, 3.0, 2.0, 1.5, 1.0, 0.5),
+     "orders": (4, 6, 8, 10)},
+    {"part": "sweep", "h0": 2e-9, "E": 1e9, "factors": (4.0, 3.0, 2.0, 1.5, 1.0, 0.5),
+     "orders": (4, 6, 8, 10)},
+)
+#: --quick: the same default grid; the sweep at spacing factors 2 and 1, orders 4 and 8.
+QUICK_CASES = (*(c for c in CASES if c["part"] == "default_grid"),
+               *({**c, "factors": (2.0, 1.0), "orders": (4, 8)} for c in CASES
+                 if c["part"] == "sweep"))
 REFINE = 4  # default-table reference: spacing / REFINE, same order
 TARGET_TIME = 5e-3  # [s] per static solve
 TARGET_ERROR = 1e-4  # relative load error
-SWEEP_FACTORS = (4.0, 3.0, 2.0, 1.5, 1.0, 0.5)  # grid spacing = factor × default node spacing
-SWEEP_ORDERS = (4, 6, 8, 10)
-SWEEP_CASES = ((-10e-9, 1e10), (2e-9, 1e9))  # (h0 [m], E [Pa])
 SWEEP_REF_DIVISOR = 8  # sweep reference: default spacing / 8 ...
 SWEEP_REF_ORDER = 8  # ... at order 8
-QUICK_FACTORS = (2.0, 1.0)
-QUICK_ORDERS = (4, 8)
 MIN_REPEAT_TIME = 1e-3  # [s]: calls per repeat are batched up to this (timeit autorange-like)
 ERROR_FLOOR = 1e-16  # errors below this are drawn at this value (round-off level)
 SCHEMA = "viscoforce.bench_static/1"
@@ -135,6 +143,11 @@ def make_problem(h0: float, modulus: float, *, grid_spacing: float | None = None
                                     grid_spacing=grid_spacing, order=order)
 
 
+def part(cases: tuple[dict, ...], name: str) -> list[dict]:
+    """The rows of ``cases`` (:data:`CASES` or :data:`QUICK_CASES`) of one part."""
+    return [c for c in cases if c["part"] == name]
+
+
 def rel_err(value: float, reference: float) -> float:
     return abs(value - reference) / abs(reference)
 
@@ -153,23 +166,27 @@ def load_peer(path: Path) -> dict[tuple[float, int], float]:
 
 # ── part 1: default grid ─────────────────────────────────────────────────────────────────────────
 
-def bench_default(repeats: int, warmup: int, peer: dict) -> tuple[list[dict], list[dict]]:
+def bench_default(cases: list[dict], repeats: int, warmup: int,
+                  peer: dict) -> tuple[list[dict], list[dict]]:
     builds, rows, timers = [], [], []
-    for h0_nm in POSITIONS_NM:
+    positions: dict[float, list[float]] = {}  # h0 [nm] → its moduli, in the table's order
+    for case in cases:
+        positions.setdefault(case["h0_nm"], []).append(case["E"])
+    for h0_nm, moduli in positions.items():
         h0 = h0_nm * 1e-9
-        cold = make_problem(h0, MODULI[0])
+        cold = make_problem(h0, moduli[0])
         build_s = cold_build(cold)
         _node_matrix_unit.cache_clear()
-        cold = make_problem(h0, MODULI[0])
+        cold = make_problem(h0, moduli[0])
         t0 = time.perf_counter()
         vf.static_equilibrium(cold, h0)
         first_call_s = time.perf_counter() - t0
         ref_spacing = cold.grid.spacing / REFINE
-        ref_grid = make_problem(h0, MODULI[0], grid_spacing=ref_spacing).grid
+        ref_grid = make_problem(h0, moduli[0], grid_spacing=ref_spacing).grid
         builds.append({"h0": h0, "n_panels": cold.grid.n_panels, "order": cold.grid.order,
                        "nodes": cold.grid.size, "build_s": build_s,
                        "first_call_s": first_call_s, "refined_nodes": ref_grid.size})
-        for modulus in MODULI:
+        for modulus in moduli:
             problem = make_problem(h0, modulus)
             ds = vf.static_equilibrium(problem, h0)
             force = float(ds.force)
@@ -207,16 +224,17 @@ def bench_default(repeats: int, warmup: int, peer: dict) -> tuple[list[dict], li
 
 # ── part 2: speed–accuracy sweep ─────────────────────────────────────────────────────────────────
 
-def bench_sweep(factors, orders, repeats: int, warmup: int) -> list[dict]:
+def bench_sweep(cases: list[dict], repeats: int, warmup: int) -> list[dict]:
     rows = []
-    for h0, modulus in SWEEP_CASES:
+    for case in cases:
+        h0, modulus = case["h0"], case["E"]
         base = make_problem(h0, modulus).grid.spacing  # default node spacing (order 8) [m]
         ref = make_problem(h0, modulus, grid_spacing=base / SWEEP_REF_DIVISOR,
                            order=SWEEP_REF_ORDER)
         force_ref = float(vf.static_equilibrium(ref, h0).force)
         case_rows, timers = [], []
-        for order in orders:
-            for factor in factors:
+        for order in case["orders"]:
+            for factor in case["factors"]:
                 problem = make_problem(h0, modulus, grid_spacing=base * factor, order=order)
                 row = {"case": f"h0={h0 * 1e9:g}nm,E={modulus:g}Pa", "E": modulus, "h0": h0,
                        "order": order, "spacing_factor": factor,
@@ -363,8 +381,8 @@ def main(argv: list[str] | None = None) -> int:
     repeats = args.repeats or (5 if args.quick else 50)
     sweep_repeats = min(repeats, 5 if args.quick else 20)
     warmup = 1 if args.quick else 3
-    factors = QUICK_FACTORS if args.quick else SWEEP_FACTORS
-    orders = QUICK_ORDERS if args.quick else SWEEP_ORDERS
+    cases = QUICK_CASES if args.quick else CASES
+    default_cases, sweep_cases = part(cases, "default_grid"), part(cases, "sweep")
     args.out.mkdir(parents=True, exist_ok=True)
     t_start = time.perf_counter()
 
@@ -377,14 +395,14 @@ def main(argv: list[str] | None = None) -> int:
               f"{sweep_repeats}) after {warmup} warm-up call(s), gc off, time.perf_counter; "
               f"load average {machine['loadavg_start']}")
         # process warm-up: lazy imports and first-call costs outside every timed region
-        vf.static_equilibrium(make_problem(10e-9, MODULI[0]), 10e-9)
+        vf.static_equilibrium(make_problem(10e-9, default_cases[0]["E"]), 10e-9)
         peer = load_peer(PEER_CSV)
         if not peer:
             print(f"FFT peer file not found ({PEER_CSV}): peer comparison skipped")
 
-        builds, default_rows = bench_default(repeats, warmup, peer)
+        builds, default_rows = bench_default(default_cases, repeats, warmup, peer)
         print_default(builds, default_rows)
-        sweep_rows = bench_sweep(factors, orders, sweep_repeats, warmup)
+        sweep_rows = bench_sweep(sweep_cases, sweep_repeats, warmup)
         print_sweep(sweep_rows)
 
     png = args.out / "static_speed_accuracy.png"
@@ -399,11 +417,14 @@ def main(argv: list[str] | None = None) -> int:
         "target": {"time_per_solve_s": TARGET_TIME, "relative_error": TARGET_ERROR,
                    "time_measured_on": "static_equilibrium (full public call)",
                    "error_measured_against": f"same position, grid spacing / {REFINE}"},
-        "settings": {"radius": RADIUS, "moduli": list(MODULI),
-                     "positions": [x * 1e-9 for x in POSITIONS_NM], "repeats": repeats,
+        "settings": {"radius": RADIUS, "moduli": list(dict.fromkeys(c["E"] for c in default_cases)),
+                     "positions": [x * 1e-9 for x in dict.fromkeys(c["h0_nm"]
+                                                                   for c in default_cases)],
+                     "repeats": repeats,
                      "sweep_repeats": sweep_repeats, "warmup": warmup, "refine": REFINE,
-                     "sweep_factors": list(factors), "sweep_orders": list(orders),
-                     "sweep_cases": [{"h0": h, "E": e} for h, e in SWEEP_CASES],
+                     "sweep_factors": list(sweep_cases[0]["factors"]),
+                     "sweep_orders": list(sweep_cases[0]["orders"]),
+                     "sweep_cases": [{"h0": c["h0"], "E": c["E"]} for c in sweep_cases],
                      "sweep_reference": {"spacing_divisor": SWEEP_REF_DIVISOR,
                                          "order": SWEEP_REF_ORDER},
                      "peer_csv": str(PEER_CSV) if peer else None},

@@ -19,7 +19,7 @@ Cases (the paper's 10 µm sphere and pressure law; truth SLS E0 = 1e10 Pa, E_inf
 5e8 Pa, τ = 0.1 ms, which the guess ignores):
 
 1. ``fig1_step``: the Fig. 1 step h0 = −5 → −7 nm in 0.1 ms, 101 samples over 5 ms (``--quick``:
-   11 samples over 1 ms), noise-free (the test case of tests/test_fitting.py).
+   11 samples over 1 ms), noise-free (the test case of tests/fitting/test_fitting.py).
 2. ``triangle``: a triangle −3 → −7 → −3 nm at 4 µm/s (2 ms), 101 samples over 4 ms, with 0.3 %
    seeded Gaussian noise on the force (a measured-trace-like case; not run with ``--quick``).
 
@@ -30,7 +30,7 @@ and stderr differences new − old (relative, and in units of the old stderr).
 BLAS is pinned to one thread (environment before NumPy loads, plus threadpoolctl; reported).
 Run ``python benchmarks/bench_step.py [--quick] [--out DIR] [--repeats N]``. Outputs in
 ``--out``: ``step.json`` (keys :data:`JSON_KEYS`), ``step.csv`` (one row per timed fit) and
-``step.png``. tests/test_bench_step.py runs ``--quick`` and checks keys and files.
+``step.png``. tests/benchmarks/test_solvers.py runs ``--quick`` and checks keys and files.
 """
 
 from __future__ import annotations
@@ -95,6 +95,18 @@ NAMES = ("E0", "E_inf", "tau")
 TARGET = 5.0
 TRUTH = StandardLinearSolid(PAPER.E0, PAPER.E_inf, PAPER.tau)
 WRONG = StandardLinearSolid(3e9, 5e8, 1e-4)
+#: The case table: name, drive, deepest position [m], (t_end [s], samples), relative force noise,
+#: description. Each is simulated with :data:`TRUTH` and fitted from the problem with :data:`WRONG`.
+CASES = (
+    {"name": "fig1_step", "drive": Step(-5e-9, -7e-9, 1e-4), "deepest": -7e-9,
+     "times": (5e-3, 101), "noise": 0.0, "text": "Fig. 1 step -5 -> -7 nm in 0.1 ms, noise-free"},
+    {"name": "triangle", "drive": Triangle(-3e-9, -7e-9, 4e-6), "deepest": -7e-9,
+     "times": (4e-3, 101), "noise": 3e-3,
+     "text": "triangle -3 -> -7 -> -3 nm at 4 um/s, 0.3 % noise"},
+)
+#: --quick: the step case on 11 samples over 1 ms (no triangle: the old path alone costs ~2 s a
+#: fit even on 11 samples).
+QUICK_CASES = ({**CASES[0], "times": (1e-3, 11)},)
 
 
 # ── the old model, kept verbatim as the reference ────────────────────────────────────────────────
@@ -146,19 +158,13 @@ def old_fit_step(trajectory, *, problem):
 # ── cases ────────────────────────────────────────────────────────────────────────────────────────
 
 def cases(quick: bool) -> dict:
-    """Name → (trajectory, problem with the wrong material, description)."""
+    """Name → (trajectory, problem with the wrong material, description) of each case."""
     law = paper_pressure_law(PAPER.P, PAPER.debye_length, PAPER.Pw, PAPER.z0)
     out = {}
-    specs = {
-        "fig1_step": (Step(-5e-9, -7e-9, 1e-4), -7e-9, (1e-3, 11) if quick else (5e-3, 101), 0.0,
-                      "Fig. 1 step -5 -> -7 nm in 0.1 ms, noise-free"),
-        "triangle": (Triangle(-3e-9, -7e-9, 4e-6), -7e-9, (4e-3, 101),
-                     3e-3, "triangle -3 -> -7 -> -3 nm at 4 um/s, 0.3 % noise"),
-    }
-    if quick:
-        del specs["triangle"]  # seconds: the old path alone costs ~2 s a fit even on 11 samples
     rng = np.random.default_rng(20260122)
-    for name, (drive, deepest, (t_end, samples), noise, text) in specs.items():
+    for case in QUICK_CASES if quick else CASES:
+        name, drive, deepest, (t_end, samples), noise, text = (
+            case[k] for k in ("name", "drive", "deepest", "times", "noise", "text"))
         problem = ContactProblem.create(sphere=Sphere(PAPER.R), surface_force=law,
                                         material=TRUTH, deepest_position=deepest)
         t = np.linspace(0.0, t_end, samples)

@@ -28,7 +28,7 @@ BLAS is pinned to one thread (OPENBLAS_NUM_THREADS=1 etc. in this process and ev
 threadpoolctl here). Outputs in ``--out`` (default benchmarks/out/): ``stream.json`` (keys in
 :data:`JSON_KEYS`), ``stream.csv`` (one row per command and size), ``stream.png``. Run
 ``python benchmarks/bench_stream.py [--quick] [--out DIR] [--sizes 16 256 ...]``.
-tests/test_bench_stream.py runs ``--quick`` and checks keys and files; no test asserts a time.
+tests/benchmarks/test_fits_and_io.py runs ``--quick`` and checks keys and files; no test asserts a time.
 """
 
 from __future__ import annotations
@@ -52,7 +52,7 @@ from threadpoolctl import threadpool_limits  # noqa: E402
 HERE = Path(__file__).resolve().parent
 REPO = HERE.parent
 sys.path.insert(0, str(HERE))   # _common.py, bench_load.py (the synthetic map writer)
-sys.path.insert(0, str(REPO))   # tests/test_jpk.py (archive helpers of the writer)
+sys.path.insert(0, str(REPO))   # tests/io/test_jpk.py (archive helpers of the writer)
 from _common import (  # noqa: E402
     OUT_DIR,
     machine_facts,
@@ -69,7 +69,6 @@ SCHEMA = "viscoforce.bench_stream/1"
 GIB = 2**30
 TARGET_BYTES = GIB
 TARGET_RATIO = 1.5
-DEFAULT_SIZES, QUICK_SIZES = (16, 256, 1024, 4096), (4, 16)
 #: Top-level keys of stream.json.
 JSON_KEYS = ("schema", "created", "quick", "machine", "target", "settings", "maps", "runs",
              "summary", "files")
@@ -80,6 +79,13 @@ COMMANDS = {
     "fit": ("fit", "{map}", "--model", "svda", "--mean-force", "2nN", "--out", "{out}/fits.nc",
             "--no-progress"),
 }
+#: The case table: one synthetic map per row, its number of curves (a square number), run by
+#: every command of :data:`COMMANDS` (``--sizes`` replaces the table's sizes).
+CASES = tuple({"curves": n} for n in (16, 256, 1024, 4096))
+#: --quick: maps of 4 and 16 curves.
+QUICK_CASES = ({"curves": 4}, {"curves": 16})
+DEFAULT_SIZES = tuple(c["curves"] for c in CASES)
+QUICK_SIZES = tuple(c["curves"] for c in QUICK_CASES)
 SAMPLE_S = 0.02
 
 #: The wrapper run as a fresh child per measurement: starts the command, samples the RSS of its

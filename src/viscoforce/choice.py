@@ -12,8 +12,8 @@ required accuracy (a relative error of the force or complex stiffness, default
 :data:`DEFAULT_ACCURACY`). Every choice carries a one-paragraph explanation naming the
 estimates it compared.
 
-The estimates (measured in ``benchmarks/validity_maps.py`` and ``benchmarks/speed_accuracy.py``,
-whose scenes the tests check them on):
+The estimates (measured in ``studies/validity_maps/validity_maps.py`` and
+``studies/speed_accuracy/speed_accuracy.py``, whose scenes the tests check them on):
 
 * **finite amplitude** — the first harmonic of an exponential force F ∝ e^{−κh} driven by
   h̄0 + η sin ωt is κF̄·2I₁(κη)/(κη), so a small-amplitude (linear) stiffness is off by

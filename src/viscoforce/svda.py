@@ -162,7 +162,7 @@ def svda_static_deformation(position: ArrayLike, E: float, radius: float, P: flo
 
 #: max over ω of |k*_SVDA/k*_exact − 1| ≈ SVDA_ERROR_COEFFICIENT·κ|u0| (u0 the relaxed central
 #: deformation): measured 0.585 for κ|u0| ≤ 0.03 (0.3–0.55 above) over R 1–100 µm, E 0.1–10 GPa,
-#: 1/κ 0.3–3 nm, E0/E_inf 3–100 (benchmarks/validity_maps.py).
+#: 1/κ 0.3–3 nm, E0/E_inf 3–100 (studies/validity_maps/validity_maps.py).
 SVDA_ERROR_COEFFICIENT = 0.6
 #: Estimated SVDA error above which the closed forms warn (ModelValidityWarning).
 SVDA_WARN_ERROR = 1e-2
@@ -201,7 +201,7 @@ def warn_if_in_contact(gap: ArrayLike, debye_length: float, what: str, *,
 
     The SVDA holds before contact only; along a drive into contact it is tens of per cent off
     (56 % on the paper's Fig. 5 loop for the ODE, 100 % for the closed-form ramp;
-    benchmarks/speed_accuracy.py).
+    studies/speed_accuracy/speed_accuracy.py).
     """
     g = np.asarray(gap, dtype=float)
     if g.size and float(np.min(g)) < float(debye_length):

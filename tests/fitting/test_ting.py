@@ -584,7 +584,7 @@ def test_real_map_curve_0(real_map_path):
                       newtonian=False)
     # measured: E0 (Young's, t0 = 1 s) 110 Pa, β = 0.360, RMS residual 34 pN; PyFMRheo reports
     # 334 Pa and 0.168 (its analytical ramp solution on 300 points near contact): under the
-    # exact integral on these data its values leave a 50 pN RMS (benchmarks/ting_real.py)
+    # exact integral on these data its values leave a 50 pN RMS (studies/ting_real/ting_real.py)
     assert 80 < float(ds["ting_E0_young"]) < 150
     assert 0.3 < float(ds["beta"]) < 0.42
     assert math.sqrt(float(ds["redchi"])) < 40e-12

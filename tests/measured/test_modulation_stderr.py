@@ -10,7 +10,7 @@ What each test proves:
 * red noise (AR(1)) and random-walk drift: the white formula is too small, the new errors give
   z-rms in [0.7, 1.4] over 200 replicas; the F–δ noise correlation is kept in the error of k*;
 * the spectrum carries both sets of errors, the method in its attrs, and round-trips netCDF;
-  ``benchmarks/split_half.py`` runs and reports the same split-half numbers.
+  ``studies/split_half/split_half.py`` runs and reports the same split-half numbers.
 """
 
 from __future__ import annotations
@@ -256,7 +256,7 @@ def test_spectrum_carries_both_errors_and_round_trips(tmp_path):
 def test_split_half_benchmark_script_runs(tmp_path):
     if not REAL_MAP.is_file():
         pytest.skip(f"real data file not present: {REAL_MAP}")
-    script = Path(__file__).resolve().parents[2] / "benchmarks" / "split_half.py"
+    script = Path(__file__).resolve().parents[2] / "studies" / "split_half" / "split_half.py"
     out = tmp_path / "split_half.json"
     run = subprocess.run([sys.executable, str(script), "--out", str(out), "--repeats", "1"],
                          capture_output=True, text=True, check=False)

@@ -12,6 +12,7 @@ import numpy as np
 import pytest
 
 import viscoforce as vf
+from tests.conftest import REPO
 from viscoforce.exceptions import ParameterError, SchemaError
 from viscoforce.experiments import Ramp, Triangle
 from viscoforce.plotting import (
@@ -23,8 +24,6 @@ from viscoforce.plotting import (
     profile_plot,
 )
 from viscoforce.solvers.simulate import simulate
-
-from tests.conftest import REPO
 
 NM, UN, MS = 1e-9, 1e-6, 1e-3
 

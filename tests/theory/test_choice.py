@@ -60,7 +60,7 @@ def rel(a, b):
 
 # ── spectra ──────────────────────────────────────────────────────────────────────────────────────
 
-#: The frequency of the largest finite-amplitude bias (ω = 20/τ, benchmarks/validity_maps.py).
+#: The frequency of the largest finite-amplitude bias (ω = 20/τ, studies/validity_maps/validity_maps.py).
 OMEGA_BIAS = np.array([20.0 / PAPER.tau])
 
 
@@ -147,7 +147,7 @@ def test_amplitude_bias_is_the_rigid_bessel_limit_for_a_stiff_solid():
 @pytest.mark.parametrize(("h0", "eta", "measured"), [(2e-9, 0.1e-9, 5.5e-4),
                                                       (-5e-9, 0.1e-9, 3.5e-3)])
 def test_amplitude_bias_matches_the_measured_lockin_bias(h0, eta, measured):
-    # measured: linear vs time-domain lock-in at ω = 20/τ (benchmarks/validity_maps.py); the
+    # measured: linear vs time-domain lock-in at ω = 20/τ (studies/validity_maps/validity_maps.py); the
     # harmonic balance's leading term, 1.00x (Fig. 3) and 1.05x (-5 nm) of it
     p = problem(h0 - eta)
     bias = float(np.abs(amplitude_bias(p, h0, OMEGA_BIAS)[0])) * eta ** 2

@@ -1,4 +1,4 @@
-"""Inside each failure region of benchmarks/validity_maps.py the code raises or warns.
+"""Inside each failure region of studies/validity_maps/validity_maps.py the code raises or warns.
 
 One small case per region (issue 15 item 2): explicit Euler above its step limit, a gap that
 closes, the half-space model's own limits, an SVDA or Hertz spectrum outside its domain, a linear

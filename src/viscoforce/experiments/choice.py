@@ -36,11 +36,11 @@ from viscoforce.problem import ContactProblem
 from viscoforce.radial_grid import RadialGrid
 
 #: Factor on the harmonic-balance bias: its leading term is exact for small η; measured
-#: (benchmarks/validity_maps.py, time-domain lock-in) at 0.95–1.0× it for κη ≤ 0.1 (Fig. 3:
+#: (studies/validity_maps/validity_maps.py, time-domain lock-in) at 0.95–1.0× it for κη ≤ 0.1 (Fig. 3:
 #: 5.5e-4 both; −5 nm: 3.5e-3 vs 3.7e-3), 0.78× at κη = 0.25 and 0.24× at κη = 1 (Fig. 4).
 BIAS_SAFETY = 1.1
 #: Coarser grids of the linear route: (node spacing × the problem's, measured max error over the
-#: study's static loads, Fig. 3, Fig. 4 and deep spectra; benchmarks/speed_accuracy.py). The
+#: study's static loads, Fig. 3, Fig. 4 and deep spectra; studies/speed_accuracy/speed_accuracy.py). The
 #: estimate used is SAFETY × that; the deep spectrum is 20× faster at × 4 (12 ms vs 0.24 s).
 COARSE_GRIDS = ((4.0, 6.4e-5), (2.0, 2.7e-7))
 #: The share of the accuracy a coarser grid's own error may take.

@@ -24,7 +24,7 @@ What it measures, through the public API (the CLI equivalent is the table's "com
    counts left out per reason), plus — since few pixels pass the p ≥ 0.001 test — the same
    quartiles over every pixel whose optimiser converged, and the median redchi; (d) the lock-in
    split-half rms z per frequency, residual-spectrum ("new") against white-noise stderr, by
-   ``benchmarks/split_half.py``'s own functions. The tip radius is not in the file: R = 10 µm is
+   ``studies/split_half/split_half.py``'s own functions. The tip radius is not in the file: R = 10 µm is
    assumed (the CLI default).
 
 4. Force curves, on every real file whose curves have the segment (found at run time, not listed
@@ -74,9 +74,9 @@ data folder → that file's result with its own ``status``; ``hertz`` also ``tip
 ``bytes``, ``read_as``, ``curves``, ``load_error``, ``models``, ``analysed``, ``not_run``,
 ``outcome`` — ``"analysed"``, ``"not run"`` or ``"refused"`` — and ``reason``; ``markdown``),
 ``markdown``, ``wall_time_s``), ``real_data.md`` (the table), ``real_data_coverage.md`` and
-``real_data_curves.csv`` (the chooser per curve) to ``--out`` (default benchmarks/out). Exit
+``real_data_curves.csv`` (the chooser per curve) to ``--out`` (default studies/real_data/out). Exit
 status 1 when an analysis raised, else 0.
-Run ``python benchmarks/real_data.py [--quick] [--out DIR] [--data DIR]``.
+Run ``python studies/real_data/real_data.py [--quick] [--out DIR] [--data DIR]``.
 """
 
 from __future__ import annotations
@@ -107,7 +107,8 @@ import numpy as np  # noqa: E402
 from threadpoolctl import threadpool_info, threadpool_limits  # noqa: E402
 
 HERE = Path(__file__).resolve().parent
-ROOT = HERE.parent
+ROOT = HERE.parents[1]
+SPLIT_HALF = ROOT / "studies" / "split_half"  # split_half.py, whose functions (d) uses
 DATA_DIR = ROOT.parent / "shared" / "data" / "real"
 BUNDLED_MAP = ROOT / "data_examples" / "real" / "modulation-map.jpk-force-map"
 HOLD_FILE = "afmformats/fmt-jpk-sr_cell1-0008.jpk-force"
@@ -413,8 +414,8 @@ def material_map(spec, key: str) -> dict[str, Any]:
 
 
 def split_half_check(path: Path) -> dict[str, Any]:
-    if str(HERE) not in sys.path:
-        sys.path.insert(0, str(HERE))
+    if str(SPLIT_HALF) not in sys.path:
+        sys.path.insert(0, str(SPLIT_HALF))
     import split_half
 
     caught: list[warnings.WarningMessage] = []
@@ -476,7 +477,7 @@ def modulation_row(r: dict[str, Any]) -> tuple[str, str, str]:
     command = "; ".join([cmd("MAP --model auto --R 10um --curve I")]
                         + [cmd("MAP --model contact", MATERIAL_FLAGS[k], "--R 10um")
                            for k in MATERIALS]
-                        + ["`python benchmarks/split_half.py`"])
+                        + ["`python studies/split_half/split_half.py`"])
     return (f"JPK modulation map, 4×4, {len(r['frequencies_hz'])} frequencies "
             f"(MAP = `{Path(MAP_FILE).name}`)", command, result)
 
@@ -1304,7 +1305,7 @@ def main(argv: list[str] | None = None) -> int:
                         help=f"the modulation map's first {QUICK_CURVES} curves, coverage, hertz "
                              "on single curves, creep on one")
     parser.add_argument("--out", type=Path, default=HERE / "out",
-                        help="output folder (default: benchmarks/out)")
+                        help="output folder (default: studies/real_data/out)")
     parser.add_argument("--data", type=Path, default=DATA_DIR,
                         help="folder of the real files (default: ../shared/data/real)")
     args = parser.parse_args(argv)

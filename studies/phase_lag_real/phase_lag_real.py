@@ -16,12 +16,15 @@ What it does:
    the median, min and max phase per frequency and the points flagged per frequency
    (``phase_outside_passive_range``, ``low_signal``), plus ``attrs["quality_summary"]``.
 
-Output: the table on stdout and ``benchmarks/phase_lag_real.json`` (``--out`` for another file)
+Output: the table on stdout and ``studies/phase_lag_real/phase_lag_real.json`` (the committed
+numbers; ``--quick``: ``studies/phase_lag_real/out/phase_lag_real.json``; ``--out`` for another
+file or folder)
 with keys ``schema``, ``created``, ``file``, ``frequencies_hz``, ``sensor_vs_piezo_lag_deg``
 (``median``, ``sd``), ``runs`` (per run: ``description``, ``height_channel``, ``phase_lag_deg``,
 ``median_phase_deg``, ``min_phase_deg``, ``max_phase_deg``, ``flagged_phase``,
 ``flagged_low_signal``, ``quality_summary``) and ``conclusion``. Run ``python
-benchmarks/phase_lag_real.py [--path MAP] [--out FILE]``; it takes a few seconds.
+studies/phase_lag_real/phase_lag_real.py [--quick] [--path MAP] [--out PATH]``; it takes a few
+seconds (``--quick`` is the same run, written to ``out/`` so that the committed file stays).
 """
 
 from __future__ import annotations
@@ -46,10 +49,12 @@ from viscoforce.io.instruments import load_instrument  # noqa: E402
 from viscoforce.lockin import harmonics  # noqa: E402
 
 HERE = Path(__file__).resolve().parent
-CANDIDATES = (HERE.parent / "data_examples" / "real" / "modulation-map.jpk-force-map",
-              HERE.parent.parent / "shared" / "data" / "real" / "PyFMReader"
+REPO = HERE.parents[1]
+CANDIDATES = (REPO / "data_examples" / "real" / "modulation-map.jpk-force-map",
+              REPO.parent / "shared" / "data" / "real" / "PyFMReader"
               / "map-data-2021.11.05-17.37.44.432.jpk-force-map")
 SCHEMA = "viscoforce.phase_lag_real/1"
+JSON_NAME = "phase_lag_real.json"
 README_LAG = {300.0: 14.0}   # the README's recipe: load --phase-lag 300Hz=14
 
 
@@ -91,12 +96,28 @@ def summary(spec, description: str) -> dict:
             "quality_summary": str(spec.attrs["quality_summary"])}
 
 
+def json_path(out: Path | None, quick: bool) -> Path:
+    """Where the report goes.
+
+    ``out`` (a folder: ``out/phase_lag_real.json``), else the committed file, or
+    ``out/phase_lag_real.json`` next to this script for ``--quick``.
+    """
+    if out is None:
+        return HERE / "out" / JSON_NAME if quick else HERE / JSON_NAME
+    return out / JSON_NAME if out.is_dir() or not out.suffix else out
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--path", type=Path, default=None, help="JPK modulation map")
-    parser.add_argument("--out", type=Path, default=HERE / "phase_lag_real.json",
-                        help="JSON file (default benchmarks/phase_lag_real.json)")
+    parser.add_argument("--quick", action="store_true",
+                        help="smoke run: the same run, written to studies/phase_lag_real/out/")
+    parser.add_argument("--out", type=Path, default=None,
+                        help="JSON file, or a folder to write phase_lag_real.json in (default: "
+                             "studies/phase_lag_real/phase_lag_real.json; --quick: "
+                             "out/phase_lag_real.json)")
     args = parser.parse_args(argv)
+    out = json_path(args.out, args.quick)
     path = args.path or next((p for p in CANDIDATES if p.exists()), None)
     if path is None or not path.exists():
         print(f"skipped: the real modulation map is absent ({path or CANDIDATES[0]})")
@@ -150,8 +171,9 @@ def main(argv: list[str] | None = None) -> int:
         print("  flagged phase       " + "".join(f"{v:9d}" for v in run["flagged_phase"]))
         print("  flagged low signal  " + "".join(f"{v:9d}" for v in run["flagged_low_signal"]))
     print(conclusion)
-    args.out.write_text(json.dumps(report, indent=1) + "\n")
-    print(f"wrote {args.out}")
+    out.parent.mkdir(parents=True, exist_ok=True)
+    out.write_text(json.dumps(report, indent=1) + "\n")
+    print(f"wrote {out}")
     return 0
 
 

@@ -22,11 +22,13 @@ What it does:
 
 BLAS is pinned to one thread (``OPENBLAS_NUM_THREADS=1`` etc. before NumPy loads, plus
 ``threadpoolctl.threadpool_limits(1)``); the BLAS libraries and their thread counts are printed
-and stored. Output: ``benchmarks/split_half.json`` (``--out`` for another file) with keys
+and stored. Output: ``studies/split_half/split_half.json`` (the committed numbers; ``--quick``:
+``studies/split_half/out/split_half.json``; ``--out`` for another file or folder) with keys
 ``schema``, ``created``, ``machine``, ``file``, ``frequencies_hz``, ``periods``, ``rms_z``
 (``white``/``new`` lists per frequency), ``mean_z`` (per component), ``n_values`` and
-``cost_us_per_segment``. Run ``python benchmarks/split_half.py [--path MAP] [--out FILE]
-[--repeats N]``.
+``cost_us_per_segment``. Run ``python studies/split_half/split_half.py [--quick] [--path MAP]
+[--out PATH] [--repeats N]``; ``--quick`` times one round instead of 20 (the split-half figures
+are the full run's).
 """
 
 from __future__ import annotations
@@ -53,8 +55,9 @@ from viscoforce.experiments import modulation  # noqa: E402
 from viscoforce.io.instruments import load_instrument  # noqa: E402
 
 HERE = Path(__file__).resolve().parent
-REAL_MAP = HERE.parent / "data_examples" / "real" / "modulation-map.jpk-force-map"
+REAL_MAP = HERE.parents[1] / "data_examples" / "real" / "modulation-map.jpk-force-map"
 SCHEMA = "viscoforce.split_half/1"
+JSON_NAME = "split_half.json"
 METHODS = {"white": "rho_white", "new": "rho"}
 
 
@@ -101,7 +104,10 @@ def cost(segs, repeats: int) -> dict:
             modulation._demodulate_stacked(t, stacked, f, settle=settle, detrend="linear", dt=dt)
         return (time.process_time() - start) / len(segs) * 1e6
 
-    real_band = modulation._band_errors
+    # the module whose _demodulate_stacked looks _band_errors up (experiments._demodulation since
+    # the lock-in moved there; modulation re-exports the name, so patching it there does nothing)
+    owner = sys.modules[modulation._demodulate_stacked.__module__]
+    real_band = owner._band_errors
 
     def stub(*args, **kwargs) -> dict:
         return {"rho": 0.0, "sigma_F_hat": 0.0, "sigma_d_hat": 0.0, "sigma_mean": 0.0,
@@ -110,12 +116,12 @@ def cost(segs, repeats: int) -> dict:
     with_band, without = [], []
     try:
         for _ in range(repeats):   # interleaved, so that a burst of load spoils both alike
-            modulation._band_errors = real_band
+            owner._band_errors = real_band
             with_band.append(one_round())
-            modulation._band_errors = stub
+            owner._band_errors = stub
             without.append(one_round())
     finally:
-        modulation._band_errors = real_band
+        owner._band_errors = real_band
     best_with, best_without = min(with_band), min(without)
     return {"with_residual_spectrum": best_with, "white_only": best_without,
             "increase_percent": 100.0 * (best_with / best_without - 1.0), "rounds": repeats}
@@ -131,14 +137,33 @@ def machine() -> dict:
             "loadavg": list(os.getloadavg()) if hasattr(os, "getloadavg") else None}
 
 
+def json_path(out: Path | None, quick: bool) -> Path:
+    """Where the report goes.
+
+    ``out`` (a folder: ``out/split_half.json``), else the committed file, or
+    ``out/split_half.json`` next to this script for ``--quick`` (never the committed numbers).
+    """
+    if out is None:
+        return HERE / "out" / JSON_NAME if quick else HERE / JSON_NAME
+    return out / JSON_NAME if out.is_dir() or not out.suffix else out
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--path", type=Path, default=REAL_MAP, help="JPK modulation map")
-    parser.add_argument("--out", type=Path, default=HERE / "split_half.json", help="JSON file")
-    parser.add_argument("--repeats", type=int, default=20, help="timing rounds (default 20)")
+    parser.add_argument("--quick", action="store_true",
+                        help="smoke run: one timing round, written to studies/split_half/out/")
+    parser.add_argument("--out", type=Path, default=None,
+                        help="JSON file, or a folder to write split_half.json in (default: "
+                             "studies/split_half/split_half.json; --quick: out/split_half.json)")
+    parser.add_argument("--repeats", type=int, default=None,
+                        help="timing rounds (default 20; 1 with --quick)")
     args = parser.parse_args(argv)
+    if args.repeats is None:
+        args.repeats = 1 if args.quick else 20
     if args.repeats < 1:
         parser.error("--repeats must be >= 1")
+    out = json_path(args.out, args.quick)
     if not args.path.is_file():
         print(f"split_half: no file {args.path}", file=sys.stderr)
         return 2
@@ -163,8 +188,9 @@ def main(argv: list[str] | None = None) -> int:
     report = {"schema": SCHEMA, "created": datetime.now(UTC).isoformat(timespec="seconds"),
               "machine": facts, "file": str(args.path), **result,
               "cost_us_per_segment": timing}
-    args.out.write_text(json.dumps(report, indent=2) + "\n")
-    print(f"wrote {args.out}")
+    out.parent.mkdir(parents=True, exist_ok=True)
+    out.write_text(json.dumps(report, indent=2) + "\n")
+    print(f"wrote {out}")
     return 0
 
 

@@ -1,7 +1,7 @@
 #!/usr/bin/env python
 """Speed–accuracy study: wall time against error of every method and knob on the paper's scenes.
 
-What it measures (see benchmarks/README.md, section ``speed_accuracy.py``; issue 15 item 1):
+What it measures (see studies/speed_accuracy/README.md; issue 15 item 1):
 
 1. Static loads at h0 = 2, −5, −10 nm on an elastic half-space (E = 1e9 Pa):
    ``static_equilibrium`` for grid spacing = default × (0.5 … 8) and outer radius = default ×
@@ -28,7 +28,8 @@ What it measures (see benchmarks/README.md, section ``speed_accuracy.py``; issue
 Runs under 1 s are timed ``--repeats`` times (median); longer ones once. Outputs in ``--out``:
 speed_accuracy.json, speed_accuracy.csv and speed_accuracy.png (Pareto charts, error vs time,
 log–log, one panel per scene, each method's default starred, auto as red diamonds). BLAS is
-pinned to one thread. Run ``python benchmarks/speed_accuracy.py [--quick] [--out DIR]``.
+pinned to one thread. Run ``python studies/speed_accuracy/speed_accuracy.py [--quick] [--out DIR]``
+(default studies/speed_accuracy/out).
 """
 
 from __future__ import annotations
@@ -57,7 +58,8 @@ from viscoforce.fitting import fit_spectrum  # noqa: E402
 from viscoforce.solvers.svda_ode import solve_svda  # noqa: E402
 from viscoforce.svda import svda_complex_stiffness, svda_ramp_deformation  # noqa: E402
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))  # benchmarks/_common.py, from any cwd
+HERE = Path(__file__).resolve().parent
+sys.path.insert(0, str(HERE.parents[1] / "benchmarks"))  # benchmarks/_common.py, from any cwd
 from _common import (  # noqa: E402
     fmt,
     gc_paused,
@@ -739,7 +741,8 @@ def plot(rows: list[dict], path: Path) -> None:
 # ── main ─────────────────────────────────────────────────────────────────────────────────────────
 
 def main(argv: list[str] | None = None) -> int:
-    args = parse_args(argv, doc=__doc__, quick_help="coarse subsets (< 90 s)",
+    args = parse_args(argv, doc=__doc__, out_dir=HERE / "out",
+                      quick_help="coarse subsets (< 90 s)",
                       repeats_help=f"timed runs per cheap point (default {REPEATS}, quick "
                                    f"{QUICK_REPEATS})")
     global very_cheap_repeats

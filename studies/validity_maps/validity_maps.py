@@ -1,7 +1,7 @@
 #!/usr/bin/env python
 """Stability and validity maps: where each method fails, or errs by more than 1 %, and what it says.
 
-What it maps (see benchmarks/README.md, section ``validity_maps.py``; issue 15 item 2). Every
+What it maps (see studies/validity_maps/README.md; issue 15 item 2). Every
 point is classified ``ok`` (error ≤ 1 %, silent), ``warns`` (a ModelValidityWarning or
 AccuracyWarning was issued), ``raises`` (a ViscoforceError) or ``silent > 1 %`` (error above
 1 % and neither: a finding).
@@ -28,7 +28,8 @@ AccuracyWarning was issued), ``raises`` (a ViscoforceError) or ``silent > 1 %`` 
 
 Outputs in ``--out``: validity_maps.json, validity_maps.csv (one row per point) and
 validity_maps.png (one panel per map). BLAS is pinned to one thread.
-Run ``python benchmarks/validity_maps.py [--quick] [--out DIR]``.
+Run ``python studies/validity_maps/validity_maps.py [--quick] [--out DIR]`` (default
+studies/validity_maps/out).
 """
 
 from __future__ import annotations
@@ -60,7 +61,8 @@ from viscoforce.solvers.static import static_equilibrium  # noqa: E402
 from viscoforce.solvers.steppers import ExplicitEuler  # noqa: E402
 from viscoforce.svda import svda_static_deformation  # noqa: E402
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))  # benchmarks/_common.py, from any cwd
+HERE = Path(__file__).resolve().parent
+sys.path.insert(0, str(HERE.parents[1] / "benchmarks"))  # benchmarks/_common.py, from any cwd
 from _common import (  # noqa: E402
     fmt,
     machine_facts,
@@ -587,7 +589,8 @@ def plot(rows: list[dict], path: Path) -> None:
 # ── main ─────────────────────────────────────────────────────────────────────────────────────────
 
 def main(argv: list[str] | None = None) -> int:
-    args = parse_args(argv, doc=__doc__, quick_help="coarse subsets of every map (< 60 s)",
+    args = parse_args(argv, doc=__doc__, out_dir=HERE / "out",
+                      quick_help="coarse subsets of every map (< 60 s)",
                       repeats_help="ignored (every point is run once)")
     args.out.mkdir(parents=True, exist_ok=True)
     t_start = time.perf_counter()

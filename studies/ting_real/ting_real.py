@@ -27,10 +27,13 @@ What this script does, through the public API (viscoforce.fitting.ting, fitting.
 3. Speed: one evaluation of Ting's force (``ting_force``) on curve 0's 8000 samples and on its
    4000-sample approach, and whole fits of both (median of repeats).
 
-Output: figures on stdout (no pass/fail) and ``benchmarks/ting_real.json`` (``--out``) with keys
-``schema``, ``created``, ``viscoforce``, ``file``, ``pyfmrheo``, ``curve0``, ``curves``,
-``speed``, ``differences``; ``--plot FILE`` draws data, fit and residual of curve 0. Run
-``python benchmarks/ting_real.py [--path MAP] [--out FILE] [--plot FILE]``; about a minute.
+Output: figures on stdout (no pass/fail) and ``studies/ting_real/ting_real.json`` (the committed
+numbers; ``--quick``: ``studies/ting_real/out/ting_real.json``; ``--out`` for another file or
+folder) with keys ``schema``, ``created``, ``viscoforce``, ``file``, ``pyfmrheo``, ``curve0``,
+``curves``, ``speed``, ``differences``; ``--plot FILE`` draws data, fit and residual of curve 0.
+Run ``python studies/ting_real/ting_real.py [--quick] [--path MAP] [--out PATH] [--plot FILE]``;
+about a minute. ``--quick``: curve 0 as in the full run, part 2 on the first
+:data:`QUICK_CURVES` curves, part 3 with :data:`QUICK_SPEED_REPEATS` repeats.
 """
 
 from __future__ import annotations
@@ -72,9 +75,12 @@ from viscoforce.physics.ting import ting_force  # noqa: E402
 from viscoforce.physics.tips import paper_from_young, parse_tip  # noqa: E402
 
 HERE = Path(__file__).resolve().parent
-DEFAULT_PATH = (HERE.parent.parent / "shared" / "data" / "real" / "PyFMRheo"
+DEFAULT_PATH = (HERE.parents[2] / "shared" / "data" / "real" / "PyFMRheo"
                 / "map-data-2022.10.29-12.27.34.564.jpk-force-map")
 SCHEMA = "viscoforce.ting_real/1"
+JSON_NAME = "ting_real.json"
+QUICK_CURVES = 2  # --quick: part 2 (all curves) on the first 2
+SPEED_REPEATS, QUICK_SPEED_REPEATS = (30, 3), (3, 1)  # (evaluations, fits) timed in part 3
 TIP = "paraboloid:5um"
 DRAG = 2.5e-6
 POISSON = 0.5
@@ -201,8 +207,8 @@ def quartiles(values: list[float]) -> dict:
     return {"median": float(med), "q25": float(q25), "q75": float(q75), "n": int(arr.size)}
 
 
-def all_curves(curves) -> dict:
-    n = int(curves.sizes["curve"])
+def all_curves(curves, limit: int | None = None) -> dict:
+    n = int(curves.sizes["curve"]) if limit is None else min(limit, int(curves.sizes["curve"]))
     rows, sls_rows, failures, seconds = [], [], [], []
     for i in range(n):
         try:
@@ -239,7 +245,7 @@ def all_curves(curves) -> dict:
         "seconds_per_curve": quartiles(seconds)}
 
 
-def speed(curves) -> dict:
+def speed(curves, repeats: tuple[int, int] = SPEED_REPEATS) -> dict:
     data = ting_data(curves, curve=0)
     approach = ting_data(curves, curve=0, segment=0)
     kernel = ting_kernel("structural", {"E_ref": 800.0, "alpha": 0.35})
@@ -249,12 +255,12 @@ def speed(curves) -> dict:
         t, z = d.position_trace
         c = float(np.max(z)) - 0.45e-6
         evals = []
-        for _ in range(30):
+        for _ in range(repeats[0]):
             t0 = time.perf_counter()
             ting_force(t, z, c, tip, kernel, drag=DRAG)
             evals.append(time.perf_counter() - t0)
         fits = []
-        for _ in range(3):
+        for _ in range(repeats[1]):
             _, took = timed(lambda s=(0 if label == "approach" else None): fit_ting(
                 curves, curve=0, segment=s, tip=TIP, drag=DRAG, **POWER_LAW))
             fits.append(took)
@@ -289,13 +295,29 @@ def plot(curves, ds, path: Path) -> None:
     fig.savefig(path, dpi=120)
 
 
+def json_path(out: Path | None, quick: bool) -> Path:
+    """Where the report goes.
+
+    ``out`` (a folder: ``out/ting_real.json``), else the committed file, or
+    ``out/ting_real.json`` next to this script for ``--quick``.
+    """
+    if out is None:
+        return HERE / "out" / JSON_NAME if quick else HERE / JSON_NAME
+    return out / JSON_NAME if out.is_dir() or not out.suffix else out
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--path", type=Path, default=DEFAULT_PATH, help="JPK force map")
-    parser.add_argument("--out", type=Path, default=HERE / "ting_real.json",
-                        help="JSON file (default benchmarks/ting_real.json)")
+    parser.add_argument("--quick", action="store_true",
+                        help=f"smoke run: all-curve part on {QUICK_CURVES} curves, fewer speed "
+                             "repeats, written to studies/ting_real/out/")
+    parser.add_argument("--out", type=Path, default=None,
+                        help="JSON file, or a folder to write ting_real.json in (default: "
+                             "studies/ting_real/ting_real.json; --quick: out/ting_real.json)")
     parser.add_argument("--plot", type=Path, default=None, help="PNG of curve 0's fit")
     args = parser.parse_args(argv)
+    out = json_path(args.out, args.quick)
     if not args.path.exists():
         print(f"skipped: the real force map is absent ({args.path})")
         return 0
@@ -342,8 +364,8 @@ def main(argv: list[str] | None = None) -> int:
             "pyfmrheo_young": PYFMRHEO["E0_young"] * loading ** -PYFMRHEO["beta"]}}
     if args.plot is not None:
         plot(curves, power, args.plot)
-    curves_report = all_curves(curves)
-    speeds = speed(curves)
+    curves_report = all_curves(curves, QUICK_CURVES if args.quick else None)
+    speeds = speed(curves, QUICK_SPEED_REPEATS if args.quick else SPEED_REPEATS)
     at = curve0["exact_integral_at"]
     differences = [
         "Conventions: both report Young's moduli at nu = 0.5 here (viscoforce fits the paper's E "
@@ -423,8 +445,9 @@ def main(argv: list[str] | None = None) -> int:
               f"{row['evaluation_s'] * 1e3:.1f} ms, a fit {row['fit_s']:.2f} s")
     for line in differences:
         print("-", line)
-    args.out.write_text(json.dumps(clean(report), indent=1, allow_nan=False) + "\n")
-    print(f"wrote {args.out}")
+    out.parent.mkdir(parents=True, exist_ok=True)
+    out.write_text(json.dumps(clean(report), indent=1, allow_nan=False) + "\n")
+    print(f"wrote {out}")
     return 0
 
 
