@@ -89,6 +89,7 @@ SUITES: dict[str, Suite] = {s.name: s for s in (
           ("stream.csv", "stream.png"), requires=("dask.distributed",)),
     Suite("bench_startup", _T, "benchmarks/bench_startup.py", "startup.json", ("startup.csv",),
           quick=("--quick", "--repeats", "1")),
+    Suite("bench_budget", _T, "benchmarks/bench_budget.py", "budget.json", ("budget.csv",)),
     Suite("speed_accuracy", _S, "studies/speed_accuracy/speed_accuracy.py",
           "speed_accuracy.json", ("speed_accuracy.csv", "speed_accuracy.png")),
     Suite("validity_maps", _S, "studies/validity_maps/validity_maps.py", "validity_maps.json",

@@ -332,3 +332,17 @@ def test_bench_startup_writes_one_csv_row_per_run(startup):
         rows = list(csv.DictReader(fh))
     assert sorted(r["command"] for r in rows) == ["baseline", "cli"]
     assert set(rows[0]) == {"round", "command", "wall_s", "cpu_s"}
+
+
+# ── bench_budget.py ──────────────────────────────────────────────────────────────────────────────
+
+def test_bench_budget_times_the_budget_against_the_fit(quick_run):
+    """Issue 37 item 1: the budget's cost is stated as a ratio to the fit (no time asserted)."""
+    report = passed(quick_run("bench_budget")).report
+    assert report["schema"] == "viscoforce.bench_budget/1"
+    assert report["target"]["ratio_max"] == 10.0
+    assert report["results"], report["skipped"]  # the bundled file is always there
+    for row in report["results"]:
+        assert row["fit_median_s"] > 0 and row["budget_median_s"] > 0
+        assert row["ratio"] == row["budget_median_s"] / row["fit_median_s"]
+        assert row["refits"] in (0, 1)

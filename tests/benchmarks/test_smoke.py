@@ -46,6 +46,8 @@ TOP_KEYS = {
                      "runs", "summary", "files"},
     "bench_startup": {"schema", "created", "quick", "machine", "target", "settings", "results",
                       "ratio", "extra_imports", "summary", "files"},
+    "bench_budget": {"schema", "created", "quick", "machine", "target", "settings", "results",
+                     "skipped", "summary", "files"},
     "speed_accuracy": {"schema", "created", "quick", "machine", "settings", "rows", "summary",
                        "files"},
     "validity_maps": {"schema", "created", "quick", "machine", "settings", "rows", "boundaries",
