@@ -62,7 +62,11 @@ Quantity strings
 :func:`parse_quantity` reads ``<number>[<space>][<unit>]``: an optional sign, a decimal number
 with an optional exponent (``1e9``, ``1E-9``, ``1.5e+3``, ``.5``), optional whitespace, then a unit
 of the requested dimension (see :func:`accepted_units`). A bare number is SI (rad/s for an angular
-frequency, Hz for a frequency). Decimal-prefixed units convert exactly (the result is the
+frequency, Hz for a frequency), unless ``require_unit=True``. The command line sets it for the
+dimensions of :data:`UNIT_REQUIRED` (lengths, times, speeds, frequencies), where a bare number is
+refused with the unit it needs spelled out (:func:`missing_unit_message`: ``--h0 2`` is not 2 m,
+``--omega 100`` is neither 100 Hz nor 100 rad/s); moduli, pressures, forces and the other
+dimensions may stay bare SI there. Decimal-prefixed units convert exactly (the result is the
 correctly rounded double of the decimal value): ``parse_quantity("3nm", "length") == 3e-9``.
 Units are case-sensitive (``mN`` is not ``MN``); both micro signs (U+00B5 ``µ`` and U+03BC ``μ``)
 and ASCII ``u`` are accepted; ``A`` is not accepted for ångström (it is the ampere), write
@@ -84,8 +88,10 @@ from viscoforce.exceptions import ParameterError, UnitError
 
 __all__ = [
     "DIMENSIONS",
+    "UNIT_REQUIRED",
     "accepted_units",
     "format_quantity",
+    "missing_unit_message",
     "parse_quantity",
     "unit_factor",
 ]
@@ -178,6 +184,15 @@ _DIMENSIONS: dict[str, _Dimension] = {
 
 #: The dimensions :func:`parse_quantity` understands.
 DIMENSIONS: tuple[str, ...] = tuple(_DIMENSIONS)
+
+#: The dimensions whose command-line value needs its unit (``parse_quantity(...,
+#: require_unit=True)``): a bare number there is a trap (``--tip sphere:5`` a 5 m sphere,
+#: ``--omega 100`` a factor 2π from what was meant), so it is refused, naming the unit.
+UNIT_REQUIRED: tuple[str, ...] = ("length", "time", "speed", "angular_frequency", "frequency")
+
+#: The units a refusal of a bare number suggests first, per dimension of :data:`UNIT_REQUIRED`.
+_SUGGESTED: dict[str, tuple[str, ...]] = {
+    "length": ("nm", "um", "m"), "time": ("ms", "s"), "speed": ("um/s", "nm/s", "m/s")}
 
 
 def _spellings(canonical: str) -> tuple[str, ...]:
@@ -333,6 +348,68 @@ def _real(value: object, message: str) -> float:
                              f"got {value!r}") from None
 
 
+def _or_list(items: list[str]) -> str:
+    return items[0] if len(items) == 1 else f"{', '.join(items[:-1])} or {items[-1]}"
+
+
+def _looks_si(text: str) -> bool:
+    """Whether a bare number reads as an SI value of a small quantity (``2e-9``, ``0.0001``)."""
+    try:
+        value = abs(float(text))
+    except ValueError:
+        return False
+    return 0 < value < 1e-3
+
+
+def missing_unit_message(text: str, dimension: str) -> str:
+    """Why a bare number is refused for ``dimension``, and what to write instead.
+
+    Parameters
+    ----------
+    text : str
+        The number as typed (``"2"``).
+    dimension : str
+        One of :data:`DIMENSIONS`, normally of :data:`UNIT_REQUIRED`.
+
+    Returns
+    -------
+    str
+        ``"2 has no unit: write 2nm, 2um or 2m (a length needs its unit: m, cm, mm, um/µm, nm,
+        pm, Å/angstrom)"``: the likely units first (ms, s for a time; um/s, nm/s, m/s for a
+        speed), the SI unit alone for a number that looks SI (``2e-9``: ``write 2e-9m``); for a
+        frequency both readings, ``"100 has no unit: write 100Hz (f = 100 Hz, ω = 628 rad/s) or
+        100rad/s (ω = 100 rad/s, f = 15.9 Hz)"``.
+
+    Raises
+    ------
+    ParameterError
+        If ``dimension`` is unknown.
+    """
+    spec = _dimension(dimension)
+    text = str(text).strip()
+    if dimension in ("frequency", "angular_frequency"):
+        try:
+            value = float(text)
+        except ValueError:
+            value = math.nan
+        if math.isfinite(value):
+            two_pi = 2 * math.pi
+
+            def f(x: float) -> str:
+                return format_quantity(x, "frequency")
+
+            def w(x: float) -> str:
+                return format_quantity(x, "angular_frequency")
+
+            return (f"{text} has no unit: write {text}Hz (f = {f(value)}, ω = {w(two_pi * value)}) "
+                    f"or {text}rad/s (ω = {w(value)}, f = {f(value / two_pi)})")
+    units = ((_si_symbol(dimension),) if _looks_si(text)  # 2e-9 for a length: meant 2e-9m
+             else _SUGGESTED.get(dimension, tuple(c for c, _ in spec.units[:3])))
+    written = [f"{text}{u}" for u in units]
+    return (f"{text} has no unit: write {_or_list(written)} ({spec.phrase} needs its unit: "
+            f"{_unit_list(dimension)})")
+
+
 def _scaled(number: str, unit: _Unit) -> float:
     """Return ``number`` (decimal text) times the unit, correctly rounded before any 2π."""
     sign, digits, exponent = Decimal(number).as_tuple()
@@ -342,7 +419,8 @@ def _scaled(number: str, unit: _Unit) -> float:
     return value * (2.0 * math.pi) if unit.two_pi else value
 
 
-def parse_quantity(text: str | float, dimension: str, *, name: str | None = None) -> float:
+def parse_quantity(text: str | float, dimension: str, *, name: str | None = None,
+                   require_unit: bool = False) -> float:
     """Read a quantity with an optional unit suffix and return it in SI.
 
     Parameters
@@ -357,6 +435,10 @@ def parse_quantity(text: str | float, dimension: str, *, name: str | None = None
         ``"dimensionless"``).
     name : str, optional
         Parameter name to prefix error messages with (e.g. ``"--h0"``).
+    require_unit : bool, optional
+        Refuse a bare number *text* (``"2"``) with :func:`missing_unit_message`, as the command
+        line does for :data:`UNIT_REQUIRED` (default False: a bare number is SI). A real number
+        passed as such is SI either way.
 
     Returns
     -------
@@ -370,7 +452,8 @@ def parse_quantity(text: str | float, dimension: str, *, name: str | None = None
     UnitError
         For any string that is not a finite quantity of ``dimension``: empty, ``nan``/``inf``,
         a decimal comma (``"1,5nm"``), garbage (``"nm5"``, ``"--5nm"``, ``"5 n m"``), an unknown
-        unit, a unit of another dimension (``"5nm"`` for a time), or a value that overflows.
+        unit, a unit of another dimension (``"5nm"`` for a time), a value that overflows, or
+        (``require_unit=True``) a number without its unit.
     ParameterError
         If ``dimension`` is unknown, ``text`` is not a string or a finite real number, or
         ``name`` is not a string or None.
@@ -378,6 +461,8 @@ def parse_quantity(text: str | float, dimension: str, *, name: str | None = None
     spec = _dimension(dimension)
     if name is not None and not isinstance(name, str):
         raise ParameterError(f"name must be a string or None, got {_describe(name)}")
+    if not isinstance(require_unit, bool):
+        raise ParameterError(f"require_unit must be True or False, got {_describe(require_unit)}")
     prefix = f"{name}: " if name else ""
     if not isinstance(text, str):
         value = _real(text, f"{prefix}expected {spec.phrase} as a string or real number")
@@ -400,6 +485,8 @@ def parse_quantity(text: str | float, dimension: str, *, name: str | None = None
     if match is None or (_NUMBERLIKE_RE.match(match["unit"]) and match["unit"] != "1"):
         raise UnitError(f"{prefix}cannot read {shown} as {spec.phrase}: expected a number with an "
                         f"optional unit ({_unit_list(dimension)}), e.g. '{spec.example}'")
+    if require_unit and not match["unit"]:
+        raise UnitError(prefix + missing_unit_message(stripped, dimension))
     unit = _lookup_unit(dimension, match["unit"], shown, name)
     value = _scaled(match["number"], unit)
     if not math.isfinite(value):

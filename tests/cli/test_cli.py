@@ -25,7 +25,7 @@ def run_json(capsys, argv):
 
 
 @pytest.mark.parametrize("argv", [["--h0", "-5nm", "--E", "1e9Pa"], ["--h0=-5nm", "--E=1GPa"],
-                                  ["--h0", "-5e-9", "--E", "1e9"]])
+                                  ["--h0", "-5e-9m", "--E", "1e9"]])
 def test_static_json_keys_and_values(capsys, argv):
     out = run_json(capsys, ["static", *argv, "--json"])
     for key in ("h0", "force", "force_rigid", "u_center", "h_center", "contact_radius"):
@@ -188,7 +188,7 @@ def test_cli_guards_and_linear_note(capsys):
                  "--samples", "1"]) == 2
     assert "argument --samples: must be an integer >= 2, got 1" in capsys.readouterr().err
     assert main(["static", "--h0", "-5", "--E", "1e9"]) == 2
-    assert "forget a unit" in capsys.readouterr().err
+    assert "argument --h0: -5 has no unit: write -5nm" in capsys.readouterr().err
     # η = 1 nm at ω = 20/τ: the finite-amplitude bias is ~37 % by harmonic balance (9 % measured)
     out = run_json(capsys, ["spectrum", "--h0=-5nm", "--eta", "1nm", "--omega", "2e4rad/s", "--json"])
     assert "time-domain" in out["note"]

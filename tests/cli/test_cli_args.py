@@ -73,10 +73,10 @@ def parse(argv: list[str]) -> argparse.Namespace:
     (["--h0", "-5nm"], "h0", -5e-9),
     (["--h0=-5nm"], "h0", -5e-9),
     (["--h0", "-.5nm"], "h0", -5e-10),
-    (["--h0", "-1e-9"], "h0", -1e-9),
-    (["--h0", "-3"], "h0", -3.0),
+    (["--h0", "-1e-9m"], "h0", -1e-9),
+    (["--h0", "-3m"], "h0", -3.0),
     (["--h0", "2nm"], "h0", 2e-9),
-    (["--h0", "2e-9"], "h0", 2e-9),
+    (["--h0", "2e-9m"], "h0", 2e-9),
     (["--from", "10nm", "--to", "-10nm"], "to", -1e-8),
     (["--from", "10nm", "--to", "-10nm"], "from_", 1e-8),
     (["--from", "-10nm", "--to", "10nm"], "from_", -1e-8),
@@ -85,12 +85,13 @@ def parse(argv: list[str]) -> argparse.Namespace:
     (["--speed", f"5{MU}m/s"], "speed", 5e-6),
     (["--E", "1e9Pa"], "E", 1e9),
     (["--E", "1GPa"], "E", 1e9),
+    (["--E", "1e9"], "E", 1e9),  # moduli and pressures may stay bare Pa
     (["-x", "-5nm"], "x", -5e-9),
-    (["--omega", "100", "1kHz"], "omega", [100.0, 1000.0 * TWO_PI]),
-    (["--omega", "1", "-2kHz", "3"], "omega", [1.0, -2000.0 * TWO_PI, 3.0]),
-    (["--omega", "-1e3", "-.5", "--h0", "-5nm"], "omega", [-1e3, -0.5]),
-    (["--omega", "-1e3", "-.5", "--h0", "-5nm"], "h0", -5e-9),
-    (["--omega", "1", "2", "-v"], "verbose", True),
+    (["--omega", "100rad/s", "1kHz"], "omega", [100.0, 1000.0 * TWO_PI]),
+    (["--omega", "1rad/s", "-2kHz", "3rad/s"], "omega", [1.0, -2000.0 * TWO_PI, 3.0]),
+    (["--omega", "-1e3rad/s", "-.5rad/s", "--h0", "-5nm"], "omega", [-1e3, -0.5]),
+    (["--omega", "-1e3rad/s", "-.5rad/s", "--h0", "-5nm"], "h0", -5e-9),
+    (["--omega", "1rad/s", "2rad/s", "-v"], "verbose", True),
 ])
 def test_argparse_accepts(argv, attr, expected):
     value = getattr(parse(argv), attr)
@@ -111,9 +112,19 @@ def test_argparse_needs_normalization_for_negative_suffixed_values(capsys):
     (["--t-end", "5nm"], "argument --t-end: expected a time (s, ms, us/µs, ns, min), got '5nm'"),
     (["--h0", "-5xm"], "argument --h0: unknown unit 'xm' in '-5xm' for a length"),
     (["--E", "1,5GPa"], "argument --E: commas are not accepted in '1,5GPa'"),
-    (["--omega", "1", "-2nm"], "argument --omega: expected an angular frequency"),
+    (["--omega", "1Hz", "-2nm"], "argument --omega: expected an angular frequency"),
     (["--h0", "nan"], "argument --h0: a length must be finite, got 'nan'"),
     (["--speed", ""], "argument --speed: empty string is not a speed"),
+    # lengths, times, speeds and frequencies need their unit (a bare number is not SI here)
+    (["--h0", "-3"], "argument --h0: -3 has no unit: write -3nm, -3um or -3m (a length needs "
+                     "its unit: m, cm, mm, um/µm, nm, pm, Å/angstrom)"),
+    (["--h0", "2e-9"], "argument --h0: 2e-9 has no unit: write 2e-9m (a length"),
+    (["--h0", "0"], "argument --h0: 0 has no unit: write 0nm, 0um or 0m"),
+    (["--t-end", "5"], "argument --t-end: 5 has no unit: write 5ms or 5s (a time needs its "
+                       "unit"),
+    (["--speed", "5"], "argument --speed: 5 has no unit: write 5um/s, 5nm/s or 5m/s"),
+    (["--omega", "100"], "argument --omega: 100 has no unit: write 100Hz (f = 100 Hz, "
+                         "ω = 628 rad/s) or 100rad/s"),
 ])
 def test_argparse_errors_exit_2_with_the_unit_message(argv, message, capsys):
     with pytest.raises(SystemExit) as info:
@@ -267,9 +278,9 @@ def test_omega_range_errors(argv, message, capsys):
 
 def test_omega_list_is_bounded(monkeypatch, capsys):
     monkeypatch.setattr(_limits, "MAX_SAMPLES", 2)
-    assert parse_omega(["--omega", "1", "2"]).omega == [1.0, 2.0]
+    assert parse_omega(["--omega", "1rad/s", "2rad/s"]).omega == [1.0, 2.0]
     with pytest.raises(SystemExit):
-        parse_omega(["--omega", "1", "2", "3"])
+        parse_omega(["--omega", "1rad/s", "2rad/s", "3rad/s"])
     assert "frequencies: about 3 needed, beyond the limit of 2" in capsys.readouterr().err
 
 

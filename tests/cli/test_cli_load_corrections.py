@@ -40,7 +40,7 @@ def test_drag_heights_extrapolate_to_contact_and_are_subtracted(tmp_path, capsys
     for h in heights:  # out of contact: a small elastic part plus the viscous drag
         path = tmp_path / f"free_{h * 1e6:g}um.csv"
         _write_spectrum(path, 1e-4 + 1j * OMEGA * _drag(h), rel_err=1e-4)
-        files.append(f"{h}={path}")
+        files.append(f"{h}m={path}")
     contact = 0.02 * (1 + 0.1j) + 1j * OMEGA * _drag(0.0)
     data = tmp_path / "contact.csv"
     _write_spectrum(data, contact)

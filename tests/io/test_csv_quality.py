@@ -41,7 +41,7 @@ def _real_map() -> Path:
 
 @pytest.fixture(scope="module")
 def real_spectrum():
-    return modulation_spectrum(_real_map(), contact_point=False)
+    return modulation_spectrum(_real_map(), contact_point=False, phase_reference="sensor")
 
 
 def write_csv(spectrum: xr.Dataset, path: Path) -> Path:
@@ -77,7 +77,8 @@ def test_real_map_csv_flags_equal_the_jpk_paths(real_spectrum, tmp_path):
     assert "calibrated height sensor" in real_spectrum.attrs["phase_reference"]
     # the same correction on either path gives the same phases, errors and flags
     lag = {float(f): 14.0 if f == 300.0 else 0.0 for f in real_spectrum["frequency"].values}
-    jpk = modulation_spectrum(_real_map(), contact_point=False, phase_lag=lag, drag=1e-7)
+    jpk = modulation_spectrum(_real_map(), contact_point=False, phase_lag=lag, drag=1e-7,
+                              phase_reference="sensor")
     fixed = correct_spectrum(csv, phase_lag=lag, drag=1e-7)
     for name in ("stiffness", "phase", "stiffness_stderr", "phase_stderr", "phase_lag"):
         np.testing.assert_allclose(fixed[name].values, jpk[name].values, rtol=1e-12,
@@ -196,7 +197,8 @@ def test_real_map_300hz_stays_flagged_after_the_readme_phase_lag(real_spectrum, 
     corrected and what can remain.
     """
     out = tmp_path / "m.nc"
-    assert main(["load", str(_real_map()), "--out", str(out), "--phase-lag", "300Hz=14"]) == 0
+    assert main(["load", str(_real_map()), "--out", str(out), "--phase-lag", "300Hz=14",
+                 "--phase-reference", "sensor"]) == 0
     capsys.readouterr()
     with xr.open_dataset(out, engine="h5netcdf") as ds:
         ds.load()

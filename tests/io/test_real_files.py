@@ -34,7 +34,7 @@ CASES = {
     "afmformats/fmt-igor-fd_U3_3_p10004.ibw": (["--model", "hertz", "--tip", "sphere:5um"], "E"),
     "afmformats/fmt-chiaro-txt_AEBP1_Indentation_002.zip": (["--model", "hertz"], "E"),
     "afmformats/fmt-afm-workshop-fd_single_2021-10-22_14.16.csv": (
-        None, "no tip position"),
+        None, "no spring constant"),
     "afmformats/fmt-ntmdt-txt-fd_2015_01_17_gel4-0_1_mQ_adh_6B_Curve_DFL_Height_51.txt": (
         None, "spring_constant and sensitivity missing"),
 }

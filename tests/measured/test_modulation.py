@@ -199,12 +199,18 @@ def test_real_modulation_map():
     path = REAL / "PyFMReader" / "map-data-2021.11.05-17.37.44.432.jpk-force-map"
     if not path.is_file():
         pytest.skip(f"real data file not present: {path}")
-    spec = modulation_spectrum(path)
+    spec = modulation_spectrum(path, phase_reference="sensor")   # against the sensor as recorded
     assert spec.sizes == {"curve": 16, "omega": 6}
     np.testing.assert_allclose(spec["frequency"].values, [1, 3, 10, 30, 100, 300])
     assert spec.attrs["height_channel"] == "measuredHeight"
     phase = spec["phase"].values
     assert np.all((phase[:, -1] > 100) & (phase[:, -1] < 115))   # the 300 Hz instrument lag
+    # the default refers the phase to the sensor advanced by its delay behind the piezo: the
+    # 300 Hz points drop by 10-14 degrees and stay above 90 (flagged)
+    default = modulation_spectrum(path)
+    assert default.attrs["phase_reference_mode"] == "delay"
+    assert np.all((default["phase"].values[:, -1] > 90) & (default["phase"].values[:, -1] < 100))
+    assert np.all(default["quality"].values[:, -1] == 1)
     assert np.all(spec["quality"].values[:, -1] == 1)
     assert np.all((phase[:, :-1] > 0) & (phase[:, :-1] < 90))
     assert np.all(spec["stiffness"].values > 0)
@@ -379,5 +385,9 @@ def test_real_map_mean_indentation():
     # the same operating point at every frequency of a curve (creep < 60 nm over the segments)
     assert np.all(np.ptp(ind, axis=1) < 60e-9)
     # self-reference: the map's own 300 Hz median phase taken as the lag gives zero median there
-    ref = modulation_spectrum(path, phase_reference=spec)
+    # (a hard-surface reference is measured against the sensor: the default's delay refused)
+    with pytest.raises(ParameterError, match="make it with phase_reference='sensor'"):
+        modulation_spectrum(path, phase_reference=spec)
+    sensor = modulation_spectrum(path, phase_reference="sensor")
+    ref = modulation_spectrum(path, phase_reference=sensor)
     np.testing.assert_allclose(np.median(ref["phase"].values, axis=0), 0.0, atol=1e-6)

@@ -1,10 +1,12 @@
 """Command-line interface: ``viscoforce <command> [flags]`` (also ``python -m viscoforce``).
 
-The CLI parses flags (SI or unit-suffixed quantities), calls the public API and prints or writes
-results; it holds no physics. Exit status: 0 success, 2 user error (one message on stderr, no
-traceback; also an output that cannot be written: a full disk, a file-size limit), 1 internal
-error, 143 stopped by SIGTERM (partial outputs removed). ``--json`` prints one JSON object in SI
-units.
+The CLI parses flags (lengths, times, speeds and frequencies with their unit; moduli and pressures
+may be bare Pa), calls the public API and prints or writes results; it holds no physics. Any
+input file may be written ``example:NAME``, a file shipped inside viscoforce
+(:mod:`viscoforce.cli.examples`; ``viscoforce examples`` lists them). Exit status: 0 success,
+2 user error (one message on stderr, no traceback; also an output that cannot be written: a full
+disk, a file-size limit), 1 internal error, 143 stopped by SIGTERM (partial outputs removed).
+``--json`` prints one JSON object in SI units.
 
 Commands are rows of :data:`COMMANDS`: a name, the module of this package that implements it and
 a one-line help. A command module holds a ``SUBCOMMANDS`` mapping, name → (function adding the
@@ -37,6 +39,7 @@ from viscoforce.cli._args import (
     value_options,
 )
 from viscoforce.cli._examples import epilog
+from viscoforce.cli.examples import resolve_example_args
 from viscoforce.exceptions import (
     AccuracyWarning,
     DataWarning,
@@ -76,10 +79,13 @@ COMMANDS: tuple[Command, ...] = (
     Command("bode", "fitting", "Bode plot of a spectrum, with a fitted model"),
     Command("view", "view", "interactive viewer of a fitted map: an HTML page or a server"),
     Command("demo", "demo", "load, demodulate, fit and plot the bundled example data"),
+    Command("examples", "examples", "list or copy the example files shipped (example:NAME)"),
 )
 
-_DESCRIPTION = ("Viscoelastic particles with finite-ranged surface forces (SI or unit suffixes: "
-                "-5nm, 10um, 1e9Pa, 0.1ms, 5um/s).")
+_DESCRIPTION = ("Viscoelastic particles with finite-ranged surface forces. Lengths, times, speeds "
+                "and frequencies take their unit (-5nm, 10um, 0.1ms, 5um/s, 100Hz); moduli and "
+                "pressures may be bare Pa (1e9 or 1GPa). Any input file may be a shipped example, "
+                "example:NAME (viscoforce examples lists them).")
 
 
 def _requested(argv: Sequence[str]) -> Command | None:
@@ -155,6 +161,7 @@ def _run(args: argparse.Namespace) -> int:
                           DataWarning):  # once per result, not raised
                 warnings.simplefilter("always", shown)
             warnings.showwarning = show
+            resolve_example_args(args)  # example:NAME inputs → the shipped files
             check_outputs(args)
             return int(args.run_(args))
     except (ViscoforceError, OSError) as exc:

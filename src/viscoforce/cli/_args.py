@@ -1,7 +1,9 @@
 """Argument helpers of the command line: quantity types, negative values, flag tables, outputs.
 
-* ``type=`` callables: :func:`quantity_type` (a quantity with an optional unit suffix, read into SI
-  by :func:`viscoforce.units.parse_quantity`), :func:`integer_type` (a plain integer in a range)
+* ``type=`` callables: :func:`quantity_type` (a quantity with a unit suffix, read into SI by
+  :func:`viscoforce.units.parse_quantity`; lengths, times, speeds and frequencies need their unit,
+  :data:`viscoforce.units.UNIT_REQUIRED`: ``--h0 2`` is refused, not read as 2 m; moduli and
+  pressures may be bare Pa), :func:`integer_type` (a plain integer in a range)
   and :func:`real_type` (a finite plain number in a range). Bad input raises
   :class:`argparse.ArgumentTypeError`, so argparse prints ``argument --h0: <message>`` and exits
   with status 2.
@@ -55,7 +57,13 @@ from viscoforce.cli._outputs_check import (
 from viscoforce.cli._usage import UsageError
 from viscoforce.exceptions import EffortError, ParameterError, UnitError, ViscoforceError
 from viscoforce.physics.paper import PAPER
-from viscoforce.units import accepted_units, format_quantity, parse_quantity
+from viscoforce.units import (
+    UNIT_REQUIRED,
+    accepted_units,
+    format_quantity,
+    missing_unit_message,
+    parse_quantity,
+)
 
 __all__ = [
     "DIRECTORY",
@@ -103,7 +111,8 @@ class _QuantityType:
 
     def __call__(self, text: str) -> float:
         try:
-            return parse_quantity(text, self.dimension)
+            return parse_quantity(text, self.dimension,
+                                  require_unit=self.dimension in UNIT_REQUIRED)
         except (UnitError, ParameterError) as exc:
             raise argparse.ArgumentTypeError(str(exc)) from exc
 
@@ -122,8 +131,12 @@ def quantity_type(dimension: str) -> Callable[[str], float]:
     Returns
     -------
     callable
-        ``f(text) -> float`` (SI). On bad input it raises :class:`argparse.ArgumentTypeError`
-        carrying the :class:`~viscoforce.exceptions.UnitError` message, so argparse prints
+        ``f(text) -> float`` (SI). A dimension of :data:`viscoforce.units.UNIT_REQUIRED`
+        (length, time, speed, frequency) needs its unit: ``"2"`` is refused with
+        :func:`viscoforce.units.missing_unit_message` (``2 has no unit: write 2nm, 2um or 2m
+        ...``), ``"0"`` too, as for a frequency. On bad input it raises
+        :class:`argparse.ArgumentTypeError` carrying the
+        :class:`~viscoforce.exceptions.UnitError` message, so argparse prints
         ``argument --h0: <message>`` and exits with status 2. Its ``__name__`` is the dimension
         (``"angular frequency"``) and its repr ``quantity_type('length')``.
 
@@ -147,19 +160,12 @@ class _FrequencyType(_QuantityType):
     """argparse ``type=`` callable returned by :func:`frequency_type`."""
 
     def __call__(self, text: str) -> float:
-        stripped = text.strip()
-        try:
-            bare = float(stripped)
-        except ValueError:
-            bare = None
-        if bare is not None and math.isfinite(bare):
-            raise argparse.ArgumentTypeError(unitless_frequency_message(stripped, bare))
         other = "angular_frequency" if self.dimension == "frequency" else "frequency"
         try:
-            return parse_quantity(text, self.dimension)
+            return parse_quantity(text, self.dimension, require_unit=True)
         except UnitError as exc:  # rad/s for a frequency: accepted, converted
             try:
-                value = parse_quantity(text, other)
+                value = parse_quantity(text, other, require_unit=True)
             except (UnitError, ParameterError):
                 raise argparse.ArgumentTypeError(str(exc)) from exc
             return value / (2 * math.pi) if self.dimension == "frequency" else value
@@ -178,7 +184,8 @@ def unitless_frequency_message(text: str, value: float) -> str:
     text : str
         The number as typed (``"100"``).
     value : float
-        Its value.
+        Its value (the message is :func:`viscoforce.units.missing_unit_message`, which reads it
+        from ``text``).
 
     Returns
     -------
@@ -186,16 +193,7 @@ def unitless_frequency_message(text: str, value: float) -> str:
         ``"100 has no unit: write 100Hz (f = 100 Hz, ω = 628 rad/s) or 100rad/s (ω = 100 rad/s,
         f = 15.9 Hz)"``.
     """
-    two_pi = 2 * math.pi
-
-    def f(x: float) -> str:
-        return format_quantity(x, "frequency")
-
-    def w(x: float) -> str:
-        return format_quantity(x, "angular_frequency")
-
-    return (f"{text} has no unit: write {text}Hz (f = {f(value)}, ω = {w(two_pi * value)}) "
-            f"or {text}rad/s (ω = {w(value)}, f = {f(value / two_pi)})")
+    return missing_unit_message(text, "frequency")
 
 
 def frequency_type(dimension: str = "angular_frequency") -> Callable[[str], float]:

@@ -1,10 +1,11 @@
 """The two examples that end each command's ``--help`` (one table; the test suite runs them).
 
-Each example is one shell line, run verbatim by ``tests/cli/test_cli_examples.py`` (several commands
-joined by ``&&`` run one after the other). Paths under ``data_examples/`` are the example files
-shipped inside viscoforce: the repository's ``data_examples`` folder links to them, and an
-installed copy is at ``python -c "import viscoforce; print(viscoforce.example_path())"``.
-Examples stay fast (small grids, few samples): the suite runs every one.
+Each example is one shell line, run verbatim from an empty folder by
+``tests/cli/test_help_examples.py`` (several commands joined by ``&&`` run one after the other), so
+it works wherever viscoforce is installed: its input files are ``example:NAME``, the example files
+shipped inside viscoforce (:mod:`viscoforce.cli.examples`; ``viscoforce examples`` lists them,
+``viscoforce examples --copy DIR`` copies them), and everything it writes lands in the current
+folder. Examples stay fast (small grids, few samples): the suite runs every one.
 """
 
 from __future__ import annotations
@@ -29,28 +30,33 @@ EXAMPLES: dict[str, tuple[str, str]] = {
         "--plot bode.png",
     ),
     "load": (
-        "viscoforce load data_examples/sls_modulation.jpk-force --out spectrum.nc",
-        "viscoforce load data_examples/sls_modulation.jpk-force --phase-lag 300Hz=2 --json",
+        "viscoforce load example:sls_modulation.jpk-force --out spectrum.nc",
+        "viscoforce load example:sls_modulation.jpk-force --phase-lag 300Hz=2 --json",
     ),
     "fit": (
-        "viscoforce fit data_examples/sls_spectrum.csv --model exact --h0=-5nm --json",
-        "viscoforce fit data_examples/sls_step_relaxation.csv --model relaxation --out fit.csv "
+        "viscoforce fit example:sls_spectrum.csv --model exact --h0=-5nm --json",
+        "viscoforce fit example:sls_step_relaxation.csv --model relaxation --out fit.csv "
         "--plot fit.png",
     ),
     "bode": (
-        "viscoforce bode data_examples/sls_spectrum.csv --plot bode.png",
-        "viscoforce bode data_examples/sls_spectrum.csv --model exact --h0=-5nm --plot fit.png "
+        "viscoforce bode example:sls_spectrum.csv --plot bode.png",
+        "viscoforce bode example:sls_spectrum.csv --model exact --h0=-5nm --plot fit.png "
         "--out fit.nc --json",
     ),
     "view": (
-        "viscoforce fit data_examples/sls_spectrum_map.nc --model exact --h0=-5nm --out fits.nc "
-        "&& viscoforce view fits.nc --data data_examples/sls_spectrum_map.nc --out map.html",
-        "viscoforce fit data_examples/sls_spectrum_map.nc --model exact --h0=-5nm --out fits.nc "
+        "viscoforce fit example:sls_spectrum_map.nc --model exact --h0=-5nm --out fits.nc "
+        "&& viscoforce view fits.nc --data example:sls_spectrum_map.nc --out map.html",
+        "viscoforce fit example:sls_spectrum_map.nc --model exact --h0=-5nm --out fits.nc "
         "&& viscoforce view fits.nc --out map.html --json",
     ),
     "demo": (
         "viscoforce demo --out-dir demo",
         "viscoforce demo --out-dir demo --json",
+    ),
+    "examples": (
+        "viscoforce examples",
+        "viscoforce examples --copy my-examples sls_spectrum.csv && viscoforce fit "
+        "my-examples/sls_spectrum.csv --model exact --h0=-5nm --json",
     ),
 }
 
@@ -60,5 +66,5 @@ def epilog(command: str) -> str:
     lines = EXAMPLES.get(command)
     if not lines:
         return ""
-    return "examples (data_examples/: the files shipped with viscoforce):\n" + "\n".join(
-        f"  {line}" for line in lines)
+    return ("examples (example:NAME is a file shipped with viscoforce: `viscoforce examples` "
+            "lists them):\n" + "\n".join(f"  {line}" for line in lines))

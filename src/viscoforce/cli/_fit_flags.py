@@ -138,6 +138,10 @@ def _add_fit_flags(parser: argparse.ArgumentParser, *, required: bool, batch: bo
     parser.add_argument("--newtonian", action="store_true",
                         help="contact --material power-law: fit a Newtonian viscosity mu in "
                              "parallel")
+    from viscoforce.cli.analysis import PHASE_REFERENCE_HELP, phase_reference_type
+
+    parser.add_argument("--phase-reference", type=phase_reference_type, default=None,
+                        metavar="sensor|piezo|delay|FILE", help=PHASE_REFERENCE_HELP)
     parser.add_argument("--height-channel", choices=tuple(HEIGHT_RECORDS), default=None,
                         help="force curves: the tip height from the calibrated sensor or the "
                              "piezo (default: both fitted, the one leaving the smaller residual "

@@ -20,21 +20,25 @@ _CURVE_MODELS = ("relaxation", "hertz", "creep", "ting")
 _MATERIALS = ("sls", "prony", "power-law", "structural")
 
 
-def read_data(path: str, fmt: str | None = None, *, height_channel: str | None = None):
+def read_data(path: str, fmt: str | None = None, *, height_channel: str | None = None,
+              phase_reference=None):
     """The dataset of DATA: :func:`viscoforce.measured.open.open_data` (a single curve squeezed).
 
     A netCDF file as written (measured data in it checked), an instrument file through
     ``load``'s route (a JPK map demodulated in chunks of curves); ``height_channel`` the
-    reader's (``--height-channel``).
+    reader's (``--height-channel``), ``phase_reference`` the lock-in's (``--phase-reference``:
+    sensor, piezo, delay or a hard-surface file; default the one the data support).
     """
     from viscoforce.measured.open import OptionError, open_data
 
-    options = {} if height_channel is None else {"height_channel": height_channel}
+    options = {k: v for k, v in (("height_channel", height_channel),
+                                 ("phase_reference", phase_reference)) if v is not None}
     try:
         return one_curve_squeezed(open_data(path, format=fmt, **options))
     except OptionError as exc:
         raise UsageError(exc.told({"path": "DATA ", "format": "--format",
-                                   "height_channel": "--height-channel"})) from None
+                                   "height_channel": "--height-channel",
+                                   "phase_reference": "--phase-reference"})) from None
 
 
 def one_curve_squeezed(ds):

@@ -95,7 +95,7 @@ def name_flag_in_error(message: str, typed: dict[str, tuple[str, str | None]]) -
 
     ``deepest_position must be >= -0.1 R ..., got -0.005`` after ``--h0 -5mm`` becomes
     ``--h0 -5mm: the deepest position must be >= ...``; ``radius (R) must be > 0`` after
-    ``--radius 0`` becomes ``--radius 0: radius (R) must be > 0``. A message whose leading name
+    ``--radius 0um`` becomes ``--radius 0um: radius (R) must be > 0``. A message whose leading name
     no typed flag sets is returned unchanged.
 
     Parameters

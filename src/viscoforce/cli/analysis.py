@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import argparse
 import re
+from pathlib import Path
 
 from viscoforce.cli._args import (
     NETCDF,
@@ -23,8 +24,8 @@ from viscoforce.cli._args import (
 )
 from viscoforce.cli._output import print_json, print_written
 
-__all__ = ["SUBCOMMANDS", "has_modulation", "open_streamable", "phase_lag_type",
-           "streamed_spectrum"]
+__all__ = ["PHASE_REFERENCE_HELP", "SUBCOMMANDS", "has_modulation", "open_streamable",
+           "phase_lag_type", "phase_reference_type", "streamed_spectrum"]
 
 _PAIR_RE = re.compile(r"^\s*(?P<f>[^=:]+?)\s*[=:]\s*(?P<deg>[-+0-9.eE]+)\s*$")
 _FREQUENCY = frequency_type("frequency")
@@ -53,6 +54,30 @@ def phase_lag_type(text: str) -> float | tuple[float, float]:
         raise argparse.ArgumentTypeError(
             f"expected degrees (e.g. 14) or FREQUENCY=DEGREES pairs (e.g. 300Hz=14), got "
             f"{text!r}") from None
+
+
+#: The words ``--phase-reference`` takes besides a file.
+PHASE_REFERENCE_WORDS = ("auto", "sensor", "piezo", "delay")
+#: Its help (``load`` here; ``fit`` and ``bode`` may take the same flag).
+PHASE_REFERENCE_HELP = (
+    "what the phase of the indentation refers to: sensor (the height channel as recorded), "
+    "piezo (the sensor's amplitude with the piezo record's phase), delay (the sensor advanced "
+    "by its delay behind the piezo, one fitted per file), auto (default: the one the data "
+    "support, said in the attrs phase_reference_choice); or FILE, a hard-surface measurement "
+    "(any file load reads, demodulated against the sensor) whose phase per frequency is the "
+    "instrument lag to subtract. A file that exists is the file, even one named like a mode")
+
+
+def phase_reference_type(text: str) -> str | Path:
+    """``--phase-reference`` value: a mode word (``str``) or a hard-surface file (``Path``).
+
+    A file that exists is that file, whatever its name; else one of
+    :data:`PHASE_REFERENCE_WORDS` is the mode; any other text is a file (refused by the
+    reader, naming it, when absent).
+    """
+    if Path(text).exists() or text not in PHASE_REFERENCE_WORDS:
+        return Path(text)
+    return text
 
 
 def _tip_type(text: str):
@@ -86,9 +111,8 @@ def add_load(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--phase-lag", type=phase_lag_type, nargs="+", default=None,
                         metavar="LAG", help="instrument phase lag subtracted from the spectrum: "
                         "degrees for all frequencies, or FREQUENCY=DEGREES pairs")
-    parser.add_argument("--phase-reference", default=None, metavar="FILE",
-                        help="a hard-surface measurement (any file load reads) whose phase per "
-                             "frequency is the instrument lag to subtract")
+    parser.add_argument("--phase-reference", type=phase_reference_type, default=None,
+                        metavar="sensor|piezo|delay|auto|FILE", help=PHASE_REFERENCE_HELP)
     parser.add_argument("--drag-heights", type=_height_file_type, nargs="+", default=None,
                         metavar="HEIGHT=FILE",
                         help="spectra measured out of contact at several heights above the "
@@ -185,6 +209,9 @@ def run_load(args: argparse.Namespace) -> int:
     print(f"{args.file}: format {result['format']}, {result['kind']} of {result['n_curves']} "
           "curve(s); dims " + ", ".join(f"{k}={v}" for k, v in result["dims"].items()))
     print("variables: " + ", ".join(result["variables"]))
+    choice = made.dataset.attrs.get("phase_reference_choice") if made.dataset is not None else None
+    if choice:
+        print(f"phase reference: {choice}")
     if made.drag_fit is not None:
         print(f"drag at contact b(0) = {made.drag_fit.drag_at_contact:.4g} ± "
               f"{made.drag_fit.drag_at_contact_stderr:.2g} N s/m from {len(args.drag_heights)} "

@@ -184,7 +184,8 @@ def run_fit(args: argparse.Namespace) -> int:
     if len(paths) > 1:
         return run_batch(args, paths)
     args.data = paths[0]
-    ds = read_data(args.data, args.format, height_channel=height_channel(args))
+    ds = read_data(args.data, args.format, height_channel=height_channel(args),
+                   phase_reference=args.phase_reference)
     kind = _kind(ds)
     _check_model(args, kind)
     ds = _select_curve(ds, kind, args.curve)
@@ -248,7 +249,8 @@ def run_fit(args: argparse.Namespace) -> int:
 
 def _fit_file(args: argparse.Namespace, path: str):
     """The fit result of one file of a batch (a map's curves fitted in this process)."""
-    ds = read_data(path, args.format, height_channel=height_channel(args))
+    ds = read_data(path, args.format, height_channel=height_channel(args),
+                   phase_reference=args.phase_reference)
     kind = _kind(ds)
     _check_model(args, kind)
     ds = _select_curve(ds, kind, args.curve)
@@ -424,7 +426,8 @@ def run_bode(args: argparse.Namespace) -> int:
     if args.out and args.out.lower().endswith(".csv") and args.model is None:
         raise UsageError(f"--out {args.out}: a CSV table holds a fit result (give --model); "
                          "the spectrum is written as netCDF (.nc)")
-    ds = read_data(args.data, args.format)
+    ds = read_data(args.data, args.format, height_channel=height_channel(args),
+                   phase_reference=args.phase_reference)
     kind = _kind(ds)
     if kind != "spectrum":
         raise UsageError(f"bode draws spectra; DATA holds {kind}")

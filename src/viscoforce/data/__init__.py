@@ -4,7 +4,9 @@ They travel in the wheel, so ``viscoforce demo``, the notebooks and the README's
 in every folder, not only in the repository. ``examples/README.md`` says how each file was
 made and its true parameters; ``examples/real/`` holds a real JPK modulation map (MIT, with its
 ``LICENSE`` and ``SOURCE.md``). In the repository, ``data_examples/`` is a link to the same
-folder.
+folder. On the command line every input file may be written ``example:NAME`` (a name of
+:func:`example_names`), and ``viscoforce examples`` lists or copies them
+(:mod:`viscoforce.cli.examples`).
 
 >>> import viscoforce as vf
 >>> vf.load(vf.example_path("sls_spectrum.csv"))          # doctest: +SKIP

@@ -1,22 +1,33 @@
-"""Lock-in demodulation of one modulation segment, with its standard errors.
+"""Lock-in demodulation of modulation segments, with their standard errors; what it reads.
 
 :func:`demodulate_segment` and its stacked form (one call per segment of
-:func:`viscoforce.experiments.modulation.modulation_spectrum`), the split-half check and the
-residual-spectrum errors. The signs, the lock-in window and the standard-error formulas are
-told in :mod:`viscoforce.experiments.modulation`, the public module that re-exports everything
-here.
+:func:`viscoforce.experiments.modulation.modulation_spectrum`), the split-half check, the
+residual-spectrum errors and the error covariances the phase reference needs
+(:mod:`viscoforce.experiments.phase_reference`); and the segments to demodulate, from a JPK
+archive or a curves dataset (:func:`_curves_of`). The signs, the lock-in window and the
+standard-error formulas are told in :mod:`viscoforce.experiments.modulation`, the public module
+that re-exports everything here.
 """
 
 from __future__ import annotations
 
 import math
+from collections.abc import Iterable
+from dataclasses import dataclass
 from functools import lru_cache
+from pathlib import Path
 from typing import Any
 
 import numpy as np
+import xarray as xr
 
 from viscoforce.exceptions import ParameterError
+from viscoforce.experiments.phase_reference import PIEZO_VARIABLE
+from viscoforce.io.curves import _read_block, unique_curves
+from viscoforce.io.jpk import JPKArchive, read_jpk
+from viscoforce.io.quality import SENSOR_CHANNELS
 from viscoforce.lockin import harmonics
+from viscoforce.schema import clean_attrs, validate_curves
 
 #: ``attrs["stderr_method"]`` of every modulation spectrum: how the standard errors are made.
 STDERR_METHOD = (
@@ -81,8 +92,15 @@ def demodulate_segment(time: np.ndarray, force: np.ndarray, indentation: np.ndar
 
 
 def _demodulate_stacked(t: np.ndarray, stacked: np.ndarray, frequency: float, *, settle: float,
-                        detrend: str | None, dt: float) -> dict[str, Any]:
-    """:func:`demodulate_segment` of rows F, δ[, height] of ``stacked``; ``dt`` the median step."""
+                        detrend: str | None, dt: float,
+                        piezo: np.ndarray | None = None) -> dict[str, Any]:
+    """:func:`demodulate_segment` of rows F, δ[, height] of ``stacked``; ``dt`` the median step.
+
+    With ``piezo`` (the piezo height record over ``t``, [m]; needs the height row) also ``hp``
+    (its first harmonic ĥ_p [m]) and the error covariances of (F̂, δ̂, ĥ, ĥ_p) that
+    :mod:`viscoforce.experiments.phase_reference` refers the phase with: :func:`_covariances`.
+    The piezo is demodulated by a call of its own, so that F̂, δ̂ and ĥ are those without it.
+    """
     omega = 2.0 * math.pi * frequency
     # one lock-in window (selection, resampling, detrend) for every signal and both harmonics
     coef = harmonics(stacked, t, omega, 1, settle=settle, detrend=detrend)
@@ -124,7 +142,45 @@ def _demodulate_stacked(t: np.ndarray, stacked: np.ndarray, frequency: float, *,
     if out["stderr_bins"] == 0:  # no residual bin between the drive harmonics: white formula
         out.update(rho=rho_white, sigma_F_hat=out["sigma_F_hat_white"],
                    sigma_d_hat=out["sigma_d_hat_white"], sigma_mean=out["sigma_mean_white"])
+    if piezo is not None:
+        hp = harmonics(np.asarray(piezo, dtype=float)[None, :], t, omega, 1, settle=settle,
+                       detrend=detrend)[0]
+        out["hp"] = complex(hp[1])
+        extra = np.vstack([stacked[2, first:], np.asarray(piezo, dtype=float)[first:]])
+        model = np.array([coef[2, 0].real, hp[0].real])[:, None] + (
+            np.array([coef[2, 1].real, hp[1].real])[:, None] * np.cos(phase)
+            - np.array([coef[2, 1].imag, hp[1].imag])[:, None] * np.sin(phase))
+        out.update(_covariances(np.vstack([resid, _detrended(extra - model, tw, detrend)]),
+                                periods, n, dof, detrended=detrend == "linear"))
     return out
+
+
+def _detrended(resid: np.ndarray, tw: np.ndarray, detrend: str | None) -> np.ndarray:
+    """``resid`` less its mean and least-squares line (rows over ``tw``) with a detrend."""
+    if detrend != "linear":
+        return resid
+    tc = tw - tw.mean()
+    return resid - resid.mean(axis=1, keepdims=True) - (resid @ tc / (tc @ tc))[:, None] * tc
+
+
+def _covariances(resid: np.ndarray, periods: int, n: int, dof: int, *, detrended: bool
+                 ) -> dict[str, np.ndarray]:
+    """Error covariances of the first harmonics of the rows of ``resid`` (F, δ, ĥ, ĥ_p).
+
+    ``cov_band`` [row units²]: C_ij = Σ_k w_k R_i(k) R_j(k)* over the residual band around the
+    drive (the weights of :func:`_band`), so that for any complex combination c of the rows
+    c·C·c^H is the variance per real component of c·X̂ (the module's residual-spectrum error,
+    correlations kept bin by bin); ``cov_white``: the same from the white-noise formula,
+    (2/N)·Σ r_i r_j/(N − p). Where the band is empty (``stderr_bins`` 0) ``cov_band`` is
+    ``cov_white``, as for the other errors.
+    """
+    white = (2.0 / n) * (resid @ resid.T) / dof
+    bins, nn, w_near, _ = _band(periods, resid.shape[1] - 1, detrended)
+    if nn == 0:
+        return {"cov_band": white.astype(complex), "cov_white": white}
+    r = np.fft.rfft(resid[:, :-1], axis=1)[:, bins[:nn]]
+    r += (0.5 * (resid[:, -1] - resid[:, 0]))[:, None]
+    return {"cov_band": (r * w_near) @ r.conj().T, "cov_white": white}
 
 
 def _demodulate_halves(t: np.ndarray, stacked: np.ndarray, frequency: float, *, settle: float,
@@ -136,7 +192,7 @@ def _demodulate_halves(t: np.ndarray, stacked: np.ndarray, frequency: float, *, 
     ``detrend``) gives two halves of ⌊m/2⌋ whole periods: its first and its last ⌊m/2⌋ periods
     (the middle period is left out when m is odd), each demodulated with its own standard errors.
     Where those errors hold, (k*_A − k*_B)/√(σ_A² + σ_B²) per real component has rms 1 over
-    many segments (``tests/measured/test_modulation_stderr.py``, ``benchmarks/split_half.py``).
+    many segments (``tests/measured/test_modulation_stderr.py``, ``studies/split_half/split_half.py``).
 
     Parameters
     ----------
@@ -247,3 +303,185 @@ def _band_errors(resid: np.ndarray, periods: int, f_hat: complex, d_hat: complex
         rho = math.sqrt(float((eps.real**2 + eps.imag**2) @ w_near))
     return {"rho": rho, "sigma_F_hat": math.sqrt(var_f), "sigma_d_hat": math.sqrt(var_d),
             "sigma_mean": math.sqrt(var_mean), "stderr_bins": nn}
+
+
+def _segment_samples(seg: np.ndarray) -> dict[int, slice | np.ndarray]:
+    """Samples of each segment-table row of one curve, rows in order of first appearance.
+
+    A slice where the row's samples are contiguous (as :func:`~viscoforce.io.curves.
+    jpk_to_curves` writes them), else a boolean mask.
+    """
+    where: dict[int, slice | np.ndarray] = {}
+    if seg.size == 0:
+        return where
+    cut = (np.flatnonzero(seg[1:] != seg[:-1]) + 1).tolist()
+    for a, b in zip([0, *cut], [*cut, seg.size], strict=True):
+        row = int(seg[a])
+        where[row] = slice(a, b) if row not in where else seg == row
+    return where
+
+
+@dataclass(frozen=True, eq=False)
+class _Input:
+    """What the lock-in reads, from a JPK archive or a curves dataset.
+
+    ``curves``: per selected curve, its segments as (segment-table row, time, force,
+    tip_position, height), rows in order of first appearance; ``rows`` the curve rows of the
+    dataset (for messages); per segment-table row ``names``, ``freq`` [Hz], ``nominal`` [m],
+    ``base`` [N]; per curve ``x``, ``y`` [m] and ``index``; ``attrs`` those of the curves dataset;
+    ``piezo``, when asked for and present in every modulation segment beside a sensor height:
+    per curve, segment-table row → the piezo height record [m] of that segment.
+    """
+
+    curves: list[list[tuple[int, np.ndarray, np.ndarray, np.ndarray, np.ndarray]]]
+    rows: list[int]
+    names: Any
+    freq: np.ndarray
+    nominal: np.ndarray
+    base: np.ndarray
+    x: np.ndarray
+    y: np.ndarray
+    index: np.ndarray
+    attrs: dict[str, Any]
+    piezo: list[dict[int, np.ndarray]] | None = None
+
+
+def _input_of_archive(archive: JPKArchive, curves: int | Iterable[int] | None,
+                      height_channel: str | None, piezo: bool = False) -> _Input:
+    """The segments of the selected curves as decoded: what the curves dataset would hold.
+
+    Same numbers as :func:`~viscoforce.io.curves.jpk_to_curves` followed by the dataset path,
+    without flattening the curves into one dataset (tip_position = −height − deflection, per
+    segment as ``make_curves`` computes it per sample). With ``piezo``, the piezo ``height``
+    of the modulation segments too, where the height is a sensor (:func:`_piezo_of_archive`).
+    """
+    block = _read_block(archive, curves, height_channel)
+    table, cols = block.table, block.cols
+    segments: list[list[tuple[int, np.ndarray, np.ndarray, np.ndarray, np.ndarray]]] = [
+        [] for _ in block.picked]
+    for row, (t, f, h, d) in enumerate(zip(cols["time"], cols["force"], cols["height"],
+                                           cols["deflection"], strict=True)):
+        segments[table["curve"][row]].append((row, t, f, -h - d, h))
+    attrs = clean_attrs(block.attrs)
+    attrs["source"] = "jpk"
+    return _Input(curves=segments, rows=list(range(len(block.picked))), names=table["name"],
+                  freq=np.asarray(table["frequency"], dtype=float),
+                  nominal=np.asarray(table["amplitude"], dtype=float),
+                  base=np.asarray(table["baseline"], dtype=float),
+                  x=np.asarray([c.x for c in block.decoded], dtype=float),
+                  y=np.asarray([c.y for c in block.decoded], dtype=float),
+                  index=np.asarray(block.picked, dtype=np.int32), attrs=attrs,
+                  piezo=_piezo_of_archive(archive, block, segments) if piezo else None)
+
+
+def _piezo_of_archive(archive: JPKArchive, block: Any, segments: list
+                      ) -> list[dict[int, np.ndarray]] | None:
+    """The piezo ``height`` [m] of every modulation segment, or None where any lacks it.
+
+    None too where the block's height is not a sensor (it is then the piezo itself). Decoded
+    curve by curve (only that channel), in the segment order of ``segments``.
+    """
+    if block.height not in SENSOR_CHANNELS:
+        return None
+    names = block.table["name"]
+    out = []
+    for i, rows in zip(block.picked, segments, strict=True):
+        decoded = archive._curve_only(i, frozenset(("height", "vDeflection")))  # it calibrates
+        found = {}
+        for (row, t, *_), seg in zip(rows, decoded.segments, strict=True):
+            if names[row] != "modulation":
+                continue
+            values = seg.channels.get("height")
+            if (values is None or seg.units.get("height", "m") != "m"
+                    or np.shape(values) != t.shape or not np.all(np.isfinite(values))):
+                return None
+            found[row] = np.asarray(values, dtype=float)
+        out.append(found)
+    return out
+
+
+def _input_of_dataset(ds: xr.Dataset, rows: np.ndarray | None, piezo: bool = False) -> _Input:
+    """The segments of curve ``rows`` (None: all) of a valid curves dataset.
+
+    With ``piezo``, the piezo record of the modulation segments from the dataset's
+    ``piezo_height`` [m] (:data:`~viscoforce.experiments.phase_reference.PIEZO_VARIABLE`), where
+    it has one beside a sensor ``height``.
+    """
+    if "segment_frequency" not in ds.variables:
+        raise ParameterError("the curves dataset has no 'segment_frequency' [Hz] over "
+                             "segment_table: the modulation frequencies are unknown")
+    counts = np.asarray(ds["sample_count"].values)
+    starts = np.concatenate([[0], np.cumsum(counts)[:-1]])
+    rows = np.arange(counts.size) if rows is None else rows
+    freq = np.asarray(ds["segment_frequency"].values, dtype=float)
+    nominal = (np.asarray(ds["segment_amplitude"].values, dtype=float)
+               if "segment_amplitude" in ds.variables else np.full(freq.size, np.nan))
+    base = (np.asarray(ds["segment_baseline"].values, dtype=float)
+            if "segment_baseline" in ds.variables else np.full(freq.size, np.nan))
+    time = np.asarray(ds["time"].values, dtype=float)
+    force = np.asarray(ds["force"].values, dtype=float)
+    tip = np.asarray(ds["tip_position"].values, dtype=float)
+    height = np.asarray(ds["height"].values, dtype=float)
+    seg = np.asarray(ds["segment"].values)
+    names = np.asarray(ds["segment_name"].values).astype(str)
+    record = None
+    if piezo and PIEZO_VARIABLE in ds.variables and ds.attrs.get("height_channel") in \
+            SENSOR_CHANNELS:
+        variable = ds[PIEZO_VARIABLE]
+        if variable.dims != ("sample",) or variable.attrs.get("units") != "m":
+            raise ParameterError(f"'{PIEZO_VARIABLE}' must be the piezo height [m] over 'sample', "
+                                 f"got dims {variable.dims}, units {variable.attrs.get('units')!r}")
+        record = np.asarray(variable.values, dtype=float)
+    segments, piezos = [], []
+    for r in rows:
+        sl = slice(int(starts[r]), int(starts[r] + counts[r]))
+        c_time, c_force, c_tip, c_height = time[sl], force[sl], tip[sl], height[sl]
+        where = _segment_samples(seg[sl])
+        segments.append([(row, c_time[m], c_force[m], c_tip[m], c_height[m])
+                         for row, m in where.items()])
+        if record is not None:
+            piezos.append({row: record[sl][m] for row, m in where.items()
+                           if names[row] == "modulation"})
+    if record is not None and not all(np.all(np.isfinite(v)) for p in piezos
+                                      for v in p.values()):
+        record = None
+    return _Input(curves=segments, rows=[int(r) for r in rows], names=names, freq=freq,
+                  nominal=nominal, base=base,
+                  x=ds["x"].values[rows] if "x" in ds.variables else np.full(len(rows), np.nan),
+                  y=ds["y"].values[rows] if "y" in ds.variables else np.full(len(rows), np.nan),
+                  index=ds["curve"].values[rows] if "curve" in ds.coords else rows,
+                  attrs=dict(ds.attrs), piezo=piezos if record is not None else None)
+
+
+def _curves_of(data: Any, curves: int | Iterable[int] | None, height_channel: str | None,
+               piezo: bool = False) -> _Input:
+    """The segments to demodulate, from an archive, a path to one or a curves dataset.
+
+    ``piezo``: also the piezo height record where there is one (:class:`_Input`).
+    """
+    if isinstance(data, str | Path):
+        with read_jpk(data) as archive:  # opened here, so closed here
+            return _input_of_archive(archive, curves, height_channel, piezo)
+    if isinstance(data, JPKArchive):
+        return _input_of_archive(data, curves, height_channel, piezo)
+    if isinstance(data, xr.Dataset):
+        ds = validate_curves(data)
+        own = ds.attrs.get("height_channel")
+        if height_channel is not None and height_channel != own:
+            made = ("does not record its height channel" if own is None else
+                    f"was made with {own!r} (attrs['height_channel'])")
+            raise ParameterError(
+                f"height_channel {height_channel!r} chooses the height of a JPK archive; this "
+                f"curves dataset {made}: read the archive again with that height_channel, or "
+                "leave it None")
+        if curves is None:
+            return _input_of_dataset(ds, None, piezo)
+        picked = [curves] if isinstance(curves, int | np.integer) else list(curves)
+        n = ds.sizes["curve"]
+        if not picked or any(isinstance(c, bool) or not isinstance(c, int | np.integer)
+                             or not -n <= c < n for c in picked):
+            raise ParameterError(f"curves {picked} must be integers in [{-n}, {n})")
+        return _input_of_dataset(ds, np.asarray(unique_curves([int(c) % n for c in picked],
+                                                              [int(c) for c in picked])), piezo)
+    raise ParameterError("modulation_spectrum needs a JPKArchive, a path to one, or a curves "
+                         f"dataset, got {type(data).__name__}")

@@ -74,7 +74,7 @@ of m) of |R_F(k)|²/a_k. What this assumes and gives:
 On the real JPK map of a cell (16 curves, 1–300 Hz, 4–19 periods) the white formula is 2–6×
 too small: the two halves of each window differ by an rms 2.1–6.4 of their stated errors; with
 the residual-spectrum errors by 0.9–1.9 (``tests/measured/test_modulation_stderr.py``,
-``benchmarks/split_half.py``). The 1.9 is at 300 Hz, where the halves differ systematically
+``studies/split_half/split_half.py``). The 1.9 is at 300 Hz, where the halves differ systematically
 (same sign on every curve: the force response grows by ≈ 10 % through the segment), a drift
 of k* the errors count only through its sidebands.
 
@@ -99,24 +99,27 @@ NaN and ``attrs["contact_point"]`` says so; when none is found on any curve the 
 out.
 
 Which lag is in the phase: δ is built from the height channel, the calibrated sensor
-(``measuredHeight``, ``strainGaugeHeight``, ``capacitiveSensorHeight``) where the file has one.
-The sensor measures where the scanner is, so the piezo's lag behind its drive signal is not in
-the phase and must not be subtracted again: on the real JPK map of a cell the sensor lags the
-piezo ``height`` by 1.1, 1.4, 1.2, 2.1, 5.2 and 14.2° at 1, 3, 10, 30, 100 and 300 Hz (the same
-on every curve, ``benchmarks/phase_lag_real.py``), and that lag is already absent from the
-sensor-based phase. What can remain is named in the ``quality`` comment
-(:data:`viscoforce.io.quality.PHASE_REMAINS`): the sensor's own bandwidth, the deflection
-detection chain, the cantilever's inertia and hydrodynamics; ``attrs["phase_reference"]`` says
-which height signal the phase refers to (:func:`viscoforce.io.quality.phase_basis`).
+(``measuredHeight``, ``strainGaugeHeight``, ``capacitiveSensorHeight``) where the file has one,
+and the phase of its first harmonic is referred to the sensor as recorded, to the piezo record,
+or to the sensor advanced by its delay behind the piezo (``phase_reference``:
+:mod:`viscoforce.experiments.phase_reference`, which tells the default and why). On the real JPK
+map of a cell the sensor lags the piezo ``height`` by 1.1, 1.5, 1.2, 2.1, 5.2 and 14.1° at 1, 3,
+10, 30, 100 and 300 Hz (the same on every curve): the fast part is the sensor's own delay
+(τ_d ≈ 0.14 ms, removed by the default), the slow part mostly the open-loop piezo's creep, which
+a sensor-based phase rightly leaves out. What can remain is named in the ``quality`` comment
+(:data:`viscoforce.io.quality.PHASE_REMAINS`): the deflection detection chain, the cantilever's
+inertia and hydrodynamics, a sensor lag that is not a delay; ``attrs["phase_reference"]`` says
+which height signal the phase refers to, ``attrs["phase_reference_choice"]`` why.
 
-Phase reference: ``phase_reference`` = a spectrum measured on a hard (elastic) surface, where the
-true phase is 0: its median phase per frequency (over all its other dims, non-finite values
-ignored; taken circularly, about the circular mean) plus the ``phase_lag`` it already had
-subtracted (its ``phase_lag`` variable, when present) is the instrument lag λ(f), subtracted as
-``phase_lag``. Every modulation frequency must be in the reference (relative tolerance 1e-6;
-extra reference frequencies are ignored), and ``phase_lag`` and ``phase_reference`` are
-exclusive. Measured with the same cantilever, liquid, drive and height channel, it removes
-everything the ``quality`` comment lists except the sample itself.
+Hard-surface reference: ``phase_reference`` = a spectrum measured on a hard (elastic) surface
+against the sensor (its ``phase_reference_mode`` "sensor"; the data are then referred to the
+sensor too), where the true phase is 0: its median phase per frequency (over all its other
+dims, non-finite values ignored; taken circularly, about the circular mean) plus the
+``phase_lag`` it already had subtracted (its ``phase_lag`` variable, when present) is the
+instrument lag λ(f), subtracted as ``phase_lag``. Every modulation frequency must be in the
+reference (relative tolerance 1e-6; extra reference frequencies are ignored), and ``phase_lag``
+and ``phase_reference`` are exclusive. Measured with the same cantilever, liquid, drive and
+height channel, it removes everything the ``quality`` comment lists except the sample itself.
 
 Quality (kept, never dropped; :func:`viscoforce.io.quality.spectrum_quality`, the function
 the spectrum CSV reader uses too): 1 ``phase_outside_passive_range`` where the phase after the
@@ -124,9 +127,9 @@ corrections is outside (0°, 90°), else 2 ``low_signal`` where ``stiffness`` < 
 ``stiffness_stderr``, else 0. The comment says what was corrected (the lag per frequency, the
 drag) and what can remain; ``attrs["quality_summary"]`` lists the flagged frequencies, how many
 points and their median phase. A flag left after a correction is information, not a defect:
-on the real map the 300 Hz points sit at 104.5–109.8° as measured and at 90.5–95.8° after
-subtracting 14° (the sensor-vs-piezo lag, which a sensor-based phase does not contain), so they
-stay flagged until a hard-surface reference says what the instrument adds there.
+on the real map the 300 Hz points sit at 104.5–109.8° against the sensor as recorded and at
+91.8–98.0° against the sensor advanced by its delay (the default; 92.6–98.7° against the piezo),
+so they stay flagged until a hard-surface reference says what the instrument adds there.
 
 :func:`correct_spectrum` applies the same corrections and flags to a spectrum already made (a
 spectrum CSV, a netCDF written by ``load``).
@@ -137,7 +140,6 @@ from __future__ import annotations
 import math
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
-from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -152,8 +154,13 @@ from viscoforce.experiments._demodulation import (  # noqa: F401 (re-exported)
     STDERR_METHOD_WHITE,
     _band,
     _band_errors,
+    _curves_of,
     _demodulate_halves,
     _demodulate_stacked,
+    _Input,
+    _input_of_archive,
+    _input_of_dataset,
+    _segment_samples,
     demodulate_segment,
 )
 from viscoforce.experiments.contact_point import (  # noqa: F401 (re-exported)
@@ -176,140 +183,25 @@ from viscoforce.experiments.corrections import (  # noqa: F401 (re-exported)
     _reference_lags,
     correct_spectrum,
 )
-from viscoforce.io.curves import _read_block, check_height_channel, unique_curves
-from viscoforce.io.jpk import JPKArchive, read_jpk
-from viscoforce.io.quality import phase_basis, quality_notes, spectrum_quality
-from viscoforce.schema import clean_attrs, make_spectrum, validate_curves
+from viscoforce.experiments.phase_reference import (
+    check_phase_reference,
+    choose_reference,
+    fit_sensor_delay,
+    phase_difference,
+    reference_basis,
+    referred,
+)
+from viscoforce.io.curves import check_height_channel
+from viscoforce.io.quality import SENSOR_CHANNELS, quality_notes, spectrum_quality
+from viscoforce.schema import make_spectrum
 
 __all__ = ["correct_spectrum", "demodulate_segment", "find_contact_point", "modulation_spectrum"]
 
-
-def _segment_samples(seg: np.ndarray) -> dict[int, slice | np.ndarray]:
-    """Samples of each segment-table row of one curve, rows in order of first appearance.
-
-    A slice where the row's samples are contiguous (as :func:`~viscoforce.io.curves.
-    jpk_to_curves` writes them), else a boolean mask.
-    """
-    where: dict[int, slice | np.ndarray] = {}
-    if seg.size == 0:
-        return where
-    cut = (np.flatnonzero(seg[1:] != seg[:-1]) + 1).tolist()
-    for a, b in zip([0, *cut], [*cut, seg.size], strict=True):
-        row = int(seg[a])
-        where[row] = slice(a, b) if row not in where else seg == row
-    return where
-
-
-@dataclass(frozen=True, eq=False)
-class _Input:
-    """What the lock-in reads, from a JPK archive or a curves dataset.
-
-    ``curves``: per selected curve, its segments as (segment-table row, time, force,
-    tip_position, height), rows in order of first appearance; ``rows`` the curve rows of the
-    dataset (for messages); per segment-table row ``names``, ``freq`` [Hz], ``nominal`` [m],
-    ``base`` [N]; per curve ``x``, ``y`` [m] and ``index``; ``attrs`` those of the curves dataset.
-    """
-
-    curves: list[list[tuple[int, np.ndarray, np.ndarray, np.ndarray, np.ndarray]]]
-    rows: list[int]
-    names: Any
-    freq: np.ndarray
-    nominal: np.ndarray
-    base: np.ndarray
-    x: np.ndarray
-    y: np.ndarray
-    index: np.ndarray
-    attrs: dict[str, Any]
-
-
-def _input_of_archive(archive: JPKArchive, curves: int | Iterable[int] | None,
-                      height_channel: str | None) -> _Input:
-    """The segments of the selected curves as decoded: what the curves dataset would hold.
-
-    Same numbers as :func:`~viscoforce.io.curves.jpk_to_curves` followed by the dataset path,
-    without flattening the curves into one dataset (tip_position = −height − deflection, per
-    segment as ``make_curves`` computes it per sample).
-    """
-    block = _read_block(archive, curves, height_channel)
-    table, cols = block.table, block.cols
-    segments: list[list[tuple[int, np.ndarray, np.ndarray, np.ndarray, np.ndarray]]] = [
-        [] for _ in block.picked]
-    for row, (t, f, h, d) in enumerate(zip(cols["time"], cols["force"], cols["height"],
-                                           cols["deflection"], strict=True)):
-        segments[table["curve"][row]].append((row, t, f, -h - d, h))
-    attrs = clean_attrs(block.attrs)
-    attrs["source"] = "jpk"
-    return _Input(curves=segments, rows=list(range(len(block.picked))), names=table["name"],
-                  freq=np.asarray(table["frequency"], dtype=float),
-                  nominal=np.asarray(table["amplitude"], dtype=float),
-                  base=np.asarray(table["baseline"], dtype=float),
-                  x=np.asarray([c.x for c in block.decoded], dtype=float),
-                  y=np.asarray([c.y for c in block.decoded], dtype=float),
-                  index=np.asarray(block.picked, dtype=np.int32), attrs=attrs)
-
-
-def _input_of_dataset(ds: xr.Dataset, rows: np.ndarray | None) -> _Input:
-    """The segments of curve ``rows`` (None: all) of a valid curves dataset."""
-    if "segment_frequency" not in ds.variables:
-        raise ParameterError("the curves dataset has no 'segment_frequency' [Hz] over "
-                             "segment_table: the modulation frequencies are unknown")
-    counts = np.asarray(ds["sample_count"].values)
-    starts = np.concatenate([[0], np.cumsum(counts)[:-1]])
-    rows = np.arange(counts.size) if rows is None else rows
-    freq = np.asarray(ds["segment_frequency"].values, dtype=float)
-    nominal = (np.asarray(ds["segment_amplitude"].values, dtype=float)
-               if "segment_amplitude" in ds.variables else np.full(freq.size, np.nan))
-    base = (np.asarray(ds["segment_baseline"].values, dtype=float)
-            if "segment_baseline" in ds.variables else np.full(freq.size, np.nan))
-    time = np.asarray(ds["time"].values, dtype=float)
-    force = np.asarray(ds["force"].values, dtype=float)
-    tip = np.asarray(ds["tip_position"].values, dtype=float)
-    height = np.asarray(ds["height"].values, dtype=float)
-    seg = np.asarray(ds["segment"].values)
-    segments = []
-    for r in rows:
-        sl = slice(int(starts[r]), int(starts[r] + counts[r]))
-        c_time, c_force, c_tip, c_height = time[sl], force[sl], tip[sl], height[sl]
-        segments.append([(row, c_time[m], c_force[m], c_tip[m], c_height[m])
-                         for row, m in _segment_samples(seg[sl]).items()])
-    return _Input(curves=segments, rows=[int(r) for r in rows],
-                  names=np.asarray(ds["segment_name"].values).astype(str), freq=freq,
-                  nominal=nominal, base=base,
-                  x=ds["x"].values[rows] if "x" in ds.variables else np.full(len(rows), np.nan),
-                  y=ds["y"].values[rows] if "y" in ds.variables else np.full(len(rows), np.nan),
-                  index=ds["curve"].values[rows] if "curve" in ds.coords else rows,
-                  attrs=dict(ds.attrs))
-
-
-def _curves_of(data: Any, curves: int | Iterable[int] | None, height_channel: str | None
-               ) -> _Input:
-    """The segments to demodulate, from an archive, a path to one or a curves dataset."""
-    if isinstance(data, str | Path):
-        with read_jpk(data) as archive:  # opened here, so closed here
-            return _input_of_archive(archive, curves, height_channel)
-    if isinstance(data, JPKArchive):
-        return _input_of_archive(data, curves, height_channel)
-    if isinstance(data, xr.Dataset):
-        ds = validate_curves(data)
-        own = ds.attrs.get("height_channel")
-        if height_channel is not None and height_channel != own:
-            made = ("does not record its height channel" if own is None else
-                    f"was made with {own!r} (attrs['height_channel'])")
-            raise ParameterError(
-                f"height_channel {height_channel!r} chooses the height of a JPK archive; this "
-                f"curves dataset {made}: read the archive again with that height_channel, or "
-                "leave it None")
-        if curves is None:
-            return _input_of_dataset(ds, None)
-        picked = [curves] if isinstance(curves, int | np.integer) else list(curves)
-        n = ds.sizes["curve"]
-        if not picked or any(isinstance(c, bool) or not isinstance(c, int | np.integer)
-                             or not -n <= c < n for c in picked):
-            raise ParameterError(f"curves {picked} must be integers in [{-n}, {n})")
-        return _input_of_dataset(ds, np.asarray(unique_curves([int(c) % n for c in picked],
-                                                              [int(c) for c in picked])))
-    raise ParameterError("modulation_spectrum needs a JPKArchive, a path to one, or a curves "
-                         f"dataset, got {type(data).__name__}")
+#: Real (curve, frequency) arrays of :class:`_Demodulated`.
+_REAL = ("eta", "eta_se", "mean", "mean_se", "rho", "eta_se_white", "mean_se_white",
+         "rho_white", "bins", "nominal", "height", "periods", "n", "settle", "indent")
+#: What the piezo record adds: its harmonic and the error covariances of (F̂, δ̂, ĥ, ĥ_p).
+_PIEZO = ("hp", "cov_band", "cov_white")
 
 
 def modulation_spectrum(data: Any, *, curves: int | Iterable[int] | None = None,
@@ -318,18 +210,20 @@ def modulation_spectrum(data: Any, *, curves: int | Iterable[int] | None = None,
                         phase_lag: float | Mapping[float, float] | None = None,
                         drag: float | None = None, subtract_baseline: bool = True,
                         height_channel: str | None = None,
-                        phase_reference: xr.Dataset | None = None,
+                        phase_reference: str | xr.Dataset | None = None,
                         contact_point: bool | Mapping[str, Any] = True) -> xr.Dataset:
     """Spectrum over (``curve``, ``omega``) from every modulation segment of every curve.
 
     See the module docstring for the signs, the lock-in window, the corrections and the
-    standard-error formulas.
+    standard-error formulas, and :mod:`viscoforce.experiments.phase_reference` for the phase
+    reference.
 
     Parameters
     ----------
     data : JPKArchive, str, Path or xarray.Dataset
         A JPK archive (or its path), or a curves dataset with ``segment_frequency`` [Hz] over
-        ``segment_table`` (as :func:`viscoforce.io.curves.jpk_to_curves` writes).
+        ``segment_table`` (as :func:`viscoforce.io.curves.jpk_to_curves` writes; with the
+        piezo record as ``piezo_height`` [m] beside a sensor ``height`` where it has one).
     curves : int or iterable of int, optional
         Curves to use (default all).
     settle_periods : float
@@ -349,10 +243,15 @@ def modulation_spectrum(data: Any, *, curves: int | Iterable[int] | None = None,
         Height channel for a JPK archive (default: the calibrated sensor), one of
         :data:`~viscoforce.io.curves.HEIGHT_CHANNELS` (refused before anything is read). A
         curves dataset has its own: None or that one.
-    phase_reference : xarray.Dataset, optional
-        Spectrum measured on a hard (elastic) surface at the same frequencies (e.g. this
-        function's output on a glass/sapphire map): its median phase per frequency is the
-        instrument lag, subtracted as ``phase_lag`` (module docstring). Not with ``phase_lag``.
+    phase_reference : {"auto", "sensor", "piezo", "delay"} or xarray.Dataset, optional
+        What the phase of δ refers to (:mod:`viscoforce.experiments.phase_reference`): the
+        sensor as recorded, the piezo's phase with the sensor's amplitude, or the sensor
+        advanced by its delay fitted over the selected curves; None or ``"auto"``: the one the
+        data support (``attrs["phase_reference_choice"]`` says which and why). Or a spectrum
+        measured on a hard (elastic) surface at the same frequencies with the sensor as its
+        reference (e.g. this function's output on a glass/sapphire map with
+        ``phase_reference="sensor"``): its median phase per frequency is the instrument lag,
+        subtracted as ``phase_lag`` (module docstring); not with ``phase_lag``.
     contact_point : bool or mapping
         Estimate the contact point on each curve's approach (:func:`find_contact_point`) and
         store ``mean_indentation``; a mapping gives that function's options; False skips it.
@@ -373,15 +272,32 @@ def modulation_spectrum(data: Any, *, curves: int | Iterable[int] | None = None,
         white-noise ones are kept as ``stiffness_stderr_white``, ``phase_stderr_white``,
         ``drive_amplitude_stderr_white`` and ``mean_force_stderr_white`` (``attrs
         ["stderr_method_white"]``), and ``lockin_stderr_bins`` counts the residual bins
-        behind the errors (0: white formula used).
+        behind the errors (0: white formula used). Where the piezo record was read:
+        ``height_phase_difference`` (and its ``_stderr``) [degree], the sensor − piezo phase
+        per point. Attrs ``phase_reference`` (its name — ``sensor``, ``piezo``, ``delay: τ ±
+        σ``, or the hard-surface reference — and what the phase is measured against),
+        ``phase_reference_mode`` (``sensor``, ``piezo`` or ``delay``),
+        ``phase_reference_choice`` (which and why) and, where the delay was fitted,
+        ``sensor_delay``, ``sensor_delay_stderr`` [s] and ``sensor_delay_fit``.
 
     Raises
     ------
     ParameterError
         Bad options, no modulation segment, a modulation segment without a frequency, curves
         whose frequency sets differ, a frequency repeated within a curve, both ``phase_lag``
-        and ``phase_reference``, or a reference lacking a modulation frequency.
+        and a reference spectrum, a reference lacking a modulation frequency or referred to
+        anything but the sensor, ``"piezo"`` or ``"delay"`` without a sensor and a piezo record.
     """
+    options = _checked(settle_periods=settle_periods, settle=settle, detrend=detrend,
+                       phase_lag=phase_lag, drag=drag, subtract_baseline=subtract_baseline,
+                       phase_reference=phase_reference, contact_point=contact_point)
+    demodulated = _demodulate(data, curves, check_height_channel(height_channel), options)
+    return _spectrum(demodulated, options)
+
+
+def _checked(*, settle_periods, settle, detrend, phase_lag, drag, subtract_baseline,
+             phase_reference, contact_point) -> dict[str, Any]:
+    """The options of :func:`modulation_spectrum`, checked; ``contact`` the contact options."""
     if not (isinstance(settle_periods, int | float) and settle_periods >= 0
             and math.isfinite(settle_periods)):
         raise ParameterError(f"settle_periods must be >= 0 and finite, got {settle_periods!r}")
@@ -390,27 +306,64 @@ def modulation_spectrum(data: Any, *, curves: int | Iterable[int] | None = None,
         raise ParameterError(f"settle must be None or >= 0 seconds, got {settle!r}")
     if detrend not in ("linear", None):
         raise ParameterError(f"detrend must be 'linear' or None, got {detrend!r}")
-    _check_corrections(phase_lag, drag, phase_reference)
+    reference = check_phase_reference(phase_reference)
+    hard = reference if isinstance(reference, xr.Dataset) else None
+    _check_corrections(phase_lag, drag, hard)
+    if hard is not None and hard.attrs.get("phase_reference_mode", "sensor") != "sensor":
+        raise ParameterError(
+            f"phase_reference: this hard-surface spectrum's phase refers to the "
+            f"{hard.attrs['phase_reference_mode']!r} reference (attrs phase_reference_mode); a "
+            "hard-surface reference measures the instrument lag against the sensor itself: make "
+            "it with phase_reference='sensor'")
     if not isinstance(subtract_baseline, bool | np.bool_):
         raise ParameterError(f"subtract_baseline must be True or False, got "
                              f"{subtract_baseline!r}")
     if isinstance(contact_point, Mapping):
-        contact_options: dict[str, Any] | None = dict(contact_point)
+        contact: dict[str, Any] | None = dict(contact_point)
     elif isinstance(contact_point, bool):
-        contact_options = {} if contact_point else None
+        contact = {} if contact_point else None
     else:
         raise ParameterError(f"contact_point must be True, False or a mapping of "
                              f"find_contact_point options, got {contact_point!r}")
-    inp = _curves_of(data, curves, check_height_channel(height_channel))
-    names, freq, nominal, base = inp.names, inp.freq, inp.nominal, inp.base
+    return {"settle_periods": settle_periods, "settle": settle, "detrend": detrend,
+            "phase_lag": phase_lag, "drag": drag, "subtract_baseline": subtract_baseline,
+            "reference": reference, "contact": contact}
 
+
+@dataclass(frozen=True, eq=False)
+class _Demodulated:
+    """The lock-in of a selection of curves per (curve, frequency), before any correction.
+
+    ``arrays``: the real (curve, frequency) arrays of :data:`_REAL`, the complex harmonics
+    ``F`` [N], ``d`` (δ̂), ``h`` (the height channel's) [m] and, where every modulation segment
+    has a piezo record beside a sensor, those of :data:`_PIEZO` (``cov_*`` over (curve,
+    frequency, 4, 4)); ``fr`` the frequencies [Hz]; per curve ``z_contact`` [m], ``x``, ``y``
+    [m], ``index``; ``attrs`` those of the curves.
+    """
+
+    fr: np.ndarray
+    arrays: dict[str, np.ndarray]
+    z_contact: np.ndarray
+    x: np.ndarray
+    y: np.ndarray
+    index: np.ndarray
+    attrs: dict[str, Any]
+
+
+def _demodulate(data: Any, curves: Any, height_channel: str | None,
+                options: dict[str, Any]) -> _Demodulated:
+    """Every modulation segment of the selected curves through the lock-in (no correction)."""
+    settle, settle_periods = options["settle"], options["settle_periods"]
+    piezo = options["reference"] in ("auto", "piezo", "delay")
+    inp = _curves_of(data, curves, height_channel, piezo)
+    names, freq, nominal, base = inp.names, inp.freq, inp.nominal, inp.base
     results: list[dict[float, tuple[int, dict[str, Any]]]] = []
     contacts: list[dict[str, Any] | None] = []
-    for r, segments in zip(inp.rows, inp.curves, strict=True):
+    for i, (r, segments) in enumerate(zip(inp.rows, inp.curves, strict=True)):
         found: dict[float, tuple[int, dict[str, Any]]] = {}
         approach = [s for s in segments if names[s[0]] == "approach"]
-        contacts.append(None if contact_options is None or not approach else find_contact_point(
-            approach[0][3], approach[0][2], **contact_options))
+        contacts.append(None if options["contact"] is None or not approach else
+                        find_contact_point(approach[0][3], approach[0][2], **options["contact"]))
         for row, t, c_force, c_tip, c_height in sorted(segments, key=lambda s: s[0]):
             if names[row] != "modulation":
                 continue
@@ -423,8 +376,9 @@ def modulation_spectrum(data: Any, *, curves: int | Iterable[int] | None = None,
                                      "segments first")
             dt = float(np.median(np.diff(t)))
             wait = settle if settle is not None else max(settle_periods / f - dt, 0.0)
-            out = _demodulate_stacked(t, np.vstack([c_force, c_tip, c_height]), f,
-                                      settle=wait, detrend=detrend, dt=dt)
+            out = _demodulate_stacked(t, np.vstack([c_force, c_tip, c_height]), f, settle=wait,
+                                      detrend=options["detrend"], dt=dt,
+                                      piezo=None if inp.piezo is None else inp.piezo[i][row])
             out["settle"] = wait
             found[f] = (int(row), out)
         results.append(found)
@@ -435,79 +389,119 @@ def modulation_spectrum(data: Any, *, curves: int | Iterable[int] | None = None,
         raise ParameterError(f"the curves modulate different frequency sets {sorted(set(fsets))}; "
                              "select curves with the same set")
     fr = np.asarray(fsets[0])
-    omega = 2.0 * math.pi * fr
     shape = (len(inp.rows), fr.size)
-    k_raw = np.empty(shape, complex)
-    arrays = {k: np.empty(shape) for k in ("eta", "eta_se", "mean", "mean_se", "rho",
-                                           "eta_se_white", "mean_se_white", "rho_white",
-                                           "bins", "nominal", "height", "periods", "n",
-                                           "settle", "indent")}
+    arrays = {k: np.empty(shape) for k in _REAL}
+    arrays.update({k: np.empty(shape, complex) for k in ("F", "d", "h")})
+    if inp.piezo is not None:
+        arrays.update(hp=np.empty(shape, complex), cov_band=np.empty((*shape, 4, 4), complex),
+                      cov_white=np.empty((*shape, 4, 4)))
     z_contact = np.asarray([np.nan if c is None else c["z_contact"] for c in contacts])
     for i, found in enumerate(results):
         for j, f in enumerate(sorted(found)):
             row, o = found[f]
-            arrays["indent"][i, j] = o["mean_position"] - z_contact[i]
-            k_raw[i, j] = o["F"] / o["d"]
-            b = base[row] if subtract_baseline and math.isfinite(base[row]) else 0.0
-            arrays["eta"][i, j] = abs(o["d"])
-            arrays["eta_se"][i, j] = o["sigma_d_hat"]
-            arrays["eta_se_white"][i, j] = o["sigma_d_hat_white"]
-            arrays["mean"][i, j] = o["mean_force"] - b
-            arrays["mean_se"][i, j] = o["sigma_mean"]
-            arrays["mean_se_white"][i, j] = o["sigma_mean_white"]
-            arrays["rho"][i, j] = o["rho"]
-            arrays["rho_white"][i, j] = o["rho_white"]
-            arrays["bins"][i, j] = o["stderr_bins"]
-            arrays["nominal"][i, j] = nominal[row]
-            arrays["height"][i, j] = abs(o["h"])
-            arrays["periods"][i, j] = o["periods"]
-            arrays["n"][i, j] = o["n"]
-            arrays["settle"][i, j] = o["settle"]
-    lags = _lags(fr, phase_lag, phase_reference)
+            b = base[row] if options["subtract_baseline"] and math.isfinite(base[row]) else 0.0
+            values = {"indent": o["mean_position"] - z_contact[i], "F": o["F"], "d": o["d"],
+                      "h": o["h"], "eta": abs(o["d"]), "eta_se": o["sigma_d_hat"],
+                      "eta_se_white": o["sigma_d_hat_white"], "mean": o["mean_force"] - b,
+                      "mean_se": o["sigma_mean"], "mean_se_white": o["sigma_mean_white"],
+                      "rho": o["rho"], "rho_white": o["rho_white"], "bins": o["stderr_bins"],
+                      "nominal": nominal[row], "height": abs(o["h"]), "periods": o["periods"],
+                      "n": o["n"], "settle": o["settle"]}
+            for key in _PIEZO if inp.piezo is not None else ():
+                values[key] = o[key]
+            for key, value in values.items():
+                arrays[key][i, j] = value
+    return _Demodulated(fr=fr, arrays=arrays, z_contact=z_contact, x=inp.x, y=inp.y,
+                        index=inp.index, attrs=inp.attrs)
+
+
+def _joined(parts: list[_Demodulated]) -> _Demodulated:
+    """Chunks of curves as one selection (the same frequencies; the piezo where all have it)."""
+    first = parts[0]
+    for part in parts[1:]:
+        a, b = first.fr, part.fr
+        if a.shape != b.shape or not np.allclose(a, b, rtol=1e-9, atol=0.0):
+            sets = sorted({tuple(a.tolist()), tuple(b.tolist())})
+            raise ParameterError(f"the curves modulate different frequency sets {sets}; select "
+                                 "curves with the same set")
+    keys = [k for k in first.arrays if all(k in p.arrays for p in parts)]
+    return _Demodulated(
+        fr=first.fr, arrays={k: np.concatenate([p.arrays[k] for p in parts]) for k in keys},
+        **{k: np.concatenate([getattr(p, k) for p in parts])
+           for k in ("z_contact", "x", "y", "index")}, attrs=first.attrs)
+
+
+def _spectrum(dem: _Demodulated, options: dict[str, Any]) -> xr.Dataset:
+    """The spectrum of :func:`modulation_spectrum` from the lock-in of its curves."""
+    a, fr = dem.arrays, dem.fr
+    omega = 2.0 * math.pi * fr
+    reference, drag, phase_lag = options["reference"], options["drag"], options["phase_lag"]
+    hard = reference if isinstance(reference, xr.Dataset) else None
+    height_channel = dem.attrs.get("height_channel")
+    fit = None
+    if "hp" in a and height_channel in SENSOR_CHANNELS and hard is None:
+        try:
+            fit = fit_sensor_delay(fr, a["h"], a["hp"], a["cov_band"])
+        except ParameterError:
+            if reference == "delay":
+                raise
+    mode, why = choose_reference(reference, channel=height_channel, has_piezo="hp" in a,
+                                 fit=fit)
+    k_raw, eta, eta_se, eta_se_white = a["F"] / a["d"], a["eta"], a["eta_se"], a["eta_se_white"]
+    rho, rho_white = a["rho"], a["rho_white"]
+    if mode != "sensor":
+        band, white = (referred(mode, a["F"], a["d"], a["h"], a["hp"], a[cov], omega, fit)
+                       for cov in ("cov_band", "cov_white"))
+        k_raw, eta, eta_se, rho = band["k"], band["eta"], band["eta_se"], band["rho"]
+        eta_se_white, rho_white = white["eta_se"], white["rho"]
+    lags = _lags(fr, phase_lag, hard)
     k = _corrected(k_raw, omega, lags, drag)
-    sigma_c = arrays["rho"] * np.abs(k_raw)
-    sigma_c_white = arrays["rho_white"] * np.abs(k_raw)
+    sigma_c = rho * np.abs(k_raw)
+    sigma_c_white = rho_white * np.abs(k_raw)
     with np.errstate(divide="ignore", invalid="ignore"):
         phase_se = np.degrees(sigma_c / np.abs(k))
         phase_se_white = np.degrees(sigma_c_white / np.abs(k))
     phase = np.degrees(np.angle(k))
     quality = spectrum_quality(phase, np.abs(k), sigma_c)
-    height_channel = inp.attrs.get("height_channel")
-    basis = phase_basis(height_channel)
+    basis = reference_basis(mode, height_channel, fit, hard)
     notes = quality_notes(quality, phase, fr, basis=basis, corrections=_corrections_text(
-        fr, lags, float(drag or 0.0), reference=phase_reference is not None))
+        fr, lags, float(drag or 0.0), reference=hard is not None))
 
-    x, y, index = inp.x, inp.y, inp.index
-    attrs = {key: v for key, v in inp.attrs.items() if not key.startswith("segment_")}
+    attrs = {key: v for key, v in dem.attrs.items() if not key.startswith("segment_")}
     attrs.update({
         "analysis": "lock-in of sine-modulation segments (viscoforce.experiments.modulation)",
         "indentation": "delta = tip_position (= -height - deflection) minus its mean: tip "
                        "displacement into the sample",
-        "settle_periods": float(settle_periods), "detrend": str(detrend),
-        "settle": "per-point lockin_settle" if settle is None else float(settle),
-        "mean_force_baseline_subtracted": int(bool(subtract_baseline)),
+        "settle_periods": float(options["settle_periods"]), "detrend": str(options["detrend"]),
+        "settle": ("per-point lockin_settle" if options["settle"] is None
+                   else float(options["settle"])),
+        "mean_force_baseline_subtracted": int(bool(options["subtract_baseline"])),
         "stderr_method": STDERR_METHOD, "stderr_method_white": STDERR_METHOD_WHITE,
     })
-    attrs.update({"phase_lag": _lag_mode(phase_lag, phase_reference),
+    attrs.update({"phase_lag": _lag_mode(phase_lag, hard),
                   "drag": float(drag) if drag is not None else 0.0,
                   "quality_summary": notes["summary"]})
-    attrs.update(_reference_attrs(basis, height_channel, phase_lag, phase_reference))
-    source = str(inp.attrs.get("source", "jpk"))
-    text, keep_indent = contact_point_summary(z_contact, index, source, contact_options)
+    attrs.update(_reference_attrs(basis, height_channel, phase_lag, hard))
+    attrs.update({"phase_reference_mode": mode, "phase_reference_choice": why})
+    if fit is not None:
+        attrs.update(fit.as_attrs())
+    source = str(dem.attrs.get("source", "jpk"))
+    contact_options = options["contact"]
+    text, keep_indent = contact_point_summary(dem.z_contact, dem.index, source, contact_options)
     attrs["contact_point"] = text
-    if contact_options is not None:
-        if keep_indent:
-            attrs["indentation_definition"] = (
-                "mean_indentation = mean tip_position over the lock-in window minus the tip "
-                "position at the approach contact point (> 0 in contact)")
+    if contact_options is not None and keep_indent:
+        attrs["indentation_definition"] = (
+            "mean_indentation = mean tip_position over the lock-in window minus the tip "
+            "position at the approach contact point (> 0 in contact)")
     spec = make_spectrum(
-        omega, k, arrays["mean"], arrays["eta"], dims=("curve", "omega"), attrs=attrs,
-        coords={"curve": ("curve", np.asarray(index)), "x": ("curve", np.asarray(x, float)),
-                "y": ("curve", np.asarray(y, float))},
-        stderr={"stiffness": sigma_c, "phase": phase_se, "drive_amplitude": arrays["eta_se"],
-                "mean_force": arrays["mean_se"]},
+        omega, k, a["mean"], eta, dims=("curve", "omega"), attrs=attrs,
+        coords={"curve": ("curve", np.asarray(dem.index)),
+                "x": ("curve", np.asarray(dem.x, float)),
+                "y": ("curve", np.asarray(dem.y, float))},
+        stderr={"stiffness": sigma_c, "phase": phase_se, "drive_amplitude": eta_se,
+                "mean_force": a["mean_se"]},
         quality=quality, quality_comment=notes["comment"], amplitude=False, source=source,
-        mean_indentation=arrays["indent"] if keep_indent else None)
+        mean_indentation=a["indent"] if keep_indent else None)
     w = ("curve", "omega")
     white = "white-noise formula (attrs stderr_method_white): too small for coloured noise"
     spec = spec.assign(
@@ -517,30 +511,37 @@ def modulation_spectrum(data: Any, *, curves: int | Iterable[int] | None = None,
         phase_stderr_white=(w, phase_se_white, {
             "units": "degree", "long_name": "standard error of phase, white noise",
             "comment": white}),
-        drive_amplitude_stderr_white=(w, arrays["eta_se_white"], {
+        drive_amplitude_stderr_white=(w, eta_se_white, {
             "units": "m", "long_name": "standard error of drive amplitude, white noise",
             "comment": white}),
-        mean_force_stderr_white=(w, arrays["mean_se_white"], {
+        mean_force_stderr_white=(w, a["mean_se_white"], {
             "units": "N", "long_name": "standard error of mean force, white noise",
             "comment": white}),
-        lockin_stderr_bins=(w, arrays["bins"].astype(np.int32), {
+        lockin_stderr_bins=(w, a["bins"].astype(np.int32), {
             "units": "1", "long_name": "residual-spectrum bins behind the standard errors",
             "comment": "bins next to the drive frequency (0: none, white-noise formula used)"}))
     if keep_indent:
-        spec = spec.assign(contact_position=("curve", z_contact, {
+        spec = spec.assign(contact_position=("curve", dem.z_contact, {
             "units": "m", "long_name": "tip position at the approach contact point"}))
+    if "hp" in a:
+        difference, difference_se = phase_difference(a["h"], a["hp"], a["cov_band"])
+        long_name = "phase of the height sensor minus that of the piezo height record"
+        spec = spec.assign(
+            height_phase_difference=(w, difference, {"units": "degree", "long_name": long_name}),
+            height_phase_difference_stderr=(w, difference_se, {
+                "units": "degree", "long_name": "standard error of " + long_name}))
     return spec.assign_coords(
         frequency=("omega", fr, {"units": "Hz", "long_name": "modulation frequency"})).assign(
-        nominal_amplitude=(w, arrays["nominal"], {"units": "m",
-                                                  "long_name": "nominal drive amplitude"}),
+        nominal_amplitude=(w, a["nominal"], {"units": "m",
+                                             "long_name": "nominal drive amplitude"}),
         phase_lag=(("omega",), lags, {"units": "degree",
                                       "long_name": "instrument phase lag subtracted"}),
-        height_amplitude=(w, arrays["height"], {
+        height_amplitude=(w, a["height"], {
             "units": "m", "long_name": "first-harmonic amplitude of the height channel",
-            "height_channel": str(inp.attrs.get("height_channel", "height"))}),
-        lockin_periods=(w, arrays["periods"].astype(np.int32),
+            "height_channel": str(dem.attrs.get("height_channel", "height"))}),
+        lockin_periods=(w, a["periods"].astype(np.int32),
                         {"units": "1", "long_name": "whole periods demodulated"}),
-        lockin_samples=(w, arrays["n"].astype(np.int32),
+        lockin_samples=(w, a["n"].astype(np.int32),
                         {"units": "1", "long_name": "samples in the lock-in window"}),
-        lockin_settle=(w, arrays["settle"], {"units": "s",
-                                             "long_name": "time skipped at the segment start"}))
+        lockin_settle=(w, a["settle"], {"units": "s",
+                                        "long_name": "time skipped at the segment start"}))

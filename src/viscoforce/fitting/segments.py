@@ -95,7 +95,9 @@ def _segment_arrays(one: xr.Dataset, run: tuple[int, int, str], x_name: str, y_n
     y = np.asarray(one[y_name].values[start:stop], dtype=float)
     ok = np.isfinite(x) & np.isfinite(y)
     if ok.sum() < 4:
+        note = str(one.attrs.get(f"{x_name}_channel", ""))  # the reader's why, if it says
         missing = "" if np.isfinite(one[x_name].values[start:stop]).any() else (
+            f" ({note})" if note.startswith("unavailable") else
             f" (the file gives no {x_name.replace('_', ' ')})")
         raise ParameterError(f"the {what} segment has {int(ok.sum())} finite samples of "
                              f"{x_name} and {y_name}; need >= 4{missing}")

@@ -169,7 +169,9 @@ def ting_data(curves: xr.Dataset, *, curve: int = 0, segment: int | None = None)
     z = np.asarray(one["tip_position"].values[start:stop], dtype=float)
     ok = np.isfinite(t) & np.isfinite(f) & np.isfinite(z)
     if ok.sum() < 8:
-        missing = "" if np.isfinite(z).any() else " (the file gives no tip position)"
+        note = str(one.attrs.get("tip_position_channel", ""))  # the reader's why, if it says
+        missing = "" if np.isfinite(z).any() else (
+            f" ({note})" if note.startswith("unavailable") else " (the file gives no tip position)")
         raise ParameterError(f"the approach-retract has {int(ok.sum())} finite samples of time, "
                              f"force and tip position; need >= 8{missing}")
     notes: tuple[str, ...] = ()

@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import logging
 import re
+import shlex
 import struct
 import zipfile
 import zlib
@@ -37,8 +38,30 @@ _MAKER_CHIARO = "Optics11 Life"
 _PARSE_ERRORS = (ValueError, TypeError, KeyError, IndexError, AssertionError, AttributeError,
                  ArithmeticError,
                  OSError, EOFError, UnicodeError, struct.error, zipfile.BadZipFile, zlib.error)
-_CLI_HINT = ("pass spring_constant [N/m] and sensitivity [m/V] (CLI: --spring-constant 0.1N/m "
-             "--sensitivity 50nm/V)")
+#: The calibrations a file may lack: (reader argument [unit], load flag, example value).
+_CALIBRATION_FLAGS = {"spring_constant": ("spring_constant [N/m]", "--spring-constant K", "K",
+                                          "0.1N/m"),
+                      "sensitivity": ("sensitivity [m/V]", "--sensitivity S", "S", "50nm/V")}
+
+
+def calibration_hint(file: str | Path,
+                     names: tuple[str, ...] = ("spring_constant", "sensitivity")) -> str:
+    """How to give ``file`` the calibration ``names`` it lacks, as a sentence for an error.
+
+    The reader's arguments, and the command-line route that takes them: they are flags of
+    ``load`` (not of ``fit``), so the route is ``viscoforce load FILE --spring-constant K
+    --sensitivity S --out curves.nc``, then ``viscoforce fit curves.nc ...``. ``file`` is quoted
+    for a shell where it needs it.
+    """
+    rows = [_CALIBRATION_FLAGS[n] for n in names]
+    arguments = " and ".join(r[0] for r in rows)
+    flags = " ".join(r[1] for r in rows)
+    values = " and ".join(r[2] for r in rows)
+    examples = " and ".join(r[3] for r in rows)
+    these = "these are `load` flags" if len(rows) > 1 else "it is a `load` flag"
+    return (f"pass {arguments} to the reader; on the command line {these}: run `viscoforce "
+            f"load {shlex.quote(str(file))} {flags} --out curves.nc` ({values}: your "
+            f"cantilever's, e.g. {examples}), then `viscoforce fit curves.nc ...`")
 
 
 # ── detection ─────────────────────────────────────────────────────────────────────────────────
@@ -101,8 +124,12 @@ def _afmformats():
 
 
 @contextmanager
-def _translated(where: str) -> Iterator[None]:
-    """Turn afmformats' BaseException-derived errors and parser errors into InstrumentFormatError."""
+def _translated(where: str, file: str | Path | None = None) -> Iterator[None]:
+    """Turn afmformats' BaseException-derived errors and parser errors into InstrumentFormatError.
+
+    ``file`` is the file the caller gave (a zip for one of its members; default ``where``), which
+    a missing calibration's hint tells to ``viscoforce load``.
+    """
     afmformats = _afmformats()
     errors = afmformats.errors
     try:
@@ -111,7 +138,9 @@ def _translated(where: str) -> Iterator[None]:
         raise
     except errors.MissingMetaDataError as exc:
         keys = " and ".join(getattr(exc, "meta_keys", []) or ["calibration"])
-        raise InstrumentFormatError(f"{where}: the file lacks the {keys}; {_CLI_HINT}") from None
+        raise InstrumentFormatError(f"{where}: the file lacks the {keys}; "
+                                    f"{calibration_hint(where if file is None else file)}"
+                                    ) from None
     except errors.FileFormatNotSupportedError as exc:
         raise InstrumentFormatError(f"{where}: not a file afmformats can read ({exc})") from None
     except errors.AFMFileFormatError as exc:

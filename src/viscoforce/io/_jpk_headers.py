@@ -58,6 +58,8 @@ class JPKGrid:
         Side lengths of the scanned area [m].
     xcenter, ycenter : float
         Centre of the area in the scanner's frame [m].
+    theta : float
+        Rotation of the grid's fast axis from x (``grid.theta``) [rad]; 0 when not given.
     """
 
     ilength: int
@@ -66,6 +68,7 @@ class JPKGrid:
     vlength: float
     xcenter: float
     ycenter: float
+    theta: float = 0.0
 
 
 @dataclass(frozen=True)
@@ -282,8 +285,10 @@ def _grid(header: dict[str, str]) -> JPKGrid | None:
     if (unit := header.get(_GRID + "unit.unit", "m")) != "m":
         raise HeaderError(f"{_GRID}unit.unit={unit!r}, expected 'm'")
     lengths = {key: number(header, _GRID + key) for key in ("ulength", "vlength", "xcenter", "ycenter")}
+    lengths["theta"] = number(header, _GRID + "theta", default="0")
     for key, value in lengths.items():
         if not math.isfinite(value):
-            raise HeaderError(f"'{_GRID}{key}' = {value!r} m is not finite")
+            raise HeaderError(f"'{_GRID}{key}' = {value!r} {'rad' if key == 'theta' else 'm'} is "
+                              "not finite")
     return JPKGrid(ilength=number(header, _GRID + "ilength", int),
                    jlength=number(header, _GRID + "jlength", int), **lengths)

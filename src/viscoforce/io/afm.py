@@ -20,7 +20,9 @@ temporary directory because afmformats reads paths, one at a time, each removed 
   subtracted), ``height`` [m] (afmformats' convention, as JPK's: it grows away from the sample;
   the measured/sensor height where there is one, see ``attrs["height_channel"]``),
   ``deflection`` [m] = force / spring constant (``attrs["deflection_channel"]``; NaN when the file
-  gives force but no spring constant), ``tip_position`` = −height − deflection, ``segment``;
+  gives force but no spring constant), ``tip_position`` = −height − deflection (NaN then too:
+  ``attrs["tip_position_channel"]`` says what is missing, the spring constant, and how to give
+  it), ``segment``;
 * per curve: ``spring_constant`` [N/m], ``sensitivity`` [m/V] (NaN where unknown), ``x``, ``y``
   [m] where the file has a position, and a ``curve`` coordinate (index in the file);
 * ``segment_table``: afmformats segment 0 → ``approach``, 1 → ``retract`` (Igor: note direction
@@ -31,7 +33,10 @@ temporary directory because afmformats reads paths, one at a time, each removed 
   leaves ``setpoint`` in µN, speeds in µm/s and ``z range`` in nm; spaces → underscores;
   per-curve numbers that differ become arrays, differing strings are joined with ``" | "``).
 
-Calibration given by the caller: NT-MDT needs both (``sensitivity`` as Nova displays it, "nm/V",
+Calibration given by the caller (a missing one is told with :func:`~viscoforce.io._afm_formats.
+calibration_hint`: the reader's arguments, and on the command line ``viscoforce load FILE
+--spring-constant K --sensitivity S --out curves.nc`` then ``fit curves.nc``, as ``fit`` takes no
+calibration flags): NT-MDT needs both (``sensitivity`` as Nova displays it, "nm/V",
 which is really nm per nA of photodiode current; afmformats wants it in m/A, hence ×1e9);
 AFM Workshop uses them where its columns are volts and for the deflection of force columns; for
 Igor they *recalibrate* (deflection × sensitivity/file sensitivity, force = k × deflection), for
@@ -83,7 +88,6 @@ from viscoforce.io._afm_checks import (  # noqa: F401 (re-exported)
     _require_physical,
 )
 from viscoforce.io._afm_formats import (  # noqa: F401 (re-exported)
-    _CLI_HINT,
     _HEAD,
     _IGOR_VERSIONS,
     _MAKER_CHIARO,
@@ -99,6 +103,7 @@ from viscoforce.io._afm_formats import (  # noqa: F401 (re-exported)
     _read_head,
     _translated,
     _zip_members,
+    calibration_hint,
 )
 from viscoforce.io._afm_segments import _igor_segments, _segments  # noqa: F401 (re-exported)
 from viscoforce.schema import make_curves
@@ -160,9 +165,18 @@ class _Curve:
     notes: dict[str, str] = field(default_factory=dict)
 
 
+#: Where each format's height comes from, as its file names it (for the notes).
+_HEIGHT_SOURCES = {"workshop": "the Z-Sense column", "ntmdt": "the first column",
+                   "igor": "ZSnsr", "chiaro": "the piezo position"}
+
+
 def _convert(kind: str, fmt: str, path: Path, afm: Any, k_user: float | None,
-             s_user: float | None, where: str, index: int, dropped: str) -> _Curve:
-    """Curve ``index`` of the file (``where`` names it in errors; ``dropped``: afmformats' notes)."""
+             s_user: float | None, where: str, index: int, dropped: str,
+             origin: Path) -> _Curve:
+    """Curve ``index`` of the file (``where`` names it in errors; ``dropped``: afmformats' notes).
+
+    ``origin`` is the file the caller gave (the zip of a member), which a hint tells to ``load``.
+    """
     meta = dict(afm.metadata)
     columns = list(afm.columns)
     n = len(afm)
@@ -212,6 +226,11 @@ def _convert(kind: str, fmt: str, path: Path, afm: Any, k_user: float | None,
         deflection = np.full(n, math.nan)
         notes["deflection_channel"] = ("unavailable: the file gives force but no spring constant "
                                        "(pass spring_constant)")
+        notes["tip_position_channel"] = (
+            f"unavailable: the file has a height ({_HEIGHT_SOURCES.get(kind, hname)}, read as "
+            f"'{hname}') and the force but no spring constant, so the deflection (force / spring "
+            "constant) and the tip position (-height - deflection) are unknown; "
+            + calibration_hint(origin, ("spring_constant",)))
     if kind in ("igor", "chiaro"):  # afmformats does not take overrides here: recalibrate
         if s_user is not None:
             if not math.isfinite(s_file):
@@ -238,10 +257,15 @@ def _convert(kind: str, fmt: str, path: Path, afm: Any, k_user: float | None,
 
 
 def _load_file(path: Path, where: str, k_user: float | None, s_user: float | None,
-               display: Path) -> tuple[str, list[_Curve]]:
-    """Load one real file (``path``) through afmformats; ``where`` names it in errors."""
+               display: Path, origin: Path | None = None) -> tuple[str, list[_Curve]]:
+    """Load one real file (``path``) through afmformats; ``where`` names it in errors.
+
+    ``origin`` is the file the caller gave (default ``path``; the zip of a member): the one a
+    missing calibration's hint tells to ``viscoforce load``.
+    """
+    origin = path if origin is None else origin
     afmformats = _afmformats()
-    with _translated(where):
+    with _translated(where, origin):
         suffix = path.suffix.lower()
         if suffix == ".zip":
             kind = "workshop"
@@ -259,7 +283,7 @@ def _load_file(path: Path, where: str, k_user: float | None, s_user: float | Non
                 missing = " and ".join(name for name, v in (("spring_constant", k_user),
                                                             ("sensitivity", s_user)) if v is None)
                 raise InstrumentFormatError(f"{where}: NT-MDT text exports carry no calibration; "
-                                            f"{missing} missing: {_CLI_HINT}")
+                                            f"{missing} missing: {calibration_hint(origin)}")
             override = {"spring constant": k_user, "sensitivity": s_user * 1e9}
         elif recipe.maker == _MAKER_WORKSHOP:
             override = {key: v for key, v in (("spring constant", k_user),
@@ -277,7 +301,7 @@ def _load_file(path: Path, where: str, k_user: float | None, s_user: float | Non
                           for w in caught if "column" in str(w.message).lower())
         if not loaded:
             raise InstrumentFormatError(f"{where}: no force-distance curve in the file")
-        curves = [_convert(kind, fmt, path, afm, k_user, s_user, where, i, dropped)
+        curves = [_convert(kind, fmt, path, afm, k_user, s_user, where, i, dropped, origin)
                   for i, afm in enumerate(loaded)]
     for curve in curves:
         curve.metadata["path"] = str(display)
@@ -331,7 +355,8 @@ def _load_zip(path: Path, k_user: float | None, s_user: float | None) -> tuple[s
                     target = Path(tmp) / f"{i:05d}{Path(info.filename).suffix.lower()}"
                     try:
                         _copy_member(zf, info, target, where)
-                        fmt, got = _load_file(target, where, k_user, s_user, Path(where))
+                        fmt, got = _load_file(target, where, k_user, s_user, Path(where),
+                                              origin=path)
                     except (zipfile.BadZipFile, zlib.error, EOFError) as exc:
                         raise InstrumentFormatError(
                             f"{where}: cannot be decompressed ({type(exc).__name__}: {exc}): the "

@@ -3,6 +3,13 @@
 The columns, the rules, the quality flags and the messages are described in
 :mod:`viscoforce.io.csv_formats`, which re-exports everything here; a ``phase (rad)`` column whose
 values are evidently degrees is refused (:data:`RAD_PHASE_LIMIT`).
+
+What :func:`viscoforce.io.csv_tables.write_spectrum_csv` writes reads back to the same spectrum:
+``frequency (Hz)`` beside ``omega (rad/s)`` (omega is taken, the two must agree to 1e-9), the
+per-curve coordinates ``x (m)``, ``y (m)``, ``row (1)``, ``column (1)`` (one value per curve), the
+moduli ``E_storage``, ``E_loss``, ``G_storage``, ``G_loss`` [Pa] with their stderr, and the
+``quality (1)`` codes (used as they are instead of flags recomputed from the phase); empty cells
+of ``mean_indentation`` and the moduli are NaN (unknown).
 """
 
 from __future__ import annotations
@@ -33,7 +40,22 @@ SPECTRUM_COLUMNS: dict[str, str] = {
     "frequency": "frequency", "omega": "angular_frequency", "stiffness": "stiffness",
     "amplitude": "dimensionless", "force_amplitude": "force", "drive_amplitude": "length",
     "phase": "angle", "mean_force": "force", "mean_indentation": "length",
+    "e_storage": "pressure", "e_loss": "pressure", "g_storage": "pressure", "g_loss": "pressure",
+    "x": "length", "y": "length", "row": "dimensionless", "column": "dimensionless",
+    "quality": "dimensionless",
 }
+#: The moduli columns (lower-case as read) -> variable name and long name.
+_MODULI = {"e_storage": ("E_storage", "Young's storage modulus E'"),
+           "e_loss": ("E_loss", "Young's loss modulus E''"),
+           "g_storage": ("G_storage", "shear storage modulus G'"),
+           "g_loss": ("G_loss", "shear loss modulus G''")}
+#: Per-curve columns -> (units, long name, integer).
+_PER_CURVE = {"x": ("m", "lateral position x", False), "y": ("m", "lateral position y", False),
+              "row": ("1", "grid row of the curve (along y, from 0; -1: no position)", True),
+              "column": ("1", "grid column of the curve (along x, from 0; -1: no position)",
+                         True)}
+#: Columns read here besides the magnitude, phase and frequency.
+_EXTRA = (*_MODULI, *_PER_CURVE, "quality")
 
 
 def _stderr_map(table: _Table) -> dict[str, np.ndarray]:
@@ -41,7 +63,9 @@ def _stderr_map(table: _Table) -> dict[str, np.ndarray]:
     for col in table.columns:
         if col.name.endswith("_stderr") and col.name.removesuffix("_stderr") in SPECTRUM_COLUMNS:
             base = col.name.removesuffix("_stderr")
-            if base in ("frequency", "omega"):
+            if base in _MODULI:
+                continue  # read with the moduli
+            if base in ("frequency", "omega", *_PER_CURVE, "quality"):
                 raise ParameterError(f"{table.path}: column '{col.header}': a frequency has no "
                                      "standard error here (frequencies are exact)")
             out[base] = _quantity(table, col.name, SPECTRUM_COLUMNS, allow_missing=True)
@@ -149,12 +173,15 @@ def read_spectrum_csv(path: str | Path, *, drive_amplitude: float | str | None =
     p = table.path
     for name in ("phase", "phase_stderr"):
         _check_rad_phase(table, name)
-    q = {name: _quantity(table, name, SPECTRUM_COLUMNS, allow_missing=name == "mean_force")
-         for name in SPECTRUM_COLUMNS}
-    if (q["frequency"] is None) == (q["omega"] is None):
+    q = {name: _quantity(table, name, SPECTRUM_COLUMNS,
+                         allow_missing=name in ("mean_force", "mean_indentation", *_MODULI))
+         for name in SPECTRUM_COLUMNS if name not in _EXTRA}
+    if q["frequency"] is None and q["omega"] is None:
         raise ParameterError(f"{p}: need exactly one frequency column, 'frequency (Hz)' or "
-                             "'omega (rad/s)'")
+                             "'omega (rad/s)' (or both, agreeing)")
     omega = 2 * math.pi * q["frequency"] if q["omega"] is None else q["omega"]
+    if q["frequency"] is not None and q["omega"] is not None:
+        _check_same_frequency(table, q["frequency"], q["omega"])
     if np.any(omega <= 0):
         row = int(np.flatnonzero(omega <= 0)[0])
         name = "frequency" if q["omega"] is None else "omega"
@@ -259,8 +286,9 @@ def read_spectrum_csv(path: str | Path, *, drive_amplitude: float | str | None =
 
     k = shape(stiffness) * np.exp(1j * np.radians(shape(q["phase"])))
     dims = ("curve", "omega") if len(order) > 1 else ("omega",)
-    coords = {"curve": ("curve", _curve_coord(order), {"long_name": "curve label in the file"})
-              } if len(order) > 1 else None
+    coords: dict[str, Any] = {"curve": ("curve", _curve_coord(order), {
+        "long_name": "curve label in the file"})} if len(order) > 1 else {}
+    coords.update(_per_curve(table, take, dims[:-1]))
     attrs: dict[str, Any] = {"file": str(p), "delimiter": repr(table.delimiter),
                              "magnitude_column": magnitude,
                              "frequency_column": "omega" if q["omega"] is not None
@@ -273,7 +301,9 @@ def read_spectrum_csv(path: str | Path, *, drive_amplitude: float | str | None =
         stderr.pop("force_amplitude", None)
     # the flags and notes of a JPK modulation spectrum, by the same functions; nothing corrected
     phase = np.degrees(np.angle(k))
-    quality = spectrum_quality(phase, np.abs(k), stderr.get("stiffness"))
+    quality = _file_quality(table, shape)
+    if quality is None:
+        quality = spectrum_quality(phase, np.abs(k), stderr.get("stiffness"))
     basis = phase_basis(None)
     notes = quality_notes(quality, phase, w_sorted / (2 * math.pi), corrections="none",
                           basis=basis)
@@ -289,4 +319,76 @@ def read_spectrum_csv(path: str | Path, *, drive_amplitude: float | str | None =
         ds = ds.drop_vars([v for v in ("drive_amplitude", "force_amplitude",
                                        "force_amplitude_stderr") if v in ds.variables])
         ds.attrs["drive_amplitude_known"] = 0
+    moduli = _moduli(table, shape, dims)
+    if moduli:
+        ds = ds.assign(moduli)
+    table.check_ranges()  # the columns read since the first check (x, y)
     return validate_spectrum(ds)
+
+
+def _check_same_frequency(table: _Table, frequency: np.ndarray, omega: np.ndarray) -> None:
+    """Refuse ``frequency (Hz)`` and ``omega (rad/s)`` columns that disagree (to 1e-9)."""
+    with np.errstate(invalid="ignore"):
+        off = np.abs(2 * math.pi * frequency - omega) > 1e-9 * np.abs(omega)
+    if np.any(off):
+        row = int(np.flatnonzero(off)[0])
+        raise ParameterError(
+            f"{table.path}: 'frequency' and 'omega' disagree at {table.where(row)}: "
+            f"{float(frequency[row]):g} Hz is {2 * math.pi * float(frequency[row]):g} rad/s, not "
+            f"{float(omega[row]):g} rad/s; give exactly one frequency column (or two that "
+            "agree)")
+
+
+def _per_curve(table: _Table, take: np.ndarray, dims: tuple[str, ...]) -> dict[str, Any]:
+    """Coordinates ``x``, ``y`` [m], ``row``, ``column`` of each curve, where the file has them.
+
+    Each must hold one value per curve (the same on all of its rows); NaN (an empty cell) is
+    an unknown position.
+    """
+    out: dict[str, Any] = {}
+    for name, (units, long_name, integer) in _PER_CURVE.items():
+        values = _quantity(table, name, SPECTRUM_COLUMNS, allow_missing=not integer)
+        if values is None:
+            continue
+        per = values[take]  # (curve, omega)
+        same = (per == per[:, :1]) | (np.isnan(per) & np.isnan(per[:, :1]))
+        if not np.all(same):
+            row = int(take[np.argwhere(~same)[0][0], np.argwhere(~same)[0][1]])
+            raise ParameterError(f"{table.path}: column '{name}' must hold one value per curve; "
+                                 f"{table.where(row)} differs from the curve's first row")
+        first = per[:, 0]
+        if integer:
+            if np.any(first != np.round(first)):
+                raise ParameterError(f"{table.path}: column '{name}' must hold integers")
+            first = first.astype(np.int32)
+        value = first if dims else first[0]
+        out[name] = (dims, value, {"units": units, "long_name": long_name})
+    return out
+
+
+def _file_quality(table: _Table, shape: Any) -> np.ndarray | None:
+    """The file's ``quality (1)`` codes (None without the column); refused when not a code."""
+    from viscoforce.schema import QUALITY_FLAGS
+
+    values = _quantity(table, "quality", SPECTRUM_COLUMNS)
+    if values is None:
+        return None
+    bad = ~np.isin(values, list(QUALITY_FLAGS))
+    if np.any(bad):
+        row = int(np.flatnonzero(bad)[0])
+        raise ParameterError(f"{table.path}: 'quality' at {table.where(row)} is "
+                             f"{float(values[row]):g}, not one of the codes {QUALITY_FLAGS}")
+    return shape(values).astype(np.int8)
+
+
+def _moduli(table: _Table, shape: Any, dims: tuple[str, ...]) -> dict[str, Any]:
+    """E_storage, E_loss, G_storage, G_loss [Pa] and their stderr, where the file has them."""
+    out: dict[str, Any] = {}
+    for column, (name, long_name) in _MODULI.items():
+        for suffix in ("", "_stderr"):
+            values = _quantity(table, column + suffix, SPECTRUM_COLUMNS, allow_missing=True)
+            if values is None:
+                continue
+            what = long_name if not suffix else f"standard error of {long_name}"
+            out[name + suffix] = (dims, shape(values), {"units": "Pa", "long_name": what})
+    return out

@@ -7,9 +7,12 @@ What goes where (SI throughout; the file is never modified):
   from the preferred height channel, ``deflection`` [m] (``vDeflection``), ``tip_position`` [m]
   = −height − deflection (tip displacement toward the sample, the :func:`~viscoforce.schema.
   make_curves` default), ``segment`` (row of the segment table);
-* per curve: ``x``, ``y`` [m], ``spring_constant`` [N/m], ``sensitivity`` [m/V], ``baseline`` [N]
-  (the file's free-cantilever baseline converted to force; NaN when the file has none) and a
-  ``curve`` coordinate holding the curve's index in the archive;
+* per curve: ``x``, ``y`` [m] snapped to the map's grid, ``x_raw``, ``y_raw`` [m] as the file
+  gives them, the grid ``row`` and ``column`` (int32; :meth:`~viscoforce.io.jpk.JPKArchive.
+  positions`, found from every curve of the archive, so a chunk of curves agrees with the whole
+  file), ``spring_constant`` [N/m], ``sensitivity`` [m/V], ``baseline`` [N] (the file's
+  free-cantilever baseline converted to force; NaN when the file has none) and a ``curve``
+  coordinate holding the curve's index in the archive;
 * per segment (``segment_table``, one row per segment of every curve): ``segment_name`` (one of
   :data:`~viscoforce.schema.SEGMENT_NAMES`), ``segment_type`` (the file's
   ``settings.segment-settings.type``), ``segment_style``, ``segment_curve`` (row of ``curve``),
@@ -19,9 +22,10 @@ What goes where (SI throughout; the file is never modified):
 * ``attrs`` (flat numbers and strings): ``source`` = ``"jpk"``, ``file``, ``archive_kind``,
   ``n_curves``, ``height_channel``, ``force_baseline_subtracted`` = 0, the calibration of the
   first curve (``spring_constant``, ``sensitivity``; per-curve values are the variables), the grid
-  (``grid_*``) of a map, and the settings of the first curve's segments ``segment_<k>_style``,
-  ``_type``, ``_duration``, ``_num_points``, and for modulation ``_frequency``, ``_amplitude``,
-  ``_start_phase``.
+  (``grid_*``) of a map, how the rows and columns were found (``grid_rows``, ``grid_columns``,
+  ``grid_x_step``, ``grid_y_step``, ``grid_method``), and the settings of the first curve's
+  segments ``segment_<k>_style``, ``_type``, ``_duration``, ``_num_points``, and for modulation
+  ``_frequency``, ``_amplitude``, ``_start_phase``.
 
 Height channel: the calibrated sensor where the file has one, in the order ``strainGaugeHeight``,
 ``measuredHeight``, ``capacitiveSensorHeight``, then the piezo ``height``. One channel is used for
@@ -224,6 +228,9 @@ def _file_attrs(archive: JPKArchive, first: JPKCurve, height: str) -> dict[str, 
         attrs.update(grid_ilength=int(g.ilength), grid_jlength=int(g.jlength),
                      grid_ulength=float(g.ulength), grid_vlength=float(g.vlength),
                      grid_xcenter=float(g.xcenter), grid_ycenter=float(g.ycenter))
+        if g.theta:
+            attrs["grid_theta"] = float(g.theta)
+    attrs.update(archive.positions().as_attrs())  # of the whole archive: chunks agree
     for s in first.segments:
         p = f"segment_{s.index}_"
         attrs[p + "style"] = s.style
@@ -364,7 +371,10 @@ def jpk_to_curves(archive: JPKArchive, *, curves: int | Iterable[int] | None = N
                                 np.asarray(table["num_points"], dtype=np.intp))
     per_curve = {"x": [c.x for c in decoded], "y": [c.y for c in decoded],
                  "spring_constant": [c.spring_constant for c in decoded],
-                 "sensitivity": [c.sensitivity for c in decoded]}
+                 "sensitivity": [c.sensitivity for c in decoded],
+                 "row": np.asarray([c.row for c in decoded], dtype=np.int32),
+                 "column": np.asarray([c.column for c in decoded], dtype=np.int32),
+                 "x_raw": [c.x_raw for c in decoded], "y_raw": [c.y_raw for c in decoded]}
     ds = make_curves(flat["time"], flat["force"], flat["height"], flat["deflection"],
                      segment=flat["segment"], segment_names=table["name"],
                      segment_types=table["type"], sample_count=block.counts,

@@ -28,6 +28,10 @@ at most 64, about 3 MB for real headers, then it starts again): a header repeate
 curve (a synthetic map's; real files differ by time stamp and position) is neither parsed nor
 resolved again, and :attr:`JPKSegment.settings` is a fresh copy each time.
 
+Positions: a map's curves are placed on its grid (:meth:`JPKArchive.positions`, from every curve
+header, once): :attr:`JPKCurve.row` / :attr:`JPKCurve.column` and x, y snapped to their grid
+line (the file's values, which jitter by ~1e-12 m, in ``x_raw``, ``y_raw``).
+
 Bounded reading (hostile or damaged files): every member's decompressed size, as the zip's
 central directory declares it, is checked before the member is read — a properties header
 against :data:`~viscoforce._limits.MAX_HEADER_BYTES`, anything else against
@@ -61,6 +65,7 @@ the curves.
 from __future__ import annotations
 
 import bisect
+import dataclasses
 import math
 import operator
 import os
@@ -133,9 +138,10 @@ from viscoforce.io._jpk_segments import (  # noqa: F401 (re-exported)
     _require_samples,
 )
 from viscoforce.io._properties import HeaderError, group_blocks, number
+from viscoforce.io.map_grid import MapGrid, map_grid
 
 __all__ = ["InstrumentFormatError", "JPKArchive", "JPKCurve", "JPKGrid", "JPKModulation", "JPKSegment",
-           "read_jpk"]
+           "MapGrid", "read_jpk"]
 
 
 _KINDS = {"force-scan-series": "force", "force-scan-map": "force-map"}
@@ -159,7 +165,9 @@ class JPKCurve:
         Where it lives: ``""`` (a single curve), ``"index/<n>/"`` (a map), prefixed by
         ``"<member>!"`` inside a zip of archives.
     x, y : float
-        Position ``force-scan-series.header.position.{x,y}`` [m]; NaN when the file gives none.
+        Position [m]: ``force-scan-series.header.position.{x,y}`` snapped to the archive's grid
+        (:meth:`JPKArchive.positions`: the median of the curve's grid line, so that every curve
+        of a row has the same y); NaN when the file gives none.
     segments : tuple of JPKSegment
         The segments, ``segments[k].index == k``.
     spring_constant : float
@@ -168,6 +176,11 @@ class JPKCurve:
         Deflection sensitivity [m/V]: the vDeflection ``distance`` slot multiplier.
     metadata : dict of str to str
         The curve header (``index/<n>/header.properties`` in a map).
+    x_raw, y_raw : float
+        The position as the file gives it [m] (it jitters by ~1e-12 m along a grid line).
+    row, column : int
+        Grid row (along y, 0 at the smallest y) and column (along x) of the curve among all
+        the archive's curves; -1 without a position.
     """
 
     index: int
@@ -178,6 +191,10 @@ class JPKCurve:
     spring_constant: float
     sensitivity: float
     metadata: dict[str, str] = field(repr=False)
+    x_raw: float = math.nan
+    y_raw: float = math.nan
+    row: int = -1
+    column: int = -1
 
 
 class _Handles:
@@ -234,6 +251,7 @@ class JPKArchive:
     _index: _MemberIndex | None = field(repr=False, default=None)
 
     def __post_init__(self) -> None:
+        object.__setattr__(self, "_grid_found", None)
         self._reset()
 
     def _reset(self) -> None:
@@ -254,6 +272,7 @@ class JPKArchive:
 
     def __setstate__(self, state: dict[str, object]) -> None:
         self.__dict__.update(state)
+        self.__dict__.setdefault("_grid_found", None)
         self._reset()
 
     def __enter__(self) -> JPKArchive:
@@ -302,12 +321,65 @@ class JPKArchive:
             for local in range(len(layout.curves)):
                 yield self._decode(owner, local, self._first[owner] + local)
 
+    def positions(self) -> MapGrid:
+        """Grid rows, columns and snapped positions of every curve of the archive.
+
+        Read once from the curve headers (0.35 s for a 64x64 map), then kept (and pickled with
+        the archive); the grid is that of all the curves, whichever are decoded, so a chunk of
+        curves gets the rows, columns and positions the whole file gives them. The file's grid
+        (:attr:`grid`) gives the step; see :func:`viscoforce.io.map_grid.map_grid`. A curve
+        whose header cannot be read counts as one without a position here (its decoding says
+        what is wrong).
+
+        Returns
+        -------
+        MapGrid
+            Indexed by the curve index.
+        """
+        found = self._grid_found
+        if found is None:
+            with self._lock:
+                found = self._grid_found
+                if found is None:
+                    found = self._find_grid()
+                    object.__setattr__(self, "_grid_found", found)
+        return found
+
+    def _find_grid(self) -> MapGrid:
+        """:meth:`positions` (call under the lock)."""
+        xs, ys = [], []
+        for layout in self._layouts:
+            for curve_dir, _ in layout.curves:
+                try:
+                    header = (_read_props(self._zip_of(layout), f"{curve_dir}header.properties",
+                                          layout.where) if curve_dir else layout.header)
+                    place = [number(header, _POSITION + axis, default="nan") for axis in "xy"]
+                except (InstrumentFormatError, HeaderError):
+                    place = [math.nan, math.nan]
+                xs.append(place[0])
+                ys.append(place[1])
+        xs = [v if math.isfinite(v) else math.nan for v in xs]
+        ys = [v if math.isfinite(v) else math.nan for v in ys]
+        g = self.grid
+        if g is None or g.ilength < 1 or g.jlength < 1:
+            return map_grid(xs, ys)
+        return map_grid(xs, ys, steps=(g.ulength / g.ilength, g.vlength / g.jlength),
+                        shape=(g.ilength, g.jlength), centre=(g.xcenter, g.ycenter),
+                        theta=g.theta)
+
     def _decode(self, owner: int, local: int, index: int,
                 only: frozenset[str] | None = None) -> JPKCurve:
-        """Curve ``local`` of layout ``owner`` (global ``index``), under the lock."""
+        """Curve ``local`` of layout ``owner`` (global ``index``), under the lock, placed."""
         layout = self._layouts[owner]
+        grid = self.positions()
         with self._lock:
-            return _read_curve(self._zip_of(layout), layout, local, index, only)
+            curve = _read_curve(self._zip_of(layout), layout, local, index, only)
+        row, column = int(grid.row[index]), int(grid.column[index])
+        placed = row >= 0 and grid.x_raw[index] == curve.x and grid.y_raw[index] == curve.y
+        return dataclasses.replace(
+            curve, x_raw=curve.x, y_raw=curve.y, row=row if placed else -1,
+            column=column if placed else -1, x=float(grid.x[index]) if placed else curve.x,
+            y=float(grid.y[index]) if placed else curve.y)
 
     def _locate(self, i: int) -> tuple[int, int, int]:
         """(layout, index in it, global index) of curve ``i``; IndexError when out of range."""

@@ -10,8 +10,11 @@ by the rows before the chunk), so that concatenating the chunks along ``sample``
 
 The height channel is chosen once for the whole selection (the first of
 :data:`~viscoforce.io.curves.HEIGHT_CHANNELS` in metres in every segment of every selected curve,
-from the headers), as :func:`jpk_to_curves` does, so a chunk never switches channel. The
-demodulated counterpart is :func:`viscoforce.experiments.stream.stream_spectrum`.
+from the headers), as :func:`jpk_to_curves` does, so a chunk never switches channel. A map's
+grid rows, columns and snapped x, y are those of the whole archive
+(:meth:`~viscoforce.io.jpk.JPKArchive.positions`, found once from every curve header), so a
+chunk's equal the whole read's. The demodulated counterpart is
+:func:`viscoforce.experiments.stream.stream_spectrum`.
 """
 
 from __future__ import annotations

@@ -92,8 +92,9 @@ def check_options(*, path: Any, raw: Any, drag: Any, drag_heights: Any, phase_la
         import xarray as xr
 
         if not isinstance(phase_reference, xr.Dataset):
-            raise OptionError("{phase_reference} must be a path or a spectrum dataset, got "
-                              f"{literal(type(phase_reference).__name__)}")
+            raise OptionError("{phase_reference} must be a path or a spectrum dataset (a "
+                              "hard-surface reference), or one of 'auto', 'sensor', 'piezo', "
+                              f"'delay', got {literal(type(phase_reference).__name__)}")
     if poisson is not None:
         if not _number(poisson):
             raise OptionError("{poisson} must be a number in [0, 0.5], got "

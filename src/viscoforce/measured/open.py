@@ -12,6 +12,9 @@ The route (what ``viscoforce load``, ``fit`` and ``bode`` do with a file):
 2. **Demodulate.** Curves with sine-modulation segments become a spectrum over (``curve``,
    ``omega``) (:func:`~viscoforce.experiments.modulation.modulation_spectrum`, in chunks:
    :func:`~viscoforce.experiments.stream.stream_spectrum`), unless ``raw``.
+   The phase of the indentation refers to the height sensor, to the piezo, or to the sensor
+   advanced by its fitted delay (``phase_reference``; by default the one the data support:
+   :mod:`~viscoforce.experiments.phase_reference`).
 3. **Correct.** The instrument phase lag (``phase_lag`` or a hard-surface ``phase_reference``)
    and the hydrodynamic drag (``drag``, or fitted from out-of-contact spectra at several
    ``drag_heights``: :func:`~viscoforce.experiments.drag.drag_from_heights`) are subtracted,
@@ -35,6 +38,7 @@ from typing import Any
 
 import xarray as xr
 
+from viscoforce.experiments.phase_reference import REFERENCES
 from viscoforce.measured._options import (
     OptionError,
     check_options,
@@ -56,6 +60,8 @@ __all__ = ["MeasuredData", "OptionError", "has_modulation", "open_data", "open_s
 
 _CORRECTIONS = "{drag}, {drag_heights}, {phase_lag} and {phase_reference} correct a spectrum"
 _MODULI = "{tip} and {poisson} give the complex modulus of a spectrum"
+#: The words ``phase_reference`` takes as a reference mode (any other text is a file).
+MODES = ("auto", *REFERENCES)
 
 
 @dataclass(frozen=True)
@@ -121,7 +127,7 @@ def open_data(path: str | PathLike[str], *, format: str | None = None, raw: bool
 
         import viscoforce as vf
         from viscoforce.measured import open_data
-        result = vf.fit(open_data("curve.jpk-force", phase_lag=14), "contact", tip="sphere:5um")
+        result = vf.fit(open_data("curve.jpk-force"), "contact", tip="sphere:5um")
 
     Parameters
     ----------
@@ -145,9 +151,17 @@ def open_data(path: str | PathLike[str], *, format: str | None = None, raw: bool
         Instrument phase lag [degree] subtracted from the phase: one value for every
         frequency, or frequency [Hz] → lag for some of the file's frequencies (0 at the others;
         a frequency the file does not have is refused).
-    phase_reference : str, Path or xarray.Dataset, optional
-        A hard-surface measurement (any file this function reads, or its spectrum dataset)
-        whose median phase per frequency is the instrument lag to subtract.
+    phase_reference : {"auto", "sensor", "piezo", "delay"}, str, Path or xarray.Dataset, optional
+        What the phase of the indentation refers to, for a file demodulated here
+        (:mod:`~viscoforce.experiments.phase_reference`): ``"sensor"`` (the height channel as
+        recorded), ``"piezo"`` (the sensor's amplitude, the piezo record's phase),
+        ``"delay"`` (the sensor advanced by its delay behind the piezo, one fitted per file);
+        None or ``"auto"`` (default): the one the data support, said in
+        ``attrs["phase_reference_choice"]``. Or a hard-surface measurement (any other text or
+        a Path: any file this function reads, read with ``phase_reference="sensor"``; or its
+        spectrum dataset, referred to the sensor) whose median phase per frequency is the
+        instrument lag to subtract; the phase of the data is then referred to the sensor too.
+        The words are the modes: a file named ``piezo`` is ``Path("piezo")`` or ``"./piezo"``.
     drag : float, optional
         Hydrodynamic drag B [N·s/m], subtracted from the spectrum as iωB.
     drag_heights : sequence of (float, path), optional
@@ -263,8 +277,10 @@ def _analysed(path, data: xr.Dataset, archive, *, netcdf: bool, format, raw: boo
     curves = "omega" not in data.dims and (raw or netcdf or not has_modulation(data))
     why = ("this netCDF file holds curves (it is read as written)" if netcdf and not raw
            else "this file gives curves (no modulation segments, or {raw})")
-    corrections = not (drag is None and phase_lag is None and phase_reference is None
-                       and drag_heights is None)
+    mode = phase_reference if isinstance(phase_reference, str) and phase_reference in MODES \
+        else None
+    corrections = not (drag is None and phase_lag is None and drag_heights is None
+                       and mode in (None, "auto", "sensor") and not _is_file(phase_reference))
     if corrections and curves:
         raise OptionError(f"{_CORRECTIONS}; {why}")
     if curves and (tip is not None or poisson is not None):
@@ -272,15 +288,29 @@ def _analysed(path, data: xr.Dataset, archive, *, netcdf: bool, format, raw: boo
     if curves and archive is not None:  # the curves of a JPK archive: chunk by chunk
         return _streamed_curves(path, data, archive, format, options, out, keep_streamed)
     lag = expand_phase_lag(phase_lag, data)  # a frequency the file lacks: before any work
-    reference = _reference(phase_reference)
+    if "omega" in data.dims and mode not in (None, "auto", _mode_of(data)):
+        raise OptionError("{phase_reference} " + f"{mode!r}: the phase is referred while each "
+                          "modulation segment is demodulated; this file is a spectrum already, "
+                          f"its phase referred to {literal(_mode_of(data))!r} (attrs "
+                          "phase_reference_mode)")
+    reference = mode if mode is not None else _reference(phase_reference)
+    hard = reference if isinstance(reference, xr.Dataset) else None
+    if "omega" in data.dims and hard is not None and _mode_of(data) != "sensor":
+        raise OptionError("{phase_reference}: a hard-surface reference subtracts a lag measured "
+                          "against the sensor; this spectrum's phase refers to "
+                          f"{literal(_mode_of(data))!r}: make it with the sensor as its phase "
+                          "reference")
     drag_fit = _drag_fit(drag_heights, phase_lag, reference)
     if drag_fit is not None:
         drag = drag_fit.drag_at_contact
     height_channel = options.get("height_channel")
-    if curves or ("omega" in data.dims and not corrections):
+    if curves or ("omega" in data.dims and drag is None and lag is None and hard is None):
         ds = data
     elif "omega" in data.dims:  # a spectrum CSV or netCDF: the same corrections
-        ds = correct_spectrum(data, phase_lag=lag, drag=drag, phase_reference=reference)
+        ds = correct_spectrum(data, phase_lag=lag, drag=drag, phase_reference=hard)
+        if _mode_of(data) != "sensor" and "phase_reference" in data.attrs:  # its name kept
+            ds.attrs["phase_reference"] = str(data.attrs["phase_reference"]) + (
+                "" if lag is None else "; the phase_lag given is subtracted from this phase")
     elif archive is not None:
         from viscoforce.experiments.stream import stream_spectrum
 
@@ -323,38 +353,76 @@ def _kind(ds: xr.Dataset) -> str:
     return "spectrum" if "omega" in ds.dims else data_kind(ds) or "curves"
 
 
+def _is_file(phase_reference: Any) -> bool:
+    """Whether ``phase_reference`` names a hard-surface measurement (a path or a dataset)."""
+    return phase_reference is not None and not (isinstance(phase_reference, str)
+                                                and phase_reference in MODES)
+
+
+def _mode_of(spectrum: xr.Dataset) -> str:
+    """What a spectrum's phase refers to (``attrs["phase_reference_mode"]``; else the sensor)."""
+    return str(spectrum.attrs.get("phase_reference_mode", "sensor"))
+
+
 def _reference(phase_reference) -> xr.Dataset | None:
-    """The hard-surface spectrum of ``phase_reference`` (a file read as :func:`open_data` does)."""
+    """The hard-surface spectrum of ``phase_reference`` (a file read as :func:`open_data` does).
+
+    A file is demodulated with the sensor as its phase reference: the lag it measures is the
+    one against the sensor, and the data are referred to the sensor with it.
+    """
     if phase_reference is None:
         return None
     from viscoforce.experiments.modulation import modulation_spectrum
 
     reference = (phase_reference if isinstance(phase_reference, xr.Dataset)
-                 else open_data(phase_reference))
-    if "omega" not in reference.dims:
-        reference = modulation_spectrum(reference)  # refused with its reason: no modulation
+                 else open_data(phase_reference, phase_reference="sensor"))
+    if "omega" not in reference.dims:  # refused with its reason: no modulation
+        reference = modulation_spectrum(reference, phase_reference="sensor")
     return reference
 
 
 def _drag_fit(heights: list[tuple[float, Any]] | None, phase_lag, reference):
-    """The DragFit of the out-of-contact spectra at ``heights`` (None without them)."""
+    """The DragFit of the out-of-contact spectra at ``heights`` (None without them).
+
+    Each file is read as the data are (a JPK archive in chunks, with its piezo record), with
+    the same ``phase_lag`` and ``reference`` (a phase reference mode, None: each file's own
+    default, or a hard-surface spectrum).
+    """
     if heights is None:
         return None
     from viscoforce.experiments.drag import drag_from_heights
-    from viscoforce.experiments.modulation import correct_spectrum, modulation_spectrum
 
     spectra = []
     for height, path in heights:
-        data = read_netcdf(path) if is_netcdf(path, None) else read_whole(path, None, {})
-        lag = expand_phase_lag(phase_lag, data)
-        if "omega" in data.dims:
-            spectrum = data if lag is None and reference is None else correct_spectrum(
-                data, phase_lag=lag, phase_reference=reference)
-        elif has_modulation(data):
-            spectrum = modulation_spectrum(data, phase_lag=lag, phase_reference=reference)
+        opened = None if is_netcdf(path, None) else open_streamable(path)
+        if opened is not None:
+            archive, data = opened
         else:
-            raise OptionError("{drag_heights} " + f"{height:g}m={literal(path)}: the file has no "
-                              "modulation segments (a spectrum measured out of contact is "
-                              "needed)")
-        spectra.append(spectrum)
+            archive, data = None, (read_netcdf(path) if is_netcdf(path, None)
+                                   else read_whole(path, None, {}))
+        with archive if archive is not None else contextlib.nullcontext():
+            if "omega" not in data.dims and not has_modulation(data):
+                raise OptionError("{drag_heights} " + f"{height:g}m={literal(path)}: the file has "
+                                  "no modulation segments (a spectrum measured out of contact is "
+                                  "needed)")
+            spectra.append(_spectrum_of(data, archive, expand_phase_lag(phase_lag, data),
+                                        reference))
     return drag_from_heights(spectra, [h for h, _ in heights])
+
+
+def _spectrum_of(data: xr.Dataset, archive, lag, reference) -> xr.Dataset:
+    """The spectrum of a file with modulation (``archive``: its JPK archive) or of a spectrum."""
+    from viscoforce.experiments.modulation import correct_spectrum, modulation_spectrum
+
+    hard = reference if isinstance(reference, xr.Dataset) else None
+    if "omega" in data.dims:
+        if isinstance(reference, str) and reference not in ("auto", _mode_of(data)):
+            raise OptionError("{phase_reference} " + f"{reference!r}: a spectrum file already "
+                              f"refers its phase to {literal(_mode_of(data))!r}")
+        return data if lag is None and hard is None else correct_spectrum(
+            data, phase_lag=lag, phase_reference=hard)
+    if archive is not None:
+        from viscoforce.experiments.stream import stream_spectrum
+
+        return stream_spectrum(archive, phase_lag=lag, phase_reference=reference)
+    return modulation_spectrum(data, phase_lag=lag, phase_reference=reference)

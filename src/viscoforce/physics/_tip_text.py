@@ -35,11 +35,14 @@ def _parse_angle(text: str) -> float:
     return math.degrees(value) if match["unit"] == "rad" else value
 
 
-def _parse_length(text: str) -> float:
-    """A length with its unit [m]; a bare number is refused (``5`` is not 5 m)."""
-    if _BARE_RE.fullmatch(text.strip()):
-        raise ParameterError(f"{text.strip()!r} has no unit: a length needs one (m, cm, mm, "
-                             "um/µm, nm, pm, Å), e.g. '10um'")
+def _parse_length(text: str, shape: str) -> float:
+    """A length with its unit [m]; a bare number is refused (``sphere:5`` is not a 5 m sphere)."""
+    number = text.strip()
+    if _BARE_RE.fullmatch(number):
+        units = ("m",) if 0 < abs(float(number)) < 1e-3 else ("um", "nm")  # 2e-6: meant SI
+        write = " or ".join(f"{shape}:{number}{u}" for u in units)
+        raise ParameterError(f"{number!r} has no unit: a length needs one (m, cm, mm, um/µm, nm, "
+                             f"pm, Å): write {write}")
     return parse_quantity(text, "length")
 
 
@@ -88,7 +91,7 @@ def parse_tip(text: str) -> Tip:
     try:
         if angled:
             return cls.from_degrees(_parse_angle(value))
-        return cls(_parse_length(value))
+        return cls(_parse_length(value, shape))
     except (ParameterError, UnitError) as err:
         raise ParameterError(f"tip {text!r}: the {part} after ':' is wrong: {err}; accepted: "
                              f"{_FORMS}") from err

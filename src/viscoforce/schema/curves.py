@@ -9,7 +9,12 @@ Layout (chosen so that curves of different lengths need no padding and the file 
 * dim ``curve`` (always present, size 1 for a single curve): ``sample_count`` (int32, CF
   ``sample_dimension = "sample"``: curve i holds the next ``sample_count[i]`` samples), optional
   ``x``, ``y`` [m] coordinates and per-curve calibration ``spring_constant`` [N/m],
-  ``sensitivity`` [m/V].
+  ``sensitivity`` [m/V]. In a map, optional int32 coordinates ``row`` (along y, 0 at the
+  smallest y) and ``column`` (along x, 0 at the smallest x): the curve's place on the grid (-1:
+  no position), so that ``ds.set_index(curve=["row", "column"]).unstack()`` (or ``["y", "x"]``)
+  gives the map; the readers that set them (JPK, :mod:`viscoforce.io.map_grid`) snap ``x``, ``y``
+  to the grid and keep the file's positions, which jitter by ~1e-12 m, in ``x_raw``, ``y_raw``
+  [m].
 * dim ``segment_table``: one row per distinct segment (curves may share rows): ``segment_name``,
   one of :data:`SEGMENT_NAMES`, and optional ``segment_type``, the file's own label (e.g.
   ``"sine-z-modulation"``). Readers may add more ``segment_*`` variables over it (with units).
@@ -56,9 +61,17 @@ CURVES_VARIABLES: dict[str, VariableSpec] = {
     "segment_type": VariableSpec("", "segment type as the file names it", _G, "U", False),
     "x": VariableSpec("m", "lateral position x", _C, required=False),
     "y": VariableSpec("m", "lateral position y", _C, required=False),
+    "x_raw": VariableSpec("m", "lateral position x as the file gives it", _C, required=False),
+    "y_raw": VariableSpec("m", "lateral position y as the file gives it", _C, required=False),
+    "row": VariableSpec("1", "grid row of the curve (along y, from 0; -1: no position)", _C, "i",
+                        required=False),
+    "column": VariableSpec("1", "grid column of the curve (along x, from 0; -1: no position)", _C,
+                           "i", required=False),
     "spring_constant": VariableSpec("N/m", "cantilever spring constant", _C, required=False),
     "sensitivity": VariableSpec("m/V", "deflection sensitivity", _C, required=False),
 }
+#: What ``make_curves(per_curve=...)`` takes (all but the calibration become coordinates).
+_PER_CURVE = ("x", "y", "spring_constant", "sensitivity", "row", "column", "x_raw", "y_raw")
 #: Allowed values of ``segment_name``.
 SEGMENT_NAMES = ("approach", "pause", "modulation", "retract", "other")
 
@@ -89,7 +102,9 @@ def make_curves(time: ArrayLike, force: ArrayLike, height: ArrayLike, deflection
     sample_count : array_like of int, optional
         Samples per curve (default: one curve of all samples).
     per_curve : mapping, optional
-        Per-curve variables ``x``, ``y`` [m], ``spring_constant`` [N/m], ``sensitivity`` [m/V].
+        Per-curve variables ``x``, ``y`` [m], ``spring_constant`` [N/m], ``sensitivity`` [m/V],
+        and the coordinates of a map's grid ``row``, ``column`` (integers) and ``x_raw``,
+        ``y_raw`` [m] (see the module docstring).
     attrs : mapping, optional
         File metadata (calibration, settings, path).
     source : str, optional
@@ -124,11 +139,18 @@ def make_curves(time: ArrayLike, force: ArrayLike, height: ArrayLike, deflection
     if segment_types is not None:
         coords["segment_type"] = variable(list(segment_types), _G, t["segment_type"])
     for name, v in per_curve.items():
-        if name not in ("x", "y", "spring_constant", "sensitivity"):
-            raise SchemaError(f"per_curve variable {name!r} is not one of x, y, spring_constant, "
-                              "sensitivity")
-        arr = variable(shaped(name, v, counts.shape, _C), _C, t[name])
-        (coords if name in ("x", "y") else data)[name] = arr
+        if name not in _PER_CURVE:
+            raise SchemaError(f"per_curve variable {name!r} is not one of "
+                              f"{', '.join(_PER_CURVE)}")
+        if t[name].dtype == "i":  # grid indices: integers, not floats
+            v = np.asarray(v)
+            if v.shape != counts.shape:
+                raise SchemaError(f"{name} must have shape {counts.shape} over {_C}, got "
+                                  f"{v.shape}")
+        else:
+            v = shaped(name, v, counts.shape, _C)
+        arr = variable(v, _C, t[name], name=name)
+        (data if name in ("spring_constant", "sensitivity") else coords)[name] = arr
     meta = clean_attrs(attrs)
     if source is not None:
         meta["source"] = source
