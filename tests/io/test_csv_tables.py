@@ -242,3 +242,20 @@ def test_results_without_best_fit_curves_are_refused_with_the_way_out():
         fit_curves_table([], data)
     with pytest.raises(ParameterError, match="path must be a file path"):
         export_fits(fit_curve(data, "relaxation"), data, None)
+
+
+def test_bode_and_load_write_a_spectrum_csv_that_reads_back(tmp_path, capsys):
+    """Issue 38 item 7: `bode ... --out c0.csv` and `load ... --out s.csv` (was refused)."""
+    from viscoforce.cli import main
+    from viscoforce.io.csv_spectrum import read_spectrum_csv
+
+    out = tmp_path / "s.csv"
+    assert main(["load", "example:sls_modulation.jpk-force", "--out", str(out)]) == 0
+    back = read_spectrum_csv(out)
+    assert back.sizes["omega"] > 1 and "stiffness" in back
+    c0 = tmp_path / "c0.csv"
+    assert main(["bode", "example:sls_modulation.jpk-force", "--tip", "sphere:5um",
+                 "--out", str(c0)]) == 0
+    capsys.readouterr()
+    header = next(line for line in c0.read_text().splitlines() if not line.startswith("#"))
+    assert "E_storage (Pa)" in header and "G_loss (Pa)" in header

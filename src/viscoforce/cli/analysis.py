@@ -11,7 +11,7 @@ import re
 from pathlib import Path
 
 from viscoforce.cli._args import (
-    NETCDF,
+    NETCDF_OR_CSV,
     Flag,
     FlagGroup,
     Output,
@@ -122,7 +122,9 @@ def add_load(parser: argparse.ArgumentParser) -> None:
                              "subtracted (instead of --drag)")
     parser.add_argument("--raw", action="store_true",
                         help="write the curves, not the spectrum of the modulation segments")
-    add_outputs(parser, [Output("--out", NETCDF, "FILE.nc", "write the dataset (netCDF)")])
+    add_outputs(parser, [Output("--out", NETCDF_OR_CSV, "FILE.nc|FILE.csv",
+                                "write the dataset (netCDF), or a spectrum as a CSV table: one "
+                                "row per curve and frequency, units in the headers (.csv)")])
     parser.add_argument("--json", action="store_true",
                         help="print one JSON object: format, kind, n_curves, dims, variables")
 
@@ -193,15 +195,26 @@ def run_load(args: argparse.Namespace) -> int:
     """
     from viscoforce.measured.open import OptionError, read_measured
 
+    table = bool(args.out) and str(args.out).lower().endswith(".csv")
+    if table and args.raw:
+        raise UsageError(f"--out {args.out}: a CSV table holds a spectrum; the curves (--raw) "
+                         "are written as netCDF (.nc)")
     try:
         made = read_measured(
             args.file, format=args.format, raw=args.raw, spring_constant=args.spring_constant,
             sensitivity=args.sensitivity, phase_lag=_phase_lag(args.phase_lag),
             phase_reference=args.phase_reference, drag=args.drag,
             drag_heights=args.drag_heights, tip=args.tip, poisson=_poisson(args.poisson),
-            out=args.out, keep_streamed=False)
+            out=None if table else args.out, keep_streamed=False)
     except OptionError as exc:
         raise UsageError(exc.told(_FLAGS)) from None
+    if table:
+        if made.kind != "spectrum" or made.dataset is None:
+            raise UsageError(f"--out {args.out}: a CSV table holds a spectrum; {args.file} gives "
+                             f"{made.kind} (no modulation segments): write them as netCDF (.nc)")
+        from viscoforce.io.csv_tables import write_spectrum_csv
+
+        write_spectrum_csv(made.dataset, args.out)
     result = made.summary()
     if args.json:
         print_json(result)

@@ -423,9 +423,6 @@ def run_bode(args: argparse.Namespace) -> int:
                          "figure name")
     if not args.plot and not args.out:
         raise UsageError("bode needs --plot FILE.png (the figure) or --out FILE.nc (the data)")
-    if args.out and args.out.lower().endswith(".csv") and args.model is None:
-        raise UsageError(f"--out {args.out}: a CSV table holds a fit result (give --model); "
-                         "the spectrum is written as netCDF (.nc)")
     ds = read_data(args.data, args.format, height_channel=height_channel(args),
                    phase_reference=args.phase_reference)
     kind = _kind(ds)
@@ -442,7 +439,9 @@ def run_bode(args: argparse.Namespace) -> int:
     from viscoforce.cli.model import _save_figure
     from viscoforce.plotting import bode_plot
 
-    if args.modulus and ("E_storage" not in ds or args.tip is not None):
+    spectrum_table = bool(args.out) and args.out.lower().endswith(".csv") and fit is None
+    if (args.modulus or (spectrum_table and args.tip is not None)) and (
+            "E_storage" not in ds or args.tip is not None):
         if args.tip is None:
             raise UsageError("--modulus needs --tip (the complex modulus needs the tip's contact "
                              "size), or a spectrum loaded with load --tip")
@@ -450,7 +449,11 @@ def run_bode(args: argparse.Namespace) -> int:
 
         ds = add_complex_modulus(ds, args.tip, poisson=args.poisson)
     measured_data = str(ds.attrs.get("source", "simulation")) != "simulation"
-    if args.out and args.out.lower().endswith(".csv"):
+    if spectrum_table:  # the spectrum drawn: one row per frequency (E', E'' ... with --tip)
+        from viscoforce.io.csv_tables import write_spectrum_csv
+
+        write_spectrum_csv(ds, args.out)
+    elif args.out and args.out.lower().endswith(".csv"):
         write_table(fit, args.out)
     elif args.out:
         write_netcdf(ds if fit is None else fit, args.out)
