@@ -8,7 +8,7 @@ modulus when the tip is given; or the force curves. A JPK map is read in chunks 
 ``bode`` fit::
 
     from viscoforce.measured import open_data
-    spectrum = open_data("map.jpk-force-map", phase_lag={300: 14}, tip="sphere:5um")
+    spectrum = open_data("map.jpk-force-map", tip="sphere:5um")  # phase: the fitted sensor delay
 
 :func:`read_measured` does the same and also tells what it made (:class:`MeasuredData`: format,
 kind, dims, the drag fit). Errors about the options are :class:`OptionError`, a
