@@ -81,7 +81,15 @@ def suites():
     # from the last suite to the first: the runs are shared with the per-suite files (a lock per
     # suite), which go from first to last, so two xdist workers meet in the middle instead of one
     # waiting for the suite the other is running
-    return [pytest.param(name, marks=MARKS.get(name, ()), id=name) for name in reversed(SUITES)]
+    # the studies' smoke runs are slow studies (`-m slow`; CI skips them, they stay runnable)
+    return [pytest.param(name, marks=(*_as_tuple(MARKS.get(name, ())),
+                                      *((pytest.mark.slow,) if SUITES[name].kind == "study"
+                                        else ())), id=name)
+            for name in reversed(SUITES)]
+
+
+def _as_tuple(marks):
+    return marks if isinstance(marks, tuple) else (marks,)
 
 
 @pytest.mark.parametrize("name", suites())

@@ -17,6 +17,9 @@ import pytest
 from tests._bench import REPO, STUDIES, benchmark_module
 from tests.benchmarks._smoke import passed
 
+#: the studies are slow studies: `-m slow` runs them (CI skips them; they stay runnable)
+pytestmark = pytest.mark.slow
+
 # ── speed_accuracy.py ────────────────────────────────────────────────────────────────────────────
 # the rows complete (finite time and error, or a ``fails: ...`` status), one default per method
 # and scene, and the files written

@@ -145,7 +145,7 @@ def test_modes_auto_of_ting_explains_its_candidates():
     from viscoforce.physics.tips import Paraboloid
     from viscoforce.schema import make_curves
 
-    tip, contact, n = Paraboloid(5e-6), 1.0e-6, 150
+    tip, contact, n = Paraboloid(5e-6), 1.0e-6, 60
     t = np.arange(2 * n) * (0.1 / n)
     z = np.where(t < 0.1, 20e-6 * t, 20e-6 * (0.2 - t))
     kernel = PronyRelaxation(1e3, (3e3, 2e3), (0.003, 0.03))
