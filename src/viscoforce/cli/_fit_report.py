@@ -119,17 +119,25 @@ def _print_single(info: dict[str, Any]) -> None:
     print(f"model {info['model']}{label}, {info['modes']} mode(s), "
           f"{'converged' if info['success'] else 'DID NOT CONVERGE'}; redchi "
           f"{info['redchi']:.4g}, {fit_text}, AIC {info['aic']:.4g}, BIC {info['bic']:.4g}")
+    derived = info.get("derived") or {}
+    young = {n: p for n, p in derived.items() if n.endswith("_young")}
+    if young:  # what people read first: Young's modulus (issue 38 item 3)
+        print(f"  Young's modulus (Poisson's ratio {info['poisson']:g}):")
+        for name, p in young.items():
+            unit = parameter_units(name.rsplit("_", 1)[0])
+            print(f"  {name:<12} = {format_estimate(p['value'], p['stderr'], unit)}")
+        print("  fitted (moduli in the paper's convention 2/E = sum (1 - nu^2)/E_i, twice "
+              "Johnson's E*):")
     for name, p in info["params"].items():
         unit = parameter_units(name)
         line = f"  {name:<8} = {format_estimate(p['value'], p['stderr'], unit)}"
         if "report_as" in p:
             line += f"   -> report as {p['report_as']} ({info.get('identifiability_method', '')})"
         print(line)
-    if info.get("derived"):
-        nu = info["poisson"]
-        print(f"  Young's and shear moduli (Poisson's ratio {nu:g}; E above is the paper's "
-              "2/E = sum (1 - nu^2)/E_i):")
-        for name, p in info["derived"].items():
+    rest = {n: p for n, p in derived.items() if n not in young}
+    if rest:
+        print(f"  shear moduli and Ting's forms (Poisson's ratio {info['poisson']:g}):")
+        for name, p in rest.items():
             base = name if name in ("ting_E0", "beta") else name.rsplit("_", 1)[0]
             unit = parameter_units(base)
             print(f"  {name:<12} = {format_estimate(p['value'], p['stderr'], unit)}")
