@@ -175,3 +175,19 @@ def test_a_map_carries_the_budget_per_pixel_and_flags_pixels_on_the_same_rule():
     np.testing.assert_allclose(out["E0_budget_upper"], 1.2 * e + 2 * s)
     np.testing.assert_array_equal(out["E0_budget_determined"], [[1, 1], [1, 0]])
     assert "E0 is not determined by these data on 1 of 4 pixels" in out.attrs["budget_notes"]
+
+
+def test_a_spectrum_referred_to_the_fitted_delay_weighs_the_sensors_phase(capsys):
+    """The phase reference is a budget source where the data chose it (issue 37 item 1)."""
+    from viscoforce.cli import main
+
+    args = ["fit", "example:modulation-map.jpk-force-map", "--model", "contact", "--material",
+            "structural", "--tip", "sphere:5um", "--curve", "3", "--json"]
+    assert main(args) == 0
+    info = json.loads(capsys.readouterr().out)
+    text = info["phase_reference_budget"]
+    assert text.startswith("phase reference delay") and "sensor's own phase" in text
+    settled = "the data settle the choice" in text
+    assert settled == ("phase_reference" not in info["params"]["alpha"]["systematic"])
+    assert main([*args[:-1], "--phase-reference", "sensor", "--json"]) == 0
+    assert "phase_reference_budget" not in json.loads(capsys.readouterr().out)

@@ -109,6 +109,44 @@ def choose_height_record(args: argparse.Namespace, ds, kind: str, result,
     return kept, dropped, why
 
 
+def phase_reference_alternative(args: argparse.Namespace, ds, kind: str, result,
+                                fit: Callable[[argparse.Namespace, Any, str], Any],
+                                read: Callable[..., Any]):
+    """(the sensor-phase fit or None, a sentence) of a spectrum referred to the piezo by default.
+
+    Where the data's phase reference was chosen by the data (``delay`` or ``piezo``, no
+    ``--phase-reference``), the spectrum is made again against the sensor's own phase and refitted:
+    its values are the ``phase_reference`` source of the budget, unless its reduced χ² is more than
+    :data:`SETTLED_RATIO` times the kept one's (the data settle the choice).
+    """
+    mode = str(ds.attrs.get("phase_reference_mode", ""))
+    if kind != "spectrum" or getattr(args, "phase_reference", None) is not None or mode not in (
+            "delay", "piezo"):
+        return None, ""
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            alt_ds = read(args.data, args.format, phase_reference="sensor")
+            if args.curve is not None and "curve" in alt_ds.dims:
+                from viscoforce.cli._fit_inputs import _select_curve
+
+                alt_ds = _select_curve(alt_ds, kind, args.curve)
+            alt = fit(args, alt_ds, kind)
+    except (UsageError, Exception) as exc:  # noqa: BLE001 - no sensor spectrum: no source
+        if isinstance(exc, KeyboardInterrupt):
+            raise
+        return None, ""
+    a = float(result["redchi"]) if "redchi" in result else math.nan
+    b = float(alt["redchi"]) if "redchi" in alt else math.nan
+    if not (math.isfinite(a) and math.isfinite(b) and a > 0):
+        return None, ""
+    why = (f"phase reference {mode} (the default where the data show the sensor's lag) against "
+           f"the sensor's own phase: reduced chi-square {a:.3g} against {b:.3g}")
+    if b > SETTLED_RATIO * a:
+        return None, why + " (the data settle the choice: not in the error budget)"
+    return alt, why + " (the sensor-phase fit's values are in the error budget)"
+
+
 def _label(channel: str) -> str:
     return f"piezo ({channel})" if channel == "height" else f"sensor ({channel})"
 

@@ -57,7 +57,8 @@ def _single_json(result) -> dict[str, Any]:
                 "identifiability_method", "ting_error",
                 "depth_check", "depth_check_E", "depth_check_shift", "precontact_rise",
                 "creep_force", "segment_type", "split_half_z", "split_half_check",
-                "sample_height", "sample_base", "bottom_effect_factor", "depth_check_relative"):
+                "sample_height", "sample_base", "bottom_effect_factor", "depth_check_relative",
+                "phase_reference_budget"):
         if key in result.attrs:
             value = result.attrs[key]
             out[key] = value if isinstance(value, str) else float(value)

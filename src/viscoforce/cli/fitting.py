@@ -23,6 +23,7 @@ from viscoforce.cli._fit_budget import (
     budget_json,
     choose_height_record,
     height_channel,
+    phase_reference_alternative,
     with_budget,
     with_map_budget,
 )
@@ -222,7 +223,12 @@ def run_fit(args: argparse.Namespace) -> int:
     else:
         result, texts = _fit_recording(fit_one, args, ds, kind)
         result, other, why = choose_height_record(args, ds, kind, result, fit_one, read_data)
-        result = with_budget(args, result, {"height_record": other}, {"height_record": why})
+        phase, phase_why = phase_reference_alternative(args, ds, kind, result, fit_one,
+                                                       read_data)
+        result = with_budget(args, result, {"height_record": other, "phase_reference": phase},
+                             {"height_record": why, "phase_reference": phase_why})
+        if phase_why:
+            result.attrs["phase_reference_budget"] = phase_why
         info = _single_json(result)
         info.update(budget_json(result, info["params"]))
         if why:

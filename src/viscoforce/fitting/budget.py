@@ -54,6 +54,7 @@ NUISANCE = ("baseline", "baseline_slope", "contact_point", "F_inf", "z_inf", "dr
 #: How a source reads in a sentence ("moves ... with the <label>").
 LABELS = {"spring_constant": "spring constant", "sensitivity": "deflection sensitivity",
           "tip": "tip size", "poisson": "Poisson's ratio", "height_record": "height record",
+          "phase_reference": "phase reference",
           "model": "model among the near-ties"}
 #: A choice that moves a parameter by more than this many stderr is said to.
 SAY_Z = 2.0
