@@ -18,6 +18,7 @@ from collections.abc import Callable
 from typing import Any
 
 from viscoforce.cli._args import UsageError
+from viscoforce.exceptions import ViscoforceError
 
 #: A record whose fit leaves a residual more than this many times the other's is settled by the
 #: data (it does not describe them): it is not a systematic of the result.
@@ -81,9 +82,7 @@ def choose_height_record(args: argparse.Namespace, ds, kind: str, result,
             if str(alt_ds.attrs.get("height_channel", "")) == used:
                 return result, None, ""
             alt = fit(args, alt_ds, kind)
-    except (UsageError, Exception) as exc:  # noqa: BLE001 - no second record: no choice
-        if isinstance(exc, KeyboardInterrupt):
-            raise
+    except (UsageError, ViscoforceError, OSError, ValueError):  # no second record: no choice
         return result, None, ""
     name = str(alt_ds.attrs.get("height_channel", other))
     a, b = _residual_rms(result), _residual_rms(alt)
@@ -132,9 +131,7 @@ def phase_reference_alternative(args: argparse.Namespace, ds, kind: str, result,
 
                 alt_ds = _select_curve(alt_ds, kind, args.curve)
             alt = fit(args, alt_ds, kind)
-    except (UsageError, Exception) as exc:  # noqa: BLE001 - no sensor spectrum: no source
-        if isinstance(exc, KeyboardInterrupt):
-            raise
+    except (UsageError, ViscoforceError, OSError, ValueError):  # no sensor spectrum: no source
         return None, ""
     a = float(result["redchi"]) if "redchi" in result else math.nan
     b = float(alt["redchi"]) if "redchi" in alt else math.nan

@@ -74,7 +74,6 @@ from viscoforce.fitting.selection import (
     halves_z,
     keep,
     mode_robustness,
-    share_effective_size,
 )
 from viscoforce.fitting.spectrum_models import svda_position
 from viscoforce.fitting.verdict import warn_fit
@@ -349,9 +348,6 @@ def select_tried(data: FitData, name: str, *, modes: int | str = 1, criterion: s
 
     tried = compare([family], data, criterion, robust=robust)
     return keep(tried, criterion), tried
-
-
-_share_effective_size = share_effective_size  # the earlier private name
 
 
 # ── public entry points ─────────────────────────────────────────────────────────────────────────
