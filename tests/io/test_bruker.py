@@ -1,4 +1,4 @@
-"""Bruker Nanoscope: the UFF text reader (real file + synthetic edge cases) and the .spm refusal."""
+"""Bruker Nanoscope: the UFF text reader (real file + synthetic edge cases); .spm in test_bruker_spm."""
 
 from __future__ import annotations
 
@@ -14,7 +14,7 @@ import xarray as xr
 from tests.conftest import REAL_DATA_DIR
 from viscoforce.cli import main
 from viscoforce.exceptions import InstrumentFormatError, ParameterError, UnitError
-from viscoforce.io.bruker import detect_nanoscope, detect_uff, read_uff, refuse_nanoscope
+from viscoforce.io.bruker import detect_nanoscope, detect_uff, read_uff
 from viscoforce.io.instruments import detect_format, load_instrument
 from viscoforce.physics.tips import Pyramid, Tip
 from viscoforce.schema import validate_curves
@@ -144,57 +144,13 @@ def test_real_uff_cli_load(capsys, tmp_path):
         assert ds.force.attrs["units"] == "N"
 
 
-# ── the Nanoscope binary: refused, with what would read it ───────────────────────────────────
+# ── the Nanoscope binary: read (tests/io/test_bruker_spm.py), told apart from UFF ───────────
 
 
-def _spm_header_value(path: Path, prefix: bytes) -> str:
-    for line in path.read_bytes().split(b"\r\n"):
-        if line.startswith(prefix):
-            return line[len(prefix):].decode("latin-1").strip()
-    raise AssertionError(prefix)
-
-
-def test_real_spm_is_recognised_and_refused_naming_what_reads_it():
+def test_real_spm_is_detected_as_nanoscope_not_uff():
     path = _real(SPM)
-    before = _sha(path)
     assert detect_nanoscope(path) and not detect_uff(path)
     assert detect_format(path).name == "nanoscope"
-    version = _spm_header_value(path, b"\\Version:")
-    k = float(_spm_header_value(path, b"\\Spring Constant:"))
-    assert (version, k) == ("0x0920B046", 0.1332)
-    with pytest.raises(InstrumentFormatError) as info:
-        load_instrument(path)
-    message = str(info.value)
-    assert message.startswith(f"{path}: Bruker Nanoscope binary file ('\\*Force file list', "
-                              f"version {version}, operating mode Force)")
-    for part in ("no maintained, permissively licensed Python package",
-                 "afmformats, MIT, has no Bruker format", "pyfmreader 0.1.3, MIT",
-                 "no release since July 2023", "Windows only",
-                 "export it from NanoScope Analysis as ASCII text", "format csv-curves",
-                 f"--spring-constant {k:g}N/m --sensitivity 27.39nm/V", "format uff"):
-        assert part in message, part
-    # calibration flags reach the same refusal (not an "unknown option" error)
-    with pytest.raises(InstrumentFormatError, match=r"does not read Nanoscope binary data"):
-        load_instrument(path, spring_constant=0.1, sensitivity=5e-8)
-    assert _sha(path) == before
-
-
-def test_real_spm_cli_load_exits_2(capsys, tmp_path):
-    path = _real(SPM)
-    assert main(["load", str(path), "--out", str(tmp_path / "x.nc")]) == 2
-    err = capsys.readouterr().err
-    assert "Bruker Nanoscope binary file" in err and "pyfmreader" in err
-    assert "Traceback" not in err and not (tmp_path / "x.nc").exists()
-
-
-def test_nanoscope_without_calibration_lines(tmp_path):
-    path = tmp_path / "image.spm"
-    path.write_bytes(b"\\*File list\r\n\\Version: 0x05120000\r\n\\*File list end\r\n\x00\x01")
-    assert detect_nanoscope(path)
-    with pytest.raises(InstrumentFormatError,
-                       match=r"\('\\\*File list', version 0x05120000\).*csv-curves with "
-                             r"--spring-constant and --sensitivity"):
-        refuse_nanoscope(path)
 
 
 # ── synthetic UFF files: every branch ─────────────────────────────────────────────────────────

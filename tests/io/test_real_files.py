@@ -21,7 +21,7 @@ CASES = {
         ["--model", "contact", "--material", "structural", "--tip", "sphere:5um", "--curve",
          "0"], "E_ref"),
     "PyFMReader/20200904_Egel4-Z1.0_00025.uff": (["--model", "hertz"], "E"),
-    "PyFMReader/20200904_Egel4-Z1.0_00025.spm": (None, "Nanoscope"),
+    "PyFMReader/20200904_Egel4-Z1.0_00025.spm": (["--model", "hertz", "--tip", "pyramid:20"], "E"),
     "PyFMRheo/map-data-2022.10.29-12.27.34.564.jpk-force-map": (
         ["--model", "hertz", "--tip", "sphere:5um"], "E"),
     "afmformats/10.1002_btm2.10294_fig5d-cell1.zip": (

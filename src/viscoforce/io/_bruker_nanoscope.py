@@ -1,22 +1,45 @@
-"""Bruker Nanoscope binary files, recognised and refused (the Nanoscope part of :mod:`viscoforce.io.bruker`).
+r"""The Bruker Nanoscope header: detection, sections, values, scales (for :mod:`viscoforce.io.bruker`).
 
-:func:`detect_nanoscope` recognises a Nanoscope file by its header; :func:`refuse_nanoscope` reads
-the few header values it quotes (version, operating mode, spring constant, sensitivity) and raises
-an :class:`~viscoforce.exceptions.InstrumentFormatError` that says what would read the curve. Why
-viscoforce does not parse the Nanoscope binary: see :mod:`viscoforce.io.bruker`.
+A Nanoscope file (``.spm``, ``.000`` …) starts with a text header of ``\key: value`` lines,
+separated by CR LF, grouped in sections opened by ``\*<name>`` lines (``\*Force file list``,
+``\*Scanner list``, ``\*Ciao scan list``, ``\*Ciao force list``, one ``\*Ciao force image list``
+per recorded channel, ``\*Ciao image list`` for an image) and closed by ``\*File list end``; the
+binary data follow at the offsets the header gives. Keys repeat across sections (``Samps/line``),
+so the header is kept as a list of sections (:class:`NanoscopeHeader`).
+
+A scaled ("V") value reads ``V [<soft scale>] (<hard scale> <unit>/LSB) <hard value> <unit>``
+(the Nanoscope manual's scaling chain, also followed by pyfmreader and SciFiReaders):
+
+* the *hard scale* (V/LSB) turns a raw integer into volts;
+* the *hard value* is the parameter itself in volts (``@4:Ramp Size … 227.2211 V``);
+* the *soft scale* names a sensitivity defined elsewhere in the header (``\@Sens. Zsens: V
+  13.203 nm/V``) that turns volts into the physical unit.
+
+:func:`scaled` parses such a value (:class:`Scaled`); :meth:`NanoscopeHeader.sensitivity`
+resolves a soft scale to metres per volt. Nothing here reads the binary data: see
+:mod:`viscoforce.io._bruker_spm`.
 """
 
 from __future__ import annotations
 
+import math
 import re
+from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, NoReturn
 
-from viscoforce._validation import require_path
 from viscoforce.exceptions import InstrumentFormatError
 
 _HEAD = 4096
 _NANOSCOPE_MAGIC = (b"\\*Force file list", b"\\*File list", b"\\*EC File list")
+#: Largest header searched for ``\*File list end`` [bytes] (real headers: 30-80 kB).
+MAX_HEADER_BYTES = 4 * 1024**2
+_END = "\\*File list end"
+_LINE = re.compile(r"^\\(?P<key>@?(?:\d+:)?[^:]*?)\s*:\s?(?P<value>.*)$")
+_NUMBER = r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?"
+_SCALED = re.compile(rf"^V\s*(?:\[(?P<soft>[^\]]*)\])?\s*(?:\((?P<hard>{_NUMBER})\s*"
+                     rf"(?P<hard_unit>[^)]*)\))?\s*(?P<value>{_NUMBER})?\s*(?P<unit>.*)$")
+#: soft-scale units → their unit per metre ("~m" is Nanoscope's µm): value / this = m/V
+_PER_METRE = {"": 1e9, "nm/V": 1e9, "~m/V": 1e6, "um/V": 1e6, "µm/V": 1e6, "m/V": 1.0}
 
 
 def _head(path: Path, size: int = _HEAD) -> bytes:
@@ -25,9 +48,6 @@ def _head(path: Path, size: int = _HEAD) -> bytes:
             return fh.read(size)
     except OSError:
         return b""
-
-
-# ── Nanoscope binary: recognised, refused ──────────────────────────────────────────────────────
 
 
 def detect_nanoscope(path: str | Path) -> bool:
@@ -39,74 +59,111 @@ def detect_nanoscope(path: str | Path) -> bool:
     return head.startswith(_NANOSCOPE_MAGIC)
 
 
-def _nanoscope_header(path: Path) -> dict[str, str]:
-    """The few header values the refusal quotes (version, mode, spring constant, sensitivity)."""
-    wanted = {"\\Version:": "version", "\\Operating mode:": "mode",
-              "\\Spring Constant:": "spring_constant", "\\@Sens. DeflSens:": "deflection_sens"}
-    found: dict[str, str] = {}
-    try:
-        with path.open("rb") as fh:
-            for _ in range(5000):
-                raw = fh.readline()
-                if not raw:
-                    break
-                line = raw.decode("latin-1").strip()
-                if line.startswith("\\*File list end"):
-                    break
-                for prefix, key in wanted.items():
-                    if line.startswith(prefix) and key not in found:
-                        found[key] = line[len(prefix):].strip()
-    except OSError:
-        pass
-    return found
-
-
 def _number(text: str) -> float | None:
-    match = re.search(r"[-+]?(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?", text)
+    """The first number in ``text``, or None."""
+    match = re.search(_NUMBER, text)
     return float(match.group(0)) if match else None
 
 
-def refuse_nanoscope(path: str | Path, *, spring_constant: Any = None,
-                     sensitivity: Any = None) -> NoReturn:
-    """Raise: viscoforce does not read Nanoscope binary files; the message says what would.
+@dataclass(frozen=True)
+class Scaled:
+    """One ``V [soft] (hard unit) value unit`` header value, parsed (NaN where absent)."""
 
-    Parameters
-    ----------
-    path : str or Path
-        A Bruker Nanoscope file (``.spm``, ``.000`` …); only its text header is read.
-    spring_constant, sensitivity : optional
-        Accepted (so that ``load --spring-constant …`` reaches this message) and not used.
+    soft: str  # the soft scale's name ("Sens. Zsens"), "" if none
+    hard: float  # hard scale [hard_unit], e.g. V/LSB
+    hard_unit: str
+    value: float  # the hard value
+    unit: str
 
-    Raises
-    ------
-    InstrumentFormatError
-        Always: names the file, what it is (header version, operating mode), why it is not read
-        and how to load the curve (a text export, or a UFF text file).
-    """
-    del spring_constant, sensitivity  # the refusal does not depend on them
-    path = require_path("path", path)
-    header = _nanoscope_header(path)
-    first = _head(path, 64).removeprefix(b"\xef\xbb\xbf").split(b"\r")[0].split(b"\n")[0]
-    what = [f"'{first.decode('latin-1')}'"]
-    if "version" in header:
-        what.append(f"version {header['version']}")
-    if "mode" in header:
-        what.append(f"operating mode {header['mode']}")
-    calibration = []
-    k = _number(header.get("spring_constant", ""))
-    if k is not None:
-        calibration.append(f"--spring-constant {k:g}N/m")
-    s = _number(header.get("deflection_sens", ""))
-    if s is not None:
-        calibration.append(f"--sensitivity {s:g}nm/V")
-    flags = (f" with the header's calibration, {' '.join(calibration)}" if calibration
-             else " with --spring-constant and --sensitivity")
-    raise InstrumentFormatError(
-        f"{path}: Bruker Nanoscope binary file ({', '.join(what)}): viscoforce does not read "
-        "Nanoscope binary data, because no maintained, permissively licensed Python package "
-        "reads calibrated Nanoscope force curves (afmformats, MIT, has no Bruker format; "
-        "pyfmreader 0.1.3, MIT, reads them but has had no release since July 2023 and subtracts "
-        "a baseline while reading; Bruker's own 'nanoscope' package runs on Windows only). To load "
-        "the curve, export it from NanoScope Analysis as ASCII text with 'name (unit)' column "
-        "headers, e.g. 'time (s),height (nm),deflection (V)', and load that as format csv-curves"
-        f"{flags}; or load a UFF text export (.uff) of the curve (format uff)")
+
+def scaled(path: Path, key: str, text: str) -> Scaled:
+    """Parse a scaled header value; refuse one that is not of that form."""
+    match = _SCALED.match(text.strip())
+    if match is None:
+        raise InstrumentFormatError(f"{path}: header value {key!r} = {text.strip()[:80]!r} is not "
+                                    "a scaled value 'V [soft scale] (hard scale) value unit'")
+    hard = float(match["hard"]) if match["hard"] else math.nan
+    value = float(match["value"]) if match["value"] else math.nan
+    return Scaled(soft=(match["soft"] or "").strip(), hard=hard,
+                  hard_unit=(match["hard_unit"] or "").strip(), value=value,
+                  unit=match["unit"].strip())
+
+
+def _bare(key: str) -> str:
+    """``@4:Z scale`` → ``Z scale``; ``@Sens. Zsens`` → ``Sens. Zsens``."""
+    return re.sub(r"^@(\d+:)?", "", key)
+
+
+@dataclass
+class NanoscopeHeader:
+    """The header as (section name, {key as written: value text}) pairs, in file order."""
+
+    path: Path
+    sections: list[tuple[str, dict[str, str]]]
+    size: int  # bytes up to and including the end marker
+
+    def all(self, name: str) -> list[dict[str, str]]:
+        """Every section called ``name`` (``Ciao force image list`` …), in file order."""
+        return [fields for section, fields in self.sections if section == name]
+
+    def get(self, fields: dict[str, str], name: str) -> str | None:
+        """The value of key ``name`` in ``fields``, matched without its ``@n:`` prefix."""
+        for key, value in fields.items():
+            if key == name or _bare(key) == name:
+                return value
+        return None
+
+    def anywhere(self, name: str) -> str | None:
+        """The first value of key ``name`` in any section."""
+        for _, fields in self.sections:
+            value = self.get(fields, name)
+            if value is not None:
+                return value
+        return None
+
+    def sensitivity(self, soft: str, what: str) -> tuple[float, str]:
+        r"""Soft scale ``soft`` (``Sens. Zsens``) in metres per volt, and its text.
+
+        A soft scale written without a unit (``\@Sens. DeflSens: V 27.39``) is in nm/V, as
+        Nanoscope writes it and as pyfmreader reads it.
+        """
+        text = self.anywhere("@" + soft)
+        if text is None:
+            raise InstrumentFormatError(f"{self.path}: the {what} refers to the soft scale "
+                                        f"'{soft}', which the header does not define")
+        value = scaled(self.path, "@" + soft, text)
+        per_metre = _PER_METRE.get(value.unit)
+        if per_metre is None or not (math.isfinite(value.value) and value.value > 0):
+            raise InstrumentFormatError(
+                f"{self.path}: soft scale '{soft}' = {text.strip()!r} is not a positive length "
+                f"per volt (units {', '.join(repr(u) for u in _PER_METRE if u)})")
+        return value.value / per_metre, text.strip()
+
+
+def read_header(path: Path, file_size: int) -> NanoscopeHeader:
+    r"""Parse the text header, up to ``\*File list end`` (at most :data:`MAX_HEADER_BYTES`)."""
+    try:
+        with path.open("rb") as fh:
+            head = fh.read(min(file_size, MAX_HEADER_BYTES))
+    except OSError as exc:
+        raise InstrumentFormatError(f"{path}: cannot read ({exc.strerror or exc})") from None
+    end = head.find(_END.encode())
+    if end < 0:
+        raise InstrumentFormatError(
+            f"{path}: the Nanoscope header has no '{_END}' line within its first "
+            f"{len(head)} bytes: the file is truncated or not a Nanoscope file")
+    stop = head.find(b"\n", end)
+    size = len(head) if stop < 0 else stop + 1
+    sections: list[tuple[str, dict[str, str]]] = []
+    for raw in head[:end].decode("latin-1").replace("\r", "\n").split("\n"):
+        line = raw.strip().removeprefix("\ufeff").removeprefix("ï»¿")
+        if not line:
+            continue
+        if line.startswith("\\*"):
+            sections.append((line[2:].strip(), {}))
+            continue
+        match = _LINE.match(line)
+        if match is None or not sections:
+            continue  # free text (a note's continuation line): not a field
+        sections[-1][1].setdefault(match["key"].strip(), match["value"].strip())
+    return NanoscopeHeader(path=path, sections=sections, size=size)

@@ -1,20 +1,22 @@
-"""Bruker Nanoscope force curves: the UFF text form is read, the binary ``.spm`` is refused.
+"""Bruker Nanoscope force curves: the binary ``.spm`` and its UFF text export, read alike.
 
-Which library reads these files (surveyed for issue 21; licence from each package's metadata)
----------------------------------------------------------------------------------------------
-* afmformats 0.18.7 (MIT; viscoforce's dependency): no Bruker format at all.
-* pyfmreader 0.1.3 (MIT): reads Nanoscope force curves and UFF, but has had no release since
-  July 2023, subtracts a baseline and drops points while reading a Nanoscope curve, and its own
-  UFF loader fails on the UFF file of its test data (``UnboundLocalError`` in ``getcurve``).
-* SciFiReaders 0.12.7 (MIT): its Bruker force-curve path returns the raw integers unscaled (no
-  volts, no metres), behind a heavy dependency stack (dask, numba, sidpy, ipython, gdown).
-* nanoscope 1.2.300 (Bruker's own): compiled for Windows only; no package for this platform.
-* pySPM (Apache-2.0): Nanoscope *images* only. AFMReader: GPL/LGPL (excluded), images only.
-
-So there is no maintained, permissively licensed reader of calibrated Nanoscope force curves, and
-viscoforce does not parse the Nanoscope binary itself: :func:`detect_nanoscope` recognises the
-file by its header and :func:`refuse_nanoscope` raises an
-:class:`~viscoforce.exceptions.InstrumentFormatError` that says what would read it.
+Nanoscope binary (``.spm``, read by :func:`read_nanoscope`)
+-----------------------------------------------------------
+Read by viscoforce's own small reader (a header parser and :func:`numpy.frombuffer`:
+:mod:`viscoforce.io._bruker_nanoscope`, :mod:`viscoforce.io._bruker_spm`), after evaluating the
+maintained readers (``docs/bruker-spm.md``): AFMReader is LGPL-3.0 and reads images only;
+Bruker's ``nanoscope`` is a Windows-only binary (Python <= 3.11.4); SciFiReaders (MIT) returns
+unscaled integers and trusts ``Bytes/pixel``, which Nanoscope 9.2 force files misstate; pyfmreader
+(MIT) scales correctly but subtracts a baseline and drops points while reading and has had no
+release since July 2023. Its scaling chain (the Nanoscope manual's, pyfmreader's) is followed:
+see :mod:`viscoforce.io._bruker_spm`. The binary is turned into the same in-memory curve as its
+UFF export (segments of rows: Z displacement from the turnaround [m], deflection [V]; spring
+constant, sensitivity, velocities), which then goes through the same assembly below, so that a
+``.spm`` and its ``.uff`` give the same dataset (variables, segments, units, calibration attrs),
+``attrs["source"]`` ``"nanoscope"``, the header's fields that describe the curve as
+``meta_nanoscope_<key>`` and the scaling as ``attrs["nanoscope_scaling"]``. The file records no
+tip (its ``Tip Radius`` / ``Tip Half Angle`` are PeakForce QNM settings): no tip attrs. Single
+ramp curves only; a force volume is refused (the pixel order of its curves is not settled).
 
 UFF text (``.uff``, "Universal Force File", read by :func:`read_uff`)
 --------------------------------------------------------------------
@@ -83,15 +85,8 @@ import xarray as xr
 from viscoforce._limits import check_effort
 from viscoforce._validation import require_path
 from viscoforce.exceptions import InstrumentFormatError, ParameterError, UnitError
-from viscoforce.io._bruker_nanoscope import (  # noqa: F401 (re-exported)
-    _HEAD,
-    _NANOSCOPE_MAGIC,
-    _head,
-    _nanoscope_header,
-    _number,
-    detect_nanoscope,
-    refuse_nanoscope,
-)
+from viscoforce.io._bruker_nanoscope import _head, detect_nanoscope
+from viscoforce.io._bruker_spm import K_FIELD, S_FIELD, nanoscope_curve
 from viscoforce.io._bruker_uff_checks import (  # noqa: F401 (re-exported)
     _K_FIELDS,
     _MAX_TIP_RADIUS,
@@ -131,7 +126,7 @@ from viscoforce.io.quality import (
 from viscoforce.schema import make_curves
 from viscoforce.units import unit_factor
 
-__all__ = ["detect_nanoscope", "detect_uff", "read_uff", "refuse_nanoscope"]
+__all__ = ["detect_nanoscope", "detect_uff", "read_nanoscope", "read_uff"]
 
 _VOLTS = ("v", "volt", "volts")
 _CLI_HINT = "pass {name} (CLI: {flag})"
@@ -408,12 +403,70 @@ def read_uff(path: str | Path, *, spring_constant: float | str | None = None,
                                     "'HE Entry_UFF_version:')")
     uff = _parse(path)
     _described_columns(uff)
-    k, k_from = _calibration(uff, _K_FIELDS, k_user, "spring_constant")
+    return _curves(uff, k_user, s_user, fields=(_K_FIELDS, _S_FIELDS), source="uff",
+                   meta=_meta(uff.fields))
+
+
+def read_nanoscope(path: str | Path, *, spring_constant: float | str | None = None,
+                   sensitivity: float | str | None = None) -> xr.Dataset:
+    """Read a Bruker Nanoscope force-curve file (``.spm``) into a curves dataset (SI).
+
+    Parameters
+    ----------
+    path : str or Path
+        The file (opened read-only, never modified): one ramp force curve (approach,
+        retract), as the MultiMode/Dimension/Icon "Force" mode writes it.
+    spring_constant : float or str, optional
+        Cantilever spring constant [N/m] (or ``"0.1N/m"``); default the header's
+        ``Spring Constant``. Given, it recalibrates: force = k × deflection.
+    sensitivity : float or str, optional
+        Inverse optical lever sensitivity [m/V] (or ``"27nm/V"``); default the header's
+        ``@Sens. DeflSens``.
+
+    Returns
+    -------
+    xarray.Dataset
+        Curves dataset (:func:`viscoforce.schema.make_curves`), one curve, the same as
+        :func:`read_uff` gives for the UFF export of the curve; ``attrs["source"]``
+        ``"nanoscope"``. See :mod:`viscoforce.io._bruker_spm` for the scaling chain.
+
+    Raises
+    ------
+    InstrumentFormatError
+        If the file is missing, not a Nanoscope force curve (an image, a force volume, a
+        PeakForce capture, a curve with a surface hold), truncated (the data block beyond the
+        end of the file), or its header lacks or garbles a field of the scaling chain (the
+        message names the file and the field).
+    ParameterError, UnitError
+        If ``spring_constant`` / ``sensitivity`` is not a positive quantity within
+        :data:`~viscoforce._limits.SPRING_CONSTANT_RANGE` /
+        :data:`~viscoforce._limits.SENSITIVITY_RANGE`.
+    """
+    path = require_path("path", path)
+    k_user = _option("spring_constant", spring_constant, "stiffness")
+    s_user = _option("sensitivity", sensitivity, "sensitivity")
+    if not path.is_file():
+        raise InstrumentFormatError(f"{path}: no such file")
+    if not detect_nanoscope(path):
+        raise InstrumentFormatError(f"{path}: not a Bruker Nanoscope file (it must start with "
+                                    "'\\*Force file list' or '\\*File list')")
+    uff, meta = nanoscope_curve(path)
+    return _curves(uff, k_user, s_user, fields=((K_FIELD,), (S_FIELD,)), source="nanoscope",
+                   meta=meta)
+
+
+def _curves(uff: _Uff, k_user: float | None, s_user: float | None, *,
+            fields: tuple[tuple[str, ...], tuple[str, ...]], source: str,
+            meta: dict[str, Any]) -> xr.Dataset:
+    """The curves dataset of a parsed curve (UFF text or Nanoscope binary): one assembly."""
+    path = uff.path
+    k_fields, s_fields = fields
+    k, k_from = _calibration(uff, k_fields, k_user, "spring_constant")
     if not k > 0:
         raise InstrumentFormatError(
-            f"{path}: the header gives no spring constant (Cantilever_springK_used(N/m)); "
+            f"{path}: the header gives no spring constant ({k_fields[0]}); "
             + _CLI_HINT.format(name="spring_constant", flag="--spring-constant 0.1N/m"))
-    s = _calibration(uff, _S_FIELDS, s_user, "sensitivity")
+    s = _calibration(uff, s_fields, s_user, "sensitivity")
     parts: dict[str, list[np.ndarray]] = {key: [] for key in (
         "time", "height", "deflection", "segment")}
     table: list[tuple[str, str]] = []
@@ -435,11 +488,12 @@ def read_uff(path: str | Path, *, spring_constant: float | str | None = None,
         notes["height_channel"] = (f"{cols['height'].title} [{cols['height'].unit}] as recorded, "
                                    "read as growing away from the sample (Nanoscope: Z piezo "
                                    "displacement from the turnaround)")
-    return _assemble(uff, parts, table, hows, notes, k, s[0])
+    return _assemble(uff, parts, table, hows, notes, k, s[0], source=source, meta=meta)
 
 
 def _assemble(uff: _Uff, parts: dict[str, list[np.ndarray]], table: list[tuple[str, str]],
-              hows: list[str], notes: dict[str, str], k: float, s: float) -> xr.Dataset:
+              hows: list[str], notes: dict[str, str], k: float, s: float, *, source: str,
+              meta: dict[str, Any]) -> xr.Dataset:
     tip, tip_note = _tip_attrs(uff.fields)
     attrs: dict[str, Any] = {
         "file": str(uff.path), "n_curves": 1, "force_baseline_subtracted": 0,
@@ -449,7 +503,7 @@ def _assemble(uff: _Uff, parts: dict[str, list[np.ndarray]], table: list[tuple[s
         **notes, **uff.notes, **tip}
     if tip_note:
         attrs["tip_note"] = tip_note
-    attrs.update(_meta(uff.fields))
+    attrs.update(meta)
     per_curve: dict[str, Any] = {"spring_constant": [k], "sensitivity": [s]}
     x = _float_field(uff.fields, "Recording_xposition(m)")
     y = _float_field(uff.fields, "Recording_yposition(m)")
@@ -480,5 +534,5 @@ def _assemble(uff: _Uff, parts: dict[str, list[np.ndarray]], table: list[tuple[s
                      np.concatenate(parts["height"]), deflection,
                      segment=np.concatenate(parts["segment"]),
                      segment_names=[r[0] for r in table], segment_types=[r[1] for r in table],
-                     per_curve=per_curve, attrs=attrs, source="uff")
+                     per_curve=per_curve, attrs=attrs, source=source)
     return ds.assign_coords(curve=np.arange(1, dtype=np.int32))

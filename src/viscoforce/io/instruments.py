@@ -21,8 +21,9 @@ name              kind      what
 ``uff``           curves    UFF text force curve ``.uff``, e.g. a Bruker Nanoscope curve
                             (:func:`viscoforce.io.bruker.read_uff`); options
                             ``spring_constant``, ``sensitivity``
-``nanoscope``     curves    Bruker Nanoscope binary ``.spm``: recognised and refused with
-                            what would read it (:func:`viscoforce.io.bruker.refuse_nanoscope`)
+``nanoscope``     curves    Bruker Nanoscope binary force curve ``.spm``
+                            (:func:`viscoforce.io.bruker.read_nanoscope`); options
+                            ``spring_constant``, ``sensitivity``
 ================  ========  =============================================================
 
 :func:`load_instrument` detects the format by CONTENT (zip members, header line), never by the
@@ -69,7 +70,7 @@ from viscoforce.exceptions import (
     ViscoforceError,
 )
 from viscoforce.io.afm import AFMFORMATS_EXTENSIONS, detect_afmformats, read_afmformats
-from viscoforce.io.bruker import detect_nanoscope, detect_uff, read_uff, refuse_nanoscope
+from viscoforce.io.bruker import detect_nanoscope, detect_uff, read_nanoscope, read_uff
 from viscoforce.io.csv_formats import (
     encoding_problem,
     header_names,
@@ -216,8 +217,8 @@ FORMATS: tuple[InstrumentFormat, ...] = (
         options=("spring_constant", "sensitivity")),
     InstrumentFormat(
         name="nanoscope",
-        description="Bruker Nanoscope binary: recognised only, refused with what would read it",
-        extensions=(".spm",), detect=detect_nanoscope, read=refuse_nanoscope, kind="curves",
+        description="Bruker Nanoscope binary force curve (one ramp; force volumes refused)",
+        extensions=(".spm",), detect=detect_nanoscope, read=read_nanoscope, kind="curves",
         options=("spring_constant", "sensitivity")),
 )
 
