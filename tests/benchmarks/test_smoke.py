@@ -48,6 +48,8 @@ TOP_KEYS = {
                       "ratio", "extra_imports", "summary", "files"},
     "bench_budget": {"schema", "created", "quick", "machine", "target", "settings", "results",
                      "skipped", "summary", "files"},
+    "bench_ting_nonuniform": {"schema", "created", "quick", "machine", "target", "settings",
+                              "results", "ratio", "summary", "files"},
     "speed_accuracy": {"schema", "created", "quick", "machine", "settings", "rows", "summary",
                        "files"},
     "validity_maps": {"schema", "created", "quick", "machine", "settings", "rows", "boundaries",

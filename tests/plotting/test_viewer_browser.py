@@ -86,19 +86,32 @@ def wait_until_drawn(page) -> None:
 
 
 @pytest.fixture(scope="module")
-def browser_page(report, tmp_path_factory):
-    """The page loaded in headless Chromium, and the console errors seen while it loaded."""
-    out, _, _ = report
+def browser(tmp_path_factory):
+    """One headless Chromium context for the module's pages (Playwright runs one at a time)."""
     with playwright_api.sync_playwright() as p:
         context = launch(p, tmp_path_factory.mktemp("chromium-profile"))
-        page = context.new_page()
-        errors: list[str] = []
-        page.on("console", lambda m: errors.append(m.text) if m.type == "error" else None)
-        page.on("pageerror", lambda e: errors.append(str(e)))
-        page.goto(out.as_uri())
-        wait_until_drawn(page)
-        yield page, errors
+        yield context
         context.close()
+
+
+def open_page(context, url: str):
+    """(page, console errors seen while it loads and after) of ``url``, drawn."""
+    page = context.new_page()
+    errors: list[str] = []
+    page.on("console", lambda m: errors.append(m.text) if m.type == "error" else None)
+    page.on("pageerror", lambda e: errors.append(str(e)))
+    page.goto(url)
+    wait_until_drawn(page)
+    return page, errors
+
+
+@pytest.fixture(scope="module")
+def browser_page(report, browser):
+    """The page loaded in headless Chromium, and the console errors seen while it loaded."""
+    out, _, _ = report
+    page, errors = open_page(browser, out.as_uri())
+    yield page, errors
+    page.close()
 
 
 def data_source(page, name: str) -> dict:
@@ -215,6 +228,63 @@ def test_a_click_on_a_pixel_draws_its_bode_plot_from_the_netcdf(browser_page, re
         assert _shown(cells[2]) == _rounded(stderr), cells
         assert cells[3] == unit
     assert drawn_text(page, "pixel_title").startswith(f"pixel {pixel} ")
+    # Young's modulus first, the paper's E0 beside it, labelled so (issue 38 item 3)
+    main_modulus = str(fits["param_i"].values[0])                       # E_inf
+    assert [cells[0] for cells in drawn[:3]] == [f"{main_modulus}_young", main_modulus,
+                                                 f"{main_modulus}_shear"]
+    assert drawn[0][4] == "Young's modulus" and drawn[1][4].startswith(f"paper's {main_modulus}")
+    assert _shown(drawn[0][1]) == _rounded(float(stored[f"{main_modulus}_young"]) / map_view(
+        fits).units[f"{main_modulus}_young"][2])
+    assert errors == []
+
+
+@pytest.fixture(scope="module")
+def hertz_page(tmp_path_factory, browser):
+    """A Hertz map's page (``fit CURVES --model hertz``, then ``view --data CURVES``) in Chromium.
+
+    Yields (page, console errors, fits, curves) with the fits and curves as read from netCDF.
+    """
+    from tests.cli.test_young_first import TIP, hertz_curves
+
+    folder = tmp_path_factory.mktemp("hertz-view")
+    curves, fits, out = folder / "curves.nc", folder / "fits.nc", folder / "hertz.html"
+    hertz_curves(3).to_netcdf(curves)
+    assert main(["fit", str(curves), "--model", "hertz", "--tip", TIP, "--scheduler",
+                 "synchronous", "--no-progress", "--out", str(fits)]) == 0
+    assert main(["view", str(fits), "--data", str(curves), "--out", str(out)]) == 0
+    page, errors = open_page(browser, out.as_uri())
+    yield page, errors, xr.open_dataset(fits), xr.open_dataset(curves)
+    page.close()
+
+
+def test_a_hertz_map_leads_with_youngs_modulus_and_draws_the_clicked_force_curve(hertz_page):
+    """Issue 38 item 3: Young's modulus mapped by default and first in the drawn table (its
+    value the netCDF's), the paper's E beside it; the clicked pixel's approach and fit drawn."""
+    page, errors, fits, curves = hertz_page
+    view = map_view(fits, curves)
+    assert page.evaluate(f"() => ({MODEL})('parameter').value") == "E_young"
+    assert page.evaluate(f"() => ({MODEL})('colour_bar').title.text") == (
+        "Young's modulus E_young [kPa]")
+    np.testing.assert_allclose(_nan(data_source(page, "map_data")["value"]),
+                               fits["E_young"].values / 1e3, rtol=1e-12)
+    pixel = 2
+    data = data_source(page, "map_data")
+    page.mouse.click(*screen_position(page, data["x"][pixel], data["y"][pixel]))
+    page.wait_for_function(f"() => ({MODEL})('map_data').selected.indices[0] === {pixel}")
+    page.wait_for_function("(n) => { const v = Bokeh.index.find_one((" + MODEL + ")("
+                           "'pixel_table')); return v.shadow_el.querySelectorAll("
+                           "'.slick-row').length >= n; }", arg=3)
+    drawn = drawn_table(page)
+    assert [cells[0] for cells in drawn[:3]] == ["E_young", "E", "E_shear"]
+    assert drawn[0][4] == "Young's modulus" and drawn[1][4].startswith("paper's E")
+    factor = view.units["E_young"][2]                                   # kPa
+    assert drawn[0][3] == "kPa"
+    assert _shown(drawn[0][1]) == _rounded(float(fits["E_young"].values[pixel]) / factor)
+    assert _shown(drawn[1][1]) == _rounded(float(fits["E"].values[pixel]) / factor)
+    shown = data_source(page, "curve_data")
+    a, b = view.curves["offsets"][pixel], view.curves["offsets"][pixel + 1]
+    for key in ("position", "force", "fit_force"):               # float32 on the page
+        np.testing.assert_allclose(shown[key], view.curves[key][a:b], rtol=2e-6, atol=1e-6)
     assert errors == []
 
 

@@ -165,7 +165,7 @@ def crafted_report(tmp_path_factory):
 @pytest.fixture(scope="module")
 def chromium(tmp_path_factory):
     """tests/plotting/test_viewer_browser.py's helpers and a headless Chromium context (or a skip)."""
-    browser = pytest.importorskip("tests.test_viewer_browser")  # skips without playwright
+    browser = pytest.importorskip("tests.plotting.test_viewer_browser")  # skips without playwright
     if browser.CHROMIUM is None:
         pytest.skip("no Chromium at /usr/bin/chromium or on PATH (Debian: apt-get install -y "
                     "chromium; .ci/run installs it)")

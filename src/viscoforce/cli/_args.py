@@ -500,3 +500,16 @@ NUMERICS_FLAGS = FlagGroup("numerics", (
     Flag("--outer-radius", "length", None, "LENGTH",
          "outer radius of the grid (default: where the force is negligible)"),
 ))
+
+
+def choice_type(*choices: str, what: str):
+    """A text flag that must be one of ``choices`` (the message lists them)."""
+
+    def parse(text: str) -> str:
+        value = text.strip().lower()
+        if value not in choices:
+            raise argparse.ArgumentTypeError(f"{what} must be one of {', '.join(choices)}, got "
+                                             f"{text!r}")
+        return value
+
+    return parse

@@ -10,6 +10,7 @@ from viscoforce.cli._args import (
     Flag,
     FlagGroup,
     add_flags,
+    choice_type,
     format_names,
     frequency_type,
     integer_type,
@@ -19,19 +20,6 @@ from viscoforce.cli._fit_budget import HEIGHT_RECORDS, uncertainty_type
 from viscoforce.cli._fit_inputs import _MODELS
 
 _WEIGHTS = ("stderr", "relative")
-
-
-def choice_type(*choices: str, what: str):
-    """A text flag that must be one of ``choices`` (the message lists them)."""
-
-    def parse(text: str) -> str:
-        value = text.strip().lower()
-        if value not in choices:
-            raise argparse.ArgumentTypeError(f"{what} must be one of {', '.join(choices)}, got "
-                                             f"{text!r}")
-        return value
-
-    return parse
 
 
 def modes_type(text: str) -> int | str:
@@ -68,11 +56,12 @@ FIT_FLAGS = FlagGroup("model", (
     Flag("--contact-point", "length", None, "LENGTH",
          "ting: the contact point (tip position) held fixed (default: fitted)"),
     Flag("--sample-height", "length", None, "LENGTH",
-         "contact: the sample's thickness on its rigid support (a cell: 2-10um): the "
-         "bottom-effect correction of Garcia & Garcia 2018 (docs/bottom_effect.md)"),
+         "contact, hertz, ting: the sample's thickness on its rigid support (a cell: 2-10um): "
+         "the bottom-effect correction (Garcia & Garcia 2018 bonded, Dimitriadis et al. 2002 "
+         "sliding; docs/bottom_effect.md)"),
     Flag("--sample-base", choice_type("bonded", "sliding", what="--sample-base"), None,
-         "bonded|sliding", "contact --sample-height: the layer bonded to (default) or sliding on "
-         "its support"),
+         "bonded|sliding", "--sample-height: the layer bonded to (default) or sliding on its "
+         "support"),
     Flag("--accuracy", real_type(0.0), None, "REL",
          "--model auto: the relative model error required, in [1e-4, 0.1] (default 1e-3)"),
 ))
@@ -150,6 +139,13 @@ def _add_fit_flags(parser: argparse.ArgumentParser, *, required: bool, batch: bo
                         metavar="SOURCE=REL",
                         help="relative calibration uncertainty of the error budget: "
                              "spring-constant (default 10%%), sensitivity (5%%), tip (10%%), "
-                             "poisson (0.05); repeat for several")
+                             "poisson (0.05), sample-height (10%%, with --sample-height); "
+                             "repeat for several")
+    parser.add_argument("--budget", choices=("full", "calibration"), default="full",
+                        help="error budget: full (default: the calibration sources and the "
+                             "refits of the choices the data may not settle: height record, "
+                             "phase reference, fit window, contact point, sample height; a map "
+                             "refits the height record or phase reference, about 2x its fit) or "
+                             "calibration (no refits)")
     add_flags(parser, FIT_SYSTEM_FLAGS)
     add_flags(parser, NUMERICS_FLAGS)

@@ -150,7 +150,7 @@ def _fixed(args: argparse.Namespace, ds, kind: str) -> dict[str, Any]:
                 "drag": args.drag, "fit_drag": bool(args.fit_drag) or None,
                 "contact_point": args.contact_point,
                 "reference_frequency": args.reference_frequency,
-                "newtonian": False if args.no_newtonian else None}
+                "newtonian": False if args.no_newtonian else None, **_layer(args)}
     if model == "auto":
         bad = [b for b in _given(args, *contact_only) if b != "--drag"]
         if bad:
@@ -187,6 +187,7 @@ def _fixed(args: argparse.Namespace, ds, kind: str) -> dict[str, Any]:
         fixed["drag"] = args.drag
     if model == "hertz":
         fixed["tip"] = _hertz_tip(args, ds)
+        fixed.update(_layer(args))
     if model == "contact":
         fixed.update(**_tip_inputs(args, ds), indentation=args.indentation, drag=args.drag,
                      material=args.material or "sls", debye_length=args.debye_length)
@@ -199,7 +200,7 @@ def _fixed(args: argparse.Namespace, ds, kind: str) -> dict[str, Any]:
 
 
 def _layer(args: argparse.Namespace) -> dict[str, Any]:
-    """``sample_height`` and ``sample_base`` of the contact model, where given."""
+    """``sample_height`` and ``sample_base`` (contact, hertz, ting), where given."""
     if getattr(args, "sample_base", None) is not None and args.sample_height is None:
         raise UsageError("--sample-base describes the layer of --sample-height: give both")
     return {k: getattr(args, k) for k in ("sample_height", "sample_base")
@@ -361,5 +362,7 @@ def fit_one(args: argparse.Namespace, ds, kind: str):
                                                      if v is not None})
         return fit_curve(ds, args.model, segment=args.segment, modes=modes,
                          criterion=args.criterion, tip=fixed.get("tip"),
-                         poisson=args.poisson if args.model == "hertz" else None)
+                         poisson=args.poisson if args.model == "hertz" else None,
+                         sample_height=fixed.get("sample_height"),
+                         sample_base=fixed.get("sample_base"))
     return fit_step(ds, problem=fixed["problem"], poisson=args.poisson)

@@ -167,24 +167,42 @@ def _print_single(info: dict[str, Any]) -> None:
 
 
 def _print_map(info: dict[str, Any]) -> None:
+    """The map summary: Young's modulus first, then the fitted parameters, then shear moduli.
+
+    Young's moduli lead (issue 38 item 3: what people read first), over the good pixels of the
+    most common number of modes; the fitted moduli follow per number of modes, labelled as the
+    paper's convention (2/E = Σ(1 − ν²)/E_i, twice Johnson's E*). ``info`` is unchanged (the
+    ``--json`` object keeps its keys).
+    """
     from viscoforce.schema.fit import parameter_units
+
+    def quartiles(name: str, p: dict[str, Any], width: int, unit: str) -> None:
+        print(f"    {name:<{width}} median {show_value(p['median'], unit)}, IQR "
+              f"{show_value(p['q25'], unit)} .. {show_value(p['q75'], unit)}")
 
     left = ", ".join(f"{v} {k.replace('_', ' ')}" for k, v in info["left_out"].items() if v)
     print(f"model {info['model']}: {info['n_fits']} fits, {info['n_good']} good"
           + (f"; left out of the summary: {left}" if left else ""))
-    for modes, block in info["by_modes"].items():
-        print(f"  {modes} mode(s), {block['n']} good pixel(s):")
+    derived = info.get("derived") or {}
+    young = {n: p for n, p in derived.items() if n.endswith("_young")}
+    modes = info.get("modes")
+    pixels = (f"the {info['by_modes'][str(modes)]['n']} good pixel(s) of {modes} mode(s)"
+              if modes is not None and str(modes) in info["by_modes"] else "no good pixel")
+    if young:  # what people read first: Young's modulus (issue 38 item 3)
+        print(f"  Young's modulus (Poisson's ratio {info['poisson']:g}), {pixels}:")
+        for name, p in young.items():
+            quartiles(name, p, 12, parameter_units(name.rsplit("_", 1)[0]))
+    paper = (", fitted (moduli in the paper's convention 2/E = sum (1 - nu^2)/E_i, twice "
+             "Johnson's E*)") if young else ""
+    for count, block in info["by_modes"].items():
+        print(f"  {count} mode(s), {block['n']} good pixel(s){paper}:")
         for name, p in block["params"].items():
-            unit = parameter_units(name)
-            print(f"    {name:<8} median {show_value(p['median'], unit)}, IQR "
-                  f"{show_value(p['q25'], unit)} .. {show_value(p['q75'], unit)}")
-    if info.get("derived"):
-        print(f"  Young's and shear moduli (Poisson's ratio {info['poisson']:g}), the pixels of "
-              f"{info['modes']} mode(s):")
-        for name, p in info["derived"].items():
-            unit = parameter_units(name.rsplit("_", 1)[0])
-            print(f"    {name:<12} median {show_value(p['median'], unit)}, IQR "
-                  f"{show_value(p['q25'], unit)} .. {show_value(p['q75'], unit)}")
+            quartiles(name, p, 8, parameter_units(name))
+    rest = {n: p for n, p in derived.items() if n not in young}
+    if rest:
+        print(f"  shear moduli (Poisson's ratio {info['poisson']:g}), {pixels}:")
+        for name, p in rest.items():
+            quartiles(name, p, 12, parameter_units(name.rsplit("_", 1)[0]))
 
 
 def _fit_recording(run, *args: Any, **kwargs: Any):

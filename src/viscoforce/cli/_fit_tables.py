@@ -14,22 +14,16 @@ from viscoforce._files import write_text
 def table_rows(result) -> tuple[list[str], list[list[Any]]]:
     """A fit result as table rows: ``name (unit)`` headers and one row per curve/pixel.
 
-    Columns: the map's coordinates, each parameter and its stderr, the derived Young's and shear
-    moduli, the total interval of the error budget (``<name>_budget_lower``/``_upper``,
-    ``<name>_budget_determined``), ``redchi``, ``chi2_pvalue``, ``quality`` (maps),
-    ``success``, ``modes``; every column read over the rows by dim name
+    Columns: the map's coordinates, then :func:`viscoforce.io.fit_tables.fit_table_columns`
+    (each parameter and its stderr, Young's modulus before the paper's and the shear modulus
+    after it, the total interval of the error budget, ``redchi``, ``chi2_pvalue``,
+    ``quality`` (maps), ``success``, ``modes``); every column read over the rows by dim name
     (:func:`viscoforce.schema.flat_over`).
     """
+    from viscoforce.io.fit_tables import fit_table_columns
     from viscoforce.schema import flat_over
 
-    names = [str(n) for n in result["param_i"].values]
-    columns = [n for name in names for n in (name, f"{name}_stderr")]
-    columns += [str(n) for n in result.data_vars if str(n).endswith(
-        ("_young", "_shear", "_young_stderr", "_shear_stderr"))]
-    columns += [str(n) for n in result.data_vars if str(n).endswith(
-        ("_budget_lower", "_budget_upper", "_budget_determined"))]  # the error budget's interval
-    columns += [n for n in ("redchi", "chi2_pvalue", "quality", "success", "modes")
-                if n in result.variables]
+    columns = fit_table_columns(result)  # Young's modulus first (issue 38 item 3)
     dims = [str(d) for d in result["success"].dims]
     coords = [str(c) for c in result.coords
               if c not in ("param_i", "param_j", "omega", "time", "tip_position")

@@ -18,6 +18,7 @@ from viscoforce.cli._args import (
     UsageError,
     add_flags,
     add_outputs,
+    choice_type,
     format_names,
     frequency_type,
     quantity_type,
@@ -101,6 +102,12 @@ LOAD_FLAGS = FlagGroup(None, (
          "E_storage, E_loss, G_storage, G_loss per point to a spectrum"),
     Flag("--poisson", None, None, "NU",
          "the sample's Poisson's ratio in [0, 0.5] for those moduli (default 0.5)"),
+    Flag("--sample-height", "length", None, "LENGTH",
+         "with --tip: the sample's thickness on its rigid support (a cell: 2-10um): E', E'' "
+         "divided by the bottom-effect stiffness factor at each mean_indentation"),
+    Flag("--sample-base", choice_type("bonded", "sliding", what="--sample-base"), None,
+         "bonded|sliding", "--sample-height: the layer bonded to (default) or sliding on its "
+         "support"),
 ))
 
 
@@ -143,7 +150,8 @@ def _height_file_type(text: str) -> tuple[float, str]:
 _FLAGS = {"drag": "--drag", "drag_heights": "--drag-heights", "phase_lag": "--phase-lag",
           "phase_reference": "--phase-reference", "tip": "--tip", "poisson": "--poisson",
           "raw": "--raw", "spring_constant": "--spring-constant",
-          "sensitivity": "--sensitivity", "format": "--format", "path": ""}
+          "sensitivity": "--sensitivity", "format": "--format", "path": "",
+          "sample_height": "--sample-height", "sample_base": "--sample-base"}
 
 
 def _phase_lag(values: list | None) -> float | dict[float, float] | None:
@@ -205,6 +213,7 @@ def run_load(args: argparse.Namespace) -> int:
             sensitivity=args.sensitivity, phase_lag=_phase_lag(args.phase_lag),
             phase_reference=args.phase_reference, drag=args.drag,
             drag_heights=args.drag_heights, tip=args.tip, poisson=_poisson(args.poisson),
+            sample_height=args.sample_height, sample_base=args.sample_base,
             out=None if table else args.out, keep_streamed=False)
     except OptionError as exc:
         raise UsageError(exc.told(_FLAGS)) from None

@@ -20,10 +20,13 @@ from viscoforce.cli._args import (
     add_outputs,
 )
 from viscoforce.cli._fit_budget import (
+    Kept,
     budget_json,
-    choose_height_record,
+    budgeted,
     height_channel,
-    phase_reference_alternative,
+    map_alternatives,
+    recorded,
+    show,
     with_budget,
     with_map_budget,
 )
@@ -78,8 +81,9 @@ def add_fit(parser: argparse.ArgumentParser) -> None:
                         help="a map: keep each pixel's lmfit report in --out (the text variable "
                              "fit_report; one more least-squares run per pixel)")
     parser.add_argument("--plot-variable", default=None, metavar="NAME",
-                        help="the variable of a map's --plot (default: the first fitted "
-                             "parameter; any per-pixel variable, e.g. E0_young, redchi)")
+                        help="the variable of a map's --plot (default: Young's modulus of the "
+                             "main modulus, e.g. E_young, else the first fitted parameter; any "
+                             "per-pixel variable, e.g. E0 (the paper's), redchi)")
     parser.add_argument("--json", action="store_true", help="print one JSON object (SI units)")
     parser.add_argument("--progress", action=argparse.BooleanOptionalAction, default=None,
                         help="progress bar of map fits (default: when stderr is a terminal)")
@@ -213,22 +217,23 @@ def run_fit(args: argparse.Namespace) -> int:
         progress = sys.stderr.isatty() if args.progress is None else args.progress
         options = {} if args.identifiability is None else {
             "identifiability": args.identifiability}
-        result, texts = _fit_recording(
-            fit_map, ds, args.model, modes=1 if args.modes is None else args.modes,
-            criterion=args.criterion, scheduler=args.scheduler, workers=args.workers,
-            progress=progress, segment=args.segment, poisson=args.poisson,
-            reports=args.reports, **options, **fixed)
-        result = with_map_budget(args, result, fixed)
+        def fit_all(data, show_progress=progress):
+            return fit_map(data, args.model, modes=1 if args.modes is None else args.modes,
+                           criterion=args.criterion, scheduler=args.scheduler,
+                           workers=args.workers, progress=show_progress, segment=args.segment,
+                           poisson=args.poisson, reports=args.reports, **options, **fixed)
+
+        result, texts = _fit_recording(fit_all, ds)
+        result, alternatives, described = map_alternatives(
+            args, ds, kind, result, lambda data: fit_all(data, False), read_data)
+        result = with_map_budget(args, result, fixed, alternatives, described)
         info = _map_json(result)
     else:
-        result, texts = _fit_recording(fit_one, args, ds, kind)
-        result, other, why = choose_height_record(args, ds, kind, result, fit_one, read_data)
-        phase, phase_why = phase_reference_alternative(args, ds, kind, result, fit_one,
-                                                       read_data)
-        result = with_budget(args, result, {"height_record": other, "phase_reference": phase},
-                             {"height_record": why, "phase_reference": phase_why})
-        if phase_why:
-            result.attrs["phase_reference_budget"] = phase_why
+        first, first_texts, first_caught = recorded(fit_one, args, ds, kind)
+        kept = Kept(first, ds, first_texts, first_caught)
+        kept, result, why = budgeted(args, kept, kind, fit_one, read_data)
+        show(kept.caught)
+        texts = kept.texts
         info = _single_json(result)
         info.update(budget_json(result, info["params"]))
         if why:

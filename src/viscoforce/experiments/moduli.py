@@ -21,6 +21,15 @@ divided by S. The error of δ0 is not included (it enters S only as δ0^½ for a
 common to all frequencies of a curve). The hydrodynamic drag B is subtracted here only when given
 and the spectrum's own ``attrs["drag"]`` is 0 (it is never subtracted twice); it moves k* but
 not its error, so σ_Re and σ_Im are those of the spectrum's own k*.
+
+A sample of finite thickness (``sample_height`` h on a rigid support, ``sample_base`` bonded or
+sliding) stiffens the contact: k*(ω) = E*(ω)·S(δ0)·g(δ0, h) with the bottom-effect stiffness
+factor g of :func:`viscoforce.physics.bottom_effect.stiffness_factor` (geometric, so by the
+correspondence principle it divides E′ and E″ alike and leaves the loss tangent unchanged). With
+``sample_height`` E*, its stderr and the derived moduli are divided by g at each point's δ0; the
+series is chosen there for the sample's Poisson's ratio (Garcia & Garcia 2018 for a bonded
+incompressible layer, else Dimitriadis et al. 2002, paraboloid or sphere only), and a δ0 beyond
+the series' accepted range is refused before anything is computed.
 """
 
 from __future__ import annotations
@@ -35,6 +44,7 @@ from viscoforce._limits import DRAG_RANGE
 from viscoforce._validation import require_plausible
 from viscoforce.exceptions import ModelValidityError, ParameterError
 from viscoforce.experiments.corrections import CORRELATION
+from viscoforce.physics.bottom_effect import bottom_effect_series, max_depth, stiffness_factor
 from viscoforce.physics.tips import DEFAULT_POISSON, Tip, tip_from, young_from_paper
 
 __all__ = ["MODULUS_VARIABLES", "add_complex_modulus"]
@@ -44,7 +54,8 @@ MODULUS_VARIABLES = ("E_storage", "E_loss", "G_storage", "G_loss")
 
 
 def add_complex_modulus(spectrum: xr.Dataset, tip: Tip | str, *, poisson: float | None = None,
-                        drag: float | None = None) -> xr.Dataset:
+                        drag: float | None = None, sample_height: float | None = None,
+                        sample_base: str | None = None) -> xr.Dataset:
     """The spectrum with E′, E″, G′, G″ [Pa] per point and their stderr (module docstring).
 
     Parameters
@@ -59,20 +70,30 @@ def add_complex_modulus(spectrum: xr.Dataset, tip: Tip | str, *, poisson: float 
     drag : float, optional
         Hydrodynamic drag B [N·s/m] to subtract (refused when the spectrum already had one
         subtracted).
+    sample_height : float, optional
+        The sample's thickness h [m] on its rigid support: the bottom-effect correction
+        (module docstring); default none (a half-space).
+    sample_base : {"bonded", "sliding"}, optional
+        The layer bonded to (default) or sliding on its support; only with ``sample_height``.
 
     Returns
     -------
     xarray.Dataset
         ``spectrum`` with ``E_storage``, ``E_loss``, ``G_storage``, ``G_loss`` and their
         ``_stderr`` over the spectrum's dims (NaN where a point has no indentation > 0);
-        ``attrs`` ``tip``, ``poisson``, ``complex_modulus``.
+        ``attrs`` ``tip``, ``poisson``, ``complex_modulus``; with ``sample_height`` also
+        ``sample_height`` [m], ``sample_base``, ``bottom_effect_series`` and the range of the
+        stiffness factor over the points, ``bottom_effect_factor_min`` and
+        ``bottom_effect_factor_max``.
 
     Raises
     ------
     ModelValidityError
         No ``mean_indentation`` (no contact point found).
     ParameterError
-        A bad tip, Poisson's ratio or drag, or a drag subtracted twice.
+        A bad tip, Poisson's ratio, drag, sample height or base, a drag subtracted twice, a tip
+        or Poisson's ratio no bottom-effect series covers, or an operating indentation beyond
+        the series' accepted range (the message names ``sample_height``).
     """
     tip = tip_from(tip)
     if tip is None:
@@ -97,7 +118,12 @@ def add_complex_modulus(spectrum: xr.Dataset, tip: Tip | str, *, poisson: float 
     chi = np.radians(phase)
     k = stiffness * np.exp(1j * chi) - 1j * omega * float(drag or 0.0)
     depth = spectrum["mean_indentation"].broadcast_like(stiffness)
+    layer = _layer(tip, float(nu), sample_height, sample_base)
     size = xr.apply_ufunc(_contact_size, depth, kwargs={"tip": tip})
+    if layer is not None:
+        bottom = xr.apply_ufunc(_stiffness_factor, spectrum["mean_indentation"],
+                                kwargs={"tip": tip, **layer})
+        size = size * bottom.broadcast_like(size)
     modulus = k / size  # the paper's E*(ω)
     s_err = _stderr(spectrum, "stiffness", stiffness)
     t_err = stiffness * np.radians(_stderr(spectrum, "phase", stiffness))
@@ -119,12 +145,50 @@ def add_complex_modulus(spectrum: xr.Dataset, tip: Tip | str, *, poisson: float 
             {**attrs, "long_name": f"standard error of {what}"})
     result = spectrum.assign(out)
     result.attrs.update(tip.as_attrs())
+    if layer is not None:
+        g = np.asarray(bottom, dtype=float)
+        g = g[np.isfinite(g)]
+        series = bottom_effect_series(tip, poisson=float(nu), bonded=layer["bonded"])
+        result.attrs.update(
+            sample_height=float(layer["sample_height"]),
+            sample_base="bonded" if layer["bonded"] else "sliding",
+            bottom_effect_series=f"{series.name}: {series.reference}, accepted for "
+                                 f"{series.variable} <= {series.max_variable:g}",
+            bottom_effect_factor_min=float(g.min()) if g.size else math.nan,
+            bottom_effect_factor_max=float(g.max()) if g.size else math.nan)
     result.attrs.update(
         tip=tip.describe(), poisson=float(nu),
         complex_modulus=("E* = (k* - i omega B)/S(mean_indentation), S = (dF/d delta)/E of the "
-                         "tip; E_* = Young's Y* = E*(1 - nu^2)/2, G_* = Y*/(2(1 + nu)); "
+                         "tip" + ("" if layer is None else " times the bottom-effect stiffness "
+                                  "factor g(mean_indentation, sample_height)") +
+                         "; E_* = Young's Y* = E*(1 - nu^2)/2, G_* = Y*/(2(1 + nu)); "
                          f"drag subtracted here: {float(drag or 0.0):g} N*s/m"))
     return result
+
+
+def _layer(tip: Tip, poisson: float, sample_height: float | None,
+           sample_base: str | None) -> dict[str, Any] | None:
+    """The bottom-effect keywords of the spectrum's layer (None: a half-space), checked."""
+    if sample_height is None:
+        if sample_base is not None:
+            raise ParameterError("sample_base describes the layer of sample_height: give both")
+        return None
+    if sample_base not in (None, "bonded", "sliding"):
+        raise ParameterError(f"sample_base must be 'bonded' or 'sliding', got {sample_base!r}")
+    bonded = sample_base != "sliding"
+    max_depth(tip, sample_height, poisson=poisson, bonded=bonded)  # refuses what no series covers
+    return {"sample_height": sample_height, "poisson": poisson, "bonded": bonded}
+
+
+def _stiffness_factor(depth: np.ndarray, *, tip: Tip, sample_height: float, poisson: float,
+                      bonded: bool) -> np.ndarray:
+    """g(δ0, h) where δ0 > 0, NaN elsewhere; all depths checked before any is used."""
+    d = np.asarray(depth, dtype=float)
+    ok = np.isfinite(d) & (d > 0)
+    out = np.full(d.shape, np.nan)
+    if ok.any():
+        out[ok] = stiffness_factor(tip, d[ok], sample_height, poisson=poisson, bonded=bonded)
+    return out
 
 
 def _contact_size(depth: np.ndarray, *, tip: Tip) -> np.ndarray:

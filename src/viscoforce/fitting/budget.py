@@ -13,9 +13,16 @@ when a choice the data do not settle is made the other way, one per source (issu
   the power of the size in the tip's force shape (:mod:`viscoforce.physics.tips`);
 - ``poisson``: Poisson's ratio of the sample (0.5 − 0.05 by default) moves the Young's and shear
   moduli, not the paper's E;
-- ``height_record``, ``model``, … : a refit with the other choice (the sensor or the piezo
-  height; another model within ΔBIC 6), given as the other fit's values
-  (:func:`alternative_shifts`).
+- ``height_record``, ``phase_reference``, ``model``: a refit with the other choice (the sensor
+  or the piezo height; the sensor's own phase instead of the piezo or a fitted delay; another
+  model within ΔBIC 6), given as the other fit's values (:func:`alternative_shifts`);
+- ``fit_window``: a refit without the fitted window's last quarter (the top quarter of a
+  spectrum's log-frequency span; the last quarter in time of a curve's fitted samples:
+  :func:`viscoforce.fitting.budget_choices.narrowed_window`);
+- ``contact_point``: a refit with the contact point held where the approach rises above its
+  noise instead of fitted (:func:`viscoforce.fitting.budget_choices.other_contact_point`);
+- ``sample_height``: a refit with the layer 10 % thicker (the bottom-effect correction's input,
+  ±10 % from a topography step by default; mirrored like the calibration sources).
 
 Each shift is the signed change of the parameter (its own unit); the calibration shifts are
 those of the + direction (their − direction is the mirror to first order). The total interval
@@ -46,6 +53,7 @@ CALIBRATION_DEFAULTS: dict[str, tuple[float, str]] = {
     "sensitivity": (0.05, "deflection sensitivity from a hard-surface ramp, +-5 %"),
     "tip": (0.10, "nominal tip radius or half-angle tangent, +-10 %"),
     "poisson": (0.05, "Poisson's ratio 0.5 of a near-incompressible sample, -0.05"),
+    "sample_height": (0.10, "the layer's thickness from a topography step, +-10 %"),
 }
 #: Parameters that are exponents (their spread is judged in absolute terms, 0.1).
 EXPONENTS = ("alpha", "beta", "m")
@@ -54,8 +62,11 @@ NUISANCE = ("baseline", "baseline_slope", "contact_point", "F_inf", "z_inf", "dr
 #: How a source reads in a sentence ("moves ... with the <label>").
 LABELS = {"spring_constant": "spring constant", "sensitivity": "deflection sensitivity",
           "tip": "tip size", "poisson": "Poisson's ratio", "height_record": "height record",
-          "phase_reference": "phase reference",
+          "phase_reference": "phase reference", "fit_window": "fit window",
+          "contact_point": "contact point method", "sample_height": "sample height",
           "model": "model among the near-ties"}
+#: Sources given as the + direction of a ± uncertainty: their − direction mirrors them.
+_MIRRORED = ("spring_constant", "sensitivity", "tip", "sample_height")
 #: A choice that moves a parameter by more than this many stderr is said to.
 SAY_Z = 2.0
 #: A total interval wider than this factor (positive parameters) is "not determined".
@@ -160,49 +171,190 @@ def calibration_descriptions(uncertainties: Mapping[str, float] | None = None
             for k in CALIBRATION_DEFAULTS}
 
 
-def alternative_shifts(ds: xr.Dataset, other: xr.Dataset) -> dict[str, float]:
-    """{parameter: other's value − this one's} over the parameters both fits report."""
-    out = {}
+def alternative_shifts(ds: xr.Dataset, other: xr.Dataset, *, where: Any = None
+                       ) -> dict[str, Any]:
+    """{parameter: other's value − this one's} over the parameters both fits report.
+
+    Single fits give floats (a non-finite difference is left out); maps give the difference
+    per pixel (NaN where either failed, or where ``where`` — a boolean per pixel — is False).
+    """
+    out: dict[str, Any] = {}
     for n in _parameters(ds) + _derived(ds):
-        if n in other and other[n].size == 1 and ds[n].size == 1:
+        if n not in other:
+            continue
+        if ds[n].size == 1 and other[n].size == 1:
             a, b = float(ds[n]), float(other[n])
             if math.isfinite(a) and math.isfinite(b):
                 out[n] = b - a
+        elif ds[n].dims == other[n].dims and ds[n].shape == other[n].shape:
+            diff = other[n].drop_vars(list(other[n].coords)) - ds[n].drop_vars(
+                list(ds[n].coords))
+            diff = diff.assign_coords({d: ds[n][d] for d in ds[n].dims if d in ds[n].coords})
+            out[n] = diff if where is None else diff.where(where)
     return out
 
 
-def _undetermined(name: str, value: float, lo: float, hi: float) -> bool:
+def _undetermined(name: str, value: Any, lo: Any, hi: Any) -> Any:
     """Whether the total interval leaves the parameter not determined by the data.
 
     An exponent's interval wider than 0.1; a positive quantity's (a modulus, a time, a
-    viscosity: not an instrument's offset) wider than a factor 2 or reaching zero.
+    viscosity: not an instrument's offset) wider than a factor 2 or reaching zero. Scalars or
+    arrays (a map's pixels) alike.
     """
     if name in EXPONENTS:
-        return hi - lo > EXPONENT_SPAN
-    if value > 0 and name not in NUISANCE:
-        return lo <= 0 or hi > FACTOR * lo
-    return False
+        return (hi - lo) > EXPONENT_SPAN
+    if name in NUISANCE:
+        return value != value  # False everywhere (NaN-safe shape)
+    return (value > 0) & ((lo <= 0) | (hi > FACTOR * lo))
 
 
-def _merged(ds: xr.Dataset, shifts: Mapping[str, Mapping[str, float]],
+def _unidentified(ds: xr.Dataset, name: str, value: xr.DataArray) -> Any:
+    """Where the fit's own identifiability test says ``name`` is not determined (code ≠ 0).
+
+    A one-sided or flat profile (or a local stderr > |value|) is never "determined" by the
+    budget, however narrow its calibration shifts (issue 37 item 4). A derived modulus
+    (``E0_young``) follows its parameter's code; instrument parameters are judged by their own
+    rule (:data:`NUISANCE`) and pass.
+    """
+    base = name.removesuffix("_young").removesuffix("_shear")
+    if base == "ting_E0":
+        base = "E0"
+    if "identifiability" not in ds or base in NUISANCE or "param_i" not in ds[
+            "identifiability"].dims or base not in [str(n) for n in ds["param_i"].values]:
+        return value != value  # False everywhere (NaN-safe shape)
+    code = ds["identifiability"].sel(param_i=base, drop=True)
+    code = code.drop_vars([c for c in code.coords if c not in value.dims])
+    return (code != 0) & value.notnull()
+
+
+def _merged(ds: xr.Dataset, shifts: Mapping[str, Mapping[str, Any]],
             descriptions: Mapping[str, str] | None
-            ) -> tuple[dict[str, dict[str, float]], dict[str, str]]:
+            ) -> tuple[dict[str, dict[str, Any]], dict[str, str]]:
     """The budget ``ds`` already carries, with ``shifts`` added (a source given again replaces)."""
-    old: dict[str, dict[str, float]] = {}
+    old: dict[str, dict[str, Any]] = {}
     text: dict[str, str] = {}
     if "budget_source" in ds.coords:
         names = [str(s) for s in ds["budget_source"].values]
         for var in ds.data_vars:
             if str(var).endswith("_systematic"):
                 param = str(var)[:-len("_systematic")]
-                for s, v in zip(names, ds[var].values, strict=True):
-                    old.setdefault(s, {})[param] = float(v)
+                for s in names:
+                    old.setdefault(s, {})[param] = ds[var].sel(budget_source=s, drop=True)
         for part in str(ds.attrs.get("budget_sources", "")).split("; "):
             key, sep, what = part.partition(": ")
             if sep:
                 text[key] = what
     merged = {**old, **{k: dict(v) for k, v in shifts.items()}}
     return merged, {**text, **dict(descriptions or {})}
+
+
+def _label(source: str) -> str:
+    return LABELS.get(source, source.replace("_", " "))
+
+
+def _scalar_notes(name: str, sources: list[str], row: xr.DataArray, stderr: xr.DataArray,
+                  determined: bool, lo: float, hi: float, unbounded: bool = False
+                  ) -> list[str]:
+    """One sentence per choice moving a single fit's parameter > 2 stderr, and if undetermined."""
+    notes = []
+    err = float(stderr)
+    for s, shift in zip(sources, row.values, strict=True):
+        if math.isfinite(err) and err > 0 and abs(shift) > SAY_Z * err:
+            notes.append(f"{name} moves by {shift:+.3g} ({shift / err:+.1f} stderr) with "
+                         f"the {_label(s)}")
+    if unbounded:
+        notes.append(f"{name} is not determined by these data: the fit's identifiability test "
+                     f"does not bound it (the budget's interval [{lo:.4g}, {hi:.4g}] is the "
+                     "curvature's, not a limit)")
+    elif not determined:
+        notes.append(f"{name} is not determined by these data: the choices they do not "
+                     f"settle put it anywhere in [{lo:.4g}, {hi:.4g}]")
+    return notes
+
+
+def _map_notes(name: str, sources: list[str], row: xr.DataArray, stderr: xr.DataArray,
+               bad: xr.DataArray, fitted: xr.DataArray, what: str) -> list[str]:
+    """A map's counts: pixels a choice moves by > 2 stderr, pixels not determined."""
+    n = int(fitted.sum())
+    notes = []
+    for s in sources:
+        moved = (abs(row.sel(budget_source=s)) > SAY_Z * stderr) & (stderr > 0) & fitted
+        if int(moved.sum()):
+            notes.append(f"{name} moves by more than {SAY_Z:g} stderr with the {_label(s)} on "
+                         f"{int(moved.sum())} of {n} pixels")
+    n_bad = int((bad & fitted).sum())
+    if n_bad:
+        notes.append(f"{name} is not determined by these data on {n_bad} of {n} pixels "
+                     f"({what})")
+    return notes
+
+
+def _with_budget(ds: xr.Dataset, shifts: Mapping[str, Mapping[str, Any]],
+                 descriptions: Mapping[str, str], *, per_pixel: bool, what: str) -> xr.Dataset:
+    """The one rule set of :func:`add_budget` (a single fit) and :func:`add_map_budget` (a map)."""
+    sources = [s for s in shifts if shifts[s]]
+    out = ds.drop_vars([v for v in ds.variables if str(v).endswith(
+        ("_systematic", "_budget_lower", "_budget_upper", "_budget_determined"))
+        or v == "budget_source"])
+    if not sources:
+        return out
+    notes: list[str] = []
+    mirrored = [s for s in sources if s in _MIRRORED]  # ± to first order
+    for name in _parameters(ds) + _derived(ds):
+        value = ds[name]
+        if not per_pixel and value.size != 1:
+            continue
+        value = value.drop_vars([c for c in value.coords if c not in value.dims])
+        stderr = (ds[f"{name}_stderr"].drop_vars(
+            [c for c in ds[f"{name}_stderr"].coords if c not in value.dims])
+            if f"{name}_stderr" in ds else xr.full_like(value, np.nan, dtype=float))
+        unit = _unit(ds, name)
+        row = xr.concat([xr.zeros_like(value, dtype=float) + _shift_of(shifts[s], name, value)
+                         for s in sources], dim="budget_source").assign_coords(
+            budget_source=("budget_source", np.asarray(sources, dtype=str)))
+        out[f"{name}_systematic"] = row.assign_attrs(
+            units=unit, long_name=f"shift of {name} when each source's choice is made otherwise")
+        width = 2.0 * stderr.where(np.isfinite(stderr), 0.0)
+        estimates = xr.concat([value.astype(float).expand_dims(budget_source=["value"]),
+                               value + row, *([(value - row.sel(budget_source=mirrored))
+                                               .assign_coords(budget_source=[f"-{m}" for m in
+                                                                             mirrored])]
+                                              if mirrored else [])], dim="budget_source")
+        lo = estimates.min("budget_source") - width
+        hi = estimates.max("budget_source") + width
+        out[f"{name}_budget_lower"] = lo.assign_attrs(
+            units=unit, long_name=f"lower end of {name}'s total interval")
+        out[f"{name}_budget_upper"] = hi.assign_attrs(
+            units=unit, long_name=f"upper end of {name}'s total interval")
+        unbounded = _unidentified(ds, name, value)
+        bad = _undetermined(name, value, lo, hi) | unbounded
+        fitted = value.notnull()
+        determined = (~bad).astype(int)
+        out[f"{name}_budget_determined"] = (determined.where(fitted) if per_pixel
+                                            else determined).assign_attrs(
+            units="1", long_name=f"1: {name} determined by these data within its budget")
+        if name in NUISANCE:  # in the budget, not in the sentences
+            continue
+        if per_pixel:
+            notes += _map_notes(name, sources, row, stderr, bad, fitted, what)
+        else:
+            notes += _scalar_notes(name, sources, row, stderr, not bool(bad), float(lo),
+                                   float(hi), bool(unbounded))
+    out = out.assign_coords(budget_source=("budget_source", np.asarray(sources, dtype=str)))
+    out.attrs["budget_sources"] = "; ".join(
+        f"{s}: {descriptions.get(s, CALIBRATION_DEFAULTS.get(s, ('', s))[1])}" for s in sources)
+    out.attrs["budget_notes"] = " | ".join(notes) if notes else "none"
+    return out
+
+
+def _shift_of(row: Mapping[str, Any], name: str, value: xr.DataArray) -> Any:
+    """A source's shift of ``name``: 0 where it has none, NaN (a failed refit) as 0."""
+    shift = row.get(name, 0.0)
+    if isinstance(shift, xr.DataArray):
+        shift = shift.drop_vars([c for c in shift.coords if c not in value.dims])
+        return shift.fillna(0.0)
+    shift = float(shift)
+    return shift if math.isfinite(shift) else 0.0
 
 
 def add_budget(ds: xr.Dataset, shifts: Mapping[str, Mapping[str, float]],
@@ -215,6 +367,7 @@ def add_budget(ds: xr.Dataset, shifts: Mapping[str, Mapping[str, float]],
         One fit result (scalar parameters).
     shifts : mapping
         {source: {parameter: shift}} (:func:`calibration_shifts`, :func:`alternative_shifts`).
+        A source given again replaces the one ``ds`` already carries.
     descriptions : mapping, optional
         {source: what the choice was} (stated in ``attrs["budget_sources"]``).
 
@@ -227,100 +380,40 @@ def add_budget(ds: xr.Dataset, shifts: Mapping[str, Mapping[str, float]],
         ``budget_notes`` (one sentence per choice that moves a parameter by more than 2 stderr
         and per parameter not determined).
     """
-    shifts, descriptions = _merged(ds, shifts, descriptions)
-    sources = [s for s in shifts if shifts[s]]
-    out = ds.drop_vars([v for v in ds.variables if str(v).endswith(
-        ("_systematic", "_budget_lower", "_budget_upper", "_budget_determined"))
-        or v == "budget_source"])
-    if not sources:
-        return out
-    notes: list[str] = []
-    for name in _parameters(ds) + _derived(ds):
-        if ds[name].size != 1:
-            continue
-        value = float(ds[name])
-        stderr = float(ds[f"{name}_stderr"]) if f"{name}_stderr" in ds else math.nan
-        row = np.array([float(shifts[s].get(name, 0.0)) for s in sources])
-        attrs = {"units": _unit(ds, name),
-                 "long_name": f"shift of {name} when each source's choice is made otherwise"}
-        out[f"{name}_systematic"] = xr.DataArray(row, dims=("budget_source",), attrs=attrs)
-        width = 2.0 * stderr if math.isfinite(stderr) else 0.0
-        estimates = np.concatenate([[value], value + row])
-        mirrored = [s for s in sources if s in ("spring_constant", "sensitivity", "tip")]  # ±
-        estimates = np.concatenate([estimates, value - np.array(
-            [shifts[s].get(name, 0.0) for s in mirrored])])
-        lo, hi = float(estimates.min() - width), float(estimates.max() + width)
-        out[f"{name}_budget_lower"] = xr.DataArray(lo, attrs={
-            "units": attrs["units"], "long_name": f"lower end of {name}'s total interval"})
-        out[f"{name}_budget_upper"] = xr.DataArray(hi, attrs={
-            "units": attrs["units"], "long_name": f"upper end of {name}'s total interval"})
-        determined = not _undetermined(name, value, lo, hi)
-        out[f"{name}_budget_determined"] = xr.DataArray(int(determined), attrs={
-            "units": "1", "long_name": f"1: {name} determined by these data within its budget"})
-        if name in NUISANCE:  # in the budget, not in the sentences
-            continue
-        for s, shift in zip(sources, row, strict=True):
-            if math.isfinite(stderr) and stderr > 0 and abs(shift) > SAY_Z * stderr:
-                notes.append(f"{name} moves by {shift:+.3g} ({shift / stderr:+.1f} stderr) with "
-                             f"the {LABELS.get(s, s.replace('_', ' '))}")
-        if not determined:
-            notes.append(f"{name} is not determined by these data: the choices they do not "
-                         f"settle put it anywhere in [{lo:.4g}, {hi:.4g}]")
-    out = out.assign_coords(budget_source=("budget_source", np.asarray(sources, dtype=str)))
-    out.attrs["budget_sources"] = "; ".join(
-        f"{s}: {(descriptions or {}).get(s, CALIBRATION_DEFAULTS.get(s, ('', s))[1])}"
-        for s in sources)
-    out.attrs["budget_notes"] = " | ".join(notes) if notes else "none"
-    return out
+    shifts, text = _merged(ds, shifts, descriptions)
+    return _with_budget(ds, shifts, text, per_pixel=False, what="")
 
 
-def add_map_budget(ds: xr.Dataset, uncertainties: Mapping[str, float] | None = None
-                   ) -> xr.Dataset:
-    """A map's fit result with its calibration budget per pixel (the rules of :func:`add_budget`).
+def add_map_budget(ds: xr.Dataset, uncertainties: Mapping[str, float] | None = None,
+                   alternatives: Mapping[str, Mapping[str, xr.DataArray]] | None = None,
+                   descriptions: Mapping[str, str] | None = None) -> xr.Dataset:
+    """A map's fit result with its budget per pixel (the rules of :func:`add_budget`).
 
-    ``<name>_systematic`` over (``budget_source``, the pixel dims), ``<name>_budget_lower`` /
-    ``_upper`` and ``<name>_budget_determined`` per pixel (0: the pixel's value is not determined
-    by these data); ``attrs["budget_notes"]`` counts the pixels per rule.
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        A map's fit result (parameters over the pixel dims).
+    uncertainties : mapping, optional
+        Relative calibration uncertainties (:func:`check_uncertainties`).
+    alternatives : mapping, optional
+        {source: {parameter: shift per pixel}} of choices refitted the other way (the height
+        record, the phase reference: :func:`alternative_shifts` of two map results); NaN where
+        a pixel's choice is settled or its refit failed (no shift).
+    descriptions : mapping, optional
+        {source: what the choice was} of the alternatives.
+
+    Returns
+    -------
+    xarray.Dataset
+        ``<name>_systematic`` over (``budget_source``, the pixel dims), ``<name>_budget_lower``
+        / ``_upper`` and ``<name>_budget_determined`` per pixel (0: the pixel's value is not
+        determined by these data); ``attrs["budget_notes"]`` counts the pixels per rule.
     """
     factors = calibration_factors(ds, uncertainties)
-    sources = list(factors)
-    out = ds.copy()
-    if not sources:
-        return out
-    notes = []
-    mirrored = [s for s in sources if s in ("spring_constant", "sensitivity", "tip")]
-    for name in _parameters(ds) + _derived(ds):
-        value = ds[name]
-        stderr = ds[f"{name}_stderr"] if f"{name}_stderr" in ds else xr.zeros_like(value)
-        shifts = xr.concat([value * factors[s].get(name, 0.0) for s in sources],
-                           dim="budget_source")
-        out[f"{name}_systematic"] = shifts.assign_attrs(
-            units=_unit(ds, name),
-            long_name=f"shift of {name} when each source's choice is made otherwise")
-        up = shifts.clip(min=0).max("budget_source")
-        mirror = [abs(value * factors[s].get(name, 0.0)) for s in mirrored]
-        down = xr.concat([(-shifts).clip(min=0).max("budget_source"), *mirror],
-                         dim="m").max("m")
-        up = xr.concat([up, *mirror], dim="m").max("m")
-        width = 2.0 * stderr.fillna(0.0)
-        lo, hi = value - down - width, value + up + width
-        unit = _unit(ds, name)
-        out[f"{name}_budget_lower"] = lo.assign_attrs(units=unit)
-        out[f"{name}_budget_upper"] = hi.assign_attrs(units=unit)
-        if name in EXPONENTS:
-            bad = (hi - lo) > EXPONENT_SPAN
-        elif name in NUISANCE:
-            bad = xr.zeros_like(value, dtype=bool)
-        else:
-            bad = (value > 0) & ((lo <= 0) | (hi > FACTOR * lo))
-        out[f"{name}_budget_determined"] = (~bad).astype(int).where(value.notnull()).assign_attrs(
-            units="1", long_name=f"1: {name} determined by these data within its budget")
-        n_bad = int(bad.where(value.notnull(), False).sum())
-        if n_bad and name not in NUISANCE:
-            notes.append(f"{name} is not determined by these data on {n_bad} of "
-                         f"{int(value.notnull().sum())} pixels (calibration budget)")
-    out = out.assign_coords(budget_source=("budget_source", np.asarray(sources, dtype=str)))
+    shifts: dict[str, dict[str, Any]] = {
+        s: {n: ds[n] * f for n, f in row.items()} for s, row in factors.items()}
+    shifts.update({s: dict(v) for s, v in (alternatives or {}).items() if v})
     text = calibration_descriptions(uncertainties)
-    out.attrs["budget_sources"] = "; ".join(f"{s}: {text[s]}" for s in sources)
-    out.attrs["budget_notes"] = " | ".join(notes) if notes else "none"
-    return out
+    text.update(descriptions or {})
+    what = "its budget" if alternatives else "calibration budget"
+    return _with_budget(ds, shifts, text, per_pixel=True, what=what)

@@ -173,7 +173,8 @@ def required_tip(curves: xr.Dataset, tip: Any, model: str):
 
 def fit_curve(curves: xr.Dataset, model: str, *, curve: int = 0, segment: int | None = None,
               modes: int | str = 1, criterion: str = "bic", tip: Any = None,
-              poisson: float | None = None) -> xr.Dataset:
+              poisson: float | None = None, sample_height: float | None = None,
+              sample_base: str | None = None) -> xr.Dataset:
     """Fit one segment of one measured force curve: ``relaxation``, ``hertz`` or ``creep``.
 
     * ``relaxation`` — F(t) = F_inf + Σ dF_i e^{−t/τ_i} on a constant-height hold (τ_i are
@@ -207,6 +208,12 @@ def fit_curve(curves: xr.Dataset, model: str, *, curve: int = 0, segment: int | 
         The tip (hertz; ``"sphere:5um"`` etc.); default the file's own when it records one.
     poisson : float, optional
         Poisson's ratio in [0, 0.5] of ``E_young``, ``E_shear`` (hertz; default 0.5).
+    sample_height : float, optional
+        Hertz: the sample's thickness [m] on its rigid support (the bottom-effect correction,
+        :mod:`viscoforce.physics.bottom_effect`); ``attrs["bottom_effect_factor"]`` is then the
+        force factor at the deepest fitted indentation.
+    sample_base : {"bonded", "sliding"}, optional
+        Hertz, with ``sample_height``: the layer bonded to (default) or sliding on its support.
 
     Returns
     -------
@@ -237,10 +244,23 @@ def fit_curve(curves: xr.Dataset, model: str, *, curve: int = 0, segment: int | 
         from viscoforce.physics.tips import tip_from
 
         fixed["tip"] = tip_from(required_tip(curves, tip, "hertz"))
+        fixed.update({k: v for k, v in (("sample_height", sample_height),
+                                        ("sample_base", sample_base)) if v is not None})
+    elif sample_height is not None or sample_base is not None:
+        raise ParameterError(f"sample_height and sample_base correct a contact law (hertz); "
+                             f"model {model!r} has none")
     ds = fit_data(data, model, modes=modes, criterion=criterion, **fixed)
     ds.attrs["validity"] = validity_note(model, ds)
     if model == "hertz":  # first: its verdict on E is part of what warn_fit reports
-        ds = hertz_checks(ds, data, fixed["tip"])
+        from viscoforce.fitting._layer import layered
+
+        law = layered(fixed["tip"], fixed)  # the layer's law: the checks refit with it
+        if law is not fixed["tip"]:
+            deepest = max(float(np.max(data.x)) - float(ds["contact_point"]), 0.0)
+            ds.attrs["bottom_effect_factor"] = float(
+                law.force_shape(deepest) / fixed["tip"].force_shape(deepest)) if deepest > 0 \
+                else 1.0
+        ds = hertz_checks(ds, data, law)
     warn_fit(ds)
     if model == "hertz":
         ds = add_derived_moduli(ds, poisson)

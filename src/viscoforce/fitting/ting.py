@@ -115,7 +115,8 @@ def fit_ting(curves: xr.Dataset, *, curve: int = 0, segment: int | None = None,
              criterion: str = "bic", drag: float | None = None, fit_drag: bool = False,
              contact_point: float | None = None, reference_frequency: float | None = None,
              newtonian: bool | None = None, poisson: float | None = None,
-             profile: bool = False) -> xr.Dataset:
+             profile: bool = False, sample_height: float | None = None,
+             sample_base: str | None = None) -> xr.Dataset:
     """Fit Ting's model to the approach and retract of one measured force curve.
 
     Parameters
@@ -147,6 +148,12 @@ def fit_ting(curves: xr.Dataset, *, curve: int = 0, segment: int | None = None,
         Structural: fit the Newtonian μ (default True; False: Ting's pure power law).
     poisson : float, optional
         Poisson's ratio of ``<name>_young`` / ``<name>_shear`` (default 0.5).
+    sample_height : float, optional
+        The sample's thickness [m] on its rigid support: Ting's integral over the layer's law
+        (:mod:`viscoforce.fitting.ting_model`); ``attrs["bottom_effect_factor"]`` is the force
+        factor at the deepest fitted indentation.
+    sample_base : {"bonded", "sliding"}, optional
+        With ``sample_height``: the layer bonded to (default) or sliding on its support.
     profile : bool
         Profile-likelihood identifiability (slow: hundreds of model evaluations); default the
         local test.
@@ -173,7 +180,8 @@ def fit_ting(curves: xr.Dataset, *, curve: int = 0, segment: int | None = None,
                              "material": material, "drag": drag, "fit_drag": fit_drag or None,
                              "contact_point": contact_point,
                              "reference_frequency": reference_frequency,
-                             "newtonian": newtonian}
+                             "newtonian": newtonian, "sample_height": sample_height,
+                             "sample_base": sample_base}
     fixed = {k: v for k, v in fixed.items() if v is not None}
     kept, tried = _select(data, modes, criterion, fixed)
     best = kept.outcome
@@ -185,6 +193,15 @@ def fit_ting(curves: xr.Dataset, *, curve: int = 0, segment: int | None = None,
         ds.attrs["explanation"] = explain(tried, kept, criterion, 0.0,
                                           "modes of model 'ting'").explanation
     ds = _describe(ds, best, data)
+    if sample_height is not None:
+        from viscoforce.physics.bottom_effect import force_factor
+        from viscoforce.physics.tips import tip_from
+
+        plain = tip_from(tip)
+        deepest = max(float(np.max(data.position)) - float(ds["contact_point"] if
+                      "contact_point" in ds else contact_point), 0.0)
+        ds.attrs["bottom_effect_factor"] = 1.0 if deepest <= 0 else float(
+            force_factor(plain, deepest, sample_height, bonded=sample_base != "sliding"))
     warn_fit(ds)
     ds = add_derived_moduli(ds, poisson)
     return add_ting_forms(ds) if material == "structural" else ds

@@ -1,5 +1,8 @@
 """Fitted curves and residuals in bulk: a long CSV table of data, best fit and residual.
 
+(The columns of the other table, one row per fit, ``fit --out x.csv``, are
+:func:`fit_table_columns`: Young's modulus before the paper's, issue 38 item 3.)
+
 :func:`export_fits` writes, for every curve (pixel) of a fit result, one row per data point: which
 curve (``curve`` and the map's coordinates, as :func:`viscoforce.io.csv_tables.pixel_columns`),
 the independent variable, the data, the best fit there and the residual (data − fit), each column
@@ -42,7 +45,7 @@ from viscoforce.exceptions import ParameterError
 from viscoforce.io.csv_tables import frequency_of, header, pixel_columns, table_text
 from viscoforce.schema import select_curve, validate_curves, validate_fit_result, validate_spectrum
 
-__all__ = ["CURVE_FITS", "export_fits", "fit_curves_table"]
+__all__ = ["CURVE_FITS", "export_fits", "fit_curves_table", "fit_table_columns"]
 
 #: Curve models -> (best-fit variable, its axis, x column, data variable, segments taken).
 CURVE_FITS: dict[str, tuple[str, str, str, str]] = {
@@ -52,6 +55,54 @@ CURVE_FITS: dict[str, tuple[str, str, str, str]] = {
     "ting": ("fit_force", "time", "time", "force"),
 }
 _UNITS = {"time": "s", "tip_position": "m", "force": "N"}
+
+
+#: Per-row statistics of a fit result's table, last, in this order.
+_STATISTICS = ("redchi", "chi2_pvalue", "quality", "success", "modes")
+#: The error budget's per-row interval of a variable (``<name><tail>``), in this order.
+_BUDGET = ("_budget_lower", "_budget_upper", "_budget_determined")
+
+
+def fit_table_columns(result: xr.Dataset) -> list[str]:
+    """The variables of a fit result's table (one row per fit or pixel), Young's modulus first.
+
+    Per fitted parameter ``<name>`` (``param_i`` order): its Young's modulus ``<name>_young``
+    and ``_stderr`` where the fit derived them, then ``<name>`` and ``<name>_stderr`` (the
+    paper's convention for a modulus, 2/E = Σ(1 − ν²)/E_i), then its shear modulus
+    ``<name>_shear`` and ``_stderr``; then the other derived moduli (e.g. Ting's
+    ``ting_E0_young``), Young's before shear; then the error budget's interval of each of those
+    (``<name>_budget_lower``, ``_budget_upper``, ``_budget_determined``) in the same order;
+    last ``redchi``, ``chi2_pvalue``, ``quality`` (maps), ``success``, ``modes``. Every
+    variable of those kinds the result holds is a column (issue 38 item 3 changed the order
+    only).
+
+    Parameters
+    ----------
+    result : xarray.Dataset
+        A fit result (a single fit or a map) with ``param_i``.
+
+    Returns
+    -------
+    list of str
+        Variable names, in column order.
+    """
+    if not isinstance(result, xr.Dataset) or "param_i" not in result.coords:
+        raise ParameterError("fit_table_columns needs a fit result (a Dataset with param_i), "
+                             f"got {type(result).__name__}")
+    present = {str(n) for n in result.data_vars}
+    names = [str(n) for n in result["param_i"].values]
+    forms = [f for n in names for f in (f"{n}_young", n, f"{n}_shear")
+             if f == n or f in present]
+    other = [str(n) for n in result.data_vars if str(n).endswith(("_young", "_shear"))
+             and str(n) not in forms]
+    forms += sorted(other, key=lambda n: (n.endswith("_shear"), other.index(n)))
+    columns = [c for f in forms for c in (f, f"{f}_stderr") if c == f or c in present]
+    columns += [f"{f}{tail}" for f in forms for tail in _BUDGET if f"{f}{tail}" in present]
+    # every budget interval is a column, also of a variable named nowhere above
+    columns += [str(n) for n in result.data_vars if str(n).endswith(_BUDGET)
+                and str(n) not in columns]
+    columns += [n for n in _STATISTICS if n in result.variables]
+    return columns
 
 
 def _refuse(what: str) -> ParameterError:

@@ -119,6 +119,7 @@ def open_data(path: str | PathLike[str], *, format: str | None = None, raw: bool
               drag: float | None = None,
               drag_heights: Sequence[tuple[float, str | PathLike[str]]] | None = None,
               tip: Any = None, poisson: float | None = None,
+              sample_height: float | None = None, sample_base: str | None = None,
               out: str | PathLike[str] | None = None) -> xr.Dataset:
     """The analysable dataset of a measured file: a spectrum, or curves (module docstring).
 
@@ -174,6 +175,12 @@ def open_data(path: str | PathLike[str], *, format: str | None = None, raw: bool
         adds E_storage, E_loss, G_storage, G_loss [Pa] per point of the spectrum.
     poisson : float, optional
         The sample's Poisson's ratio in [0, 0.5] for those moduli (default 0.5); needs ``tip``.
+    sample_height : float, optional
+        The sample's thickness [m] on its rigid support: those moduli divided by the
+        bottom-effect stiffness factor at each point's operating indentation
+        (:mod:`viscoforce.physics.bottom_effect`); needs ``tip``.
+    sample_base : {"bonded", "sliding"}, optional
+        With ``sample_height``: the layer bonded to (default) or sliding on its support.
     out : str or Path, optional
         Also write the dataset there (netCDF, atomically). The curves of a JPK archive are
         written chunk by chunk, and the dataset returned is then that file opened lazily
@@ -204,7 +211,7 @@ def open_data(path: str | PathLike[str], *, format: str | None = None, raw: bool
         path, format=format, raw=raw, height_channel=height_channel,
         spring_constant=spring_constant, sensitivity=sensitivity, phase_lag=phase_lag,
         phase_reference=phase_reference, drag=drag, drag_heights=drag_heights, tip=tip,
-        poisson=poisson, out=out).dataset
+        poisson=poisson, sample_height=sample_height, sample_base=sample_base, out=out).dataset
 
 
 def read_measured(path: str | PathLike[str], *, format: str | None = None, raw: bool = False,
@@ -216,6 +223,7 @@ def read_measured(path: str | PathLike[str], *, format: str | None = None, raw: 
                   drag: float | None = None,
                   drag_heights: Sequence[tuple[float, str | PathLike[str]]] | None = None,
                   tip: Any = None, poisson: float | None = None,
+                  sample_height: float | None = None, sample_base: str | None = None,
                   out: str | PathLike[str] | None = None,
                   keep_streamed: bool = True) -> MeasuredData:
     """:func:`open_data`, with what it made: :class:`MeasuredData` (the ``load --json`` summary).
@@ -223,7 +231,7 @@ def read_measured(path: str | PathLike[str], *, format: str | None = None, raw: 
     Parameters
     ----------
     path, format, raw, height_channel, spring_constant, sensitivity, phase_lag, \
-phase_reference, drag, drag_heights, tip, poisson, out
+phase_reference, drag, drag_heights, tip, poisson, sample_height, sample_base, out
         As :func:`open_data`.
     keep_streamed : bool
         False: the curves of a JPK archive streamed to ``out`` are not opened again, and
@@ -244,6 +252,12 @@ phase_reference, drag, drag_heights, tip, poisson, out
                                  phase_lag=phase_lag, phase_reference=phase_reference, tip=tip,
                                  poisson=poisson)
     check_height_channel(height_channel)
+    if (sample_height is not None or sample_base is not None) and tip is None:
+        raise OptionError("{sample_height} and {sample_base} correct the complex modulus of a "
+                          "contact: give {tip} too")
+    if sample_base is not None and sample_height is None:
+        raise OptionError("{sample_base} says how the layer of {sample_height} lies on its "
+                          "support: give {sample_height} too")
     options = {k: v for k, v in (("spring_constant", spring_constant),
                                  ("sensitivity", sensitivity),
                                  ("height_channel", height_channel)) if v is not None}
@@ -263,12 +277,13 @@ phase_reference, drag, drag_heights, tip, poisson, out
             path, data, archive, netcdf=is_netcdf(path, format), format=format, raw=raw,
             options=options, phase_lag=phase_lag, phase_reference=phase_reference, drag=drag,
             drag_heights=heights, tip=tip, poisson=poisson, out=out,
-            keep_streamed=keep_streamed)
+            keep_streamed=keep_streamed, layer={"sample_height": sample_height,
+                                                "sample_base": sample_base})
 
 
 def _analysed(path, data: xr.Dataset, archive, *, netcdf: bool, format, raw: bool,
               options: dict, phase_lag, phase_reference, drag, drag_heights, tip, poisson,
-              out, keep_streamed: bool) -> MeasuredData:
+              out, keep_streamed: bool, layer: dict | None = None) -> MeasuredData:
     """Steps 2 to 4 of the module docstring on ``data`` (the whole file, or a JPK probe)."""
     from viscoforce._files import write_netcdf
     from viscoforce.experiments.modulation import correct_spectrum, modulation_spectrum
@@ -324,7 +339,8 @@ def _analysed(path, data: xr.Dataset, archive, *, netcdf: bool, format, raw: boo
     if tip is not None:
         from viscoforce.experiments.moduli import add_complex_modulus
 
-        ds = add_complex_modulus(ds, tip, poisson=None if poisson is None else float(poisson))
+        ds = add_complex_modulus(ds, tip, poisson=None if poisson is None else float(poisson),
+                                 **(layer or {}))
     if out:
         write_netcdf(ds, out)
     return MeasuredData(ds, source, _kind(ds), {str(k): int(v) for k, v in ds.sizes.items()},

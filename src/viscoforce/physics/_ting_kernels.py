@@ -4,8 +4,9 @@
 :class:`PronyRelaxation`, :class:`PowerLawRelaxation`, their sums of exponentials
 (:class:`Exponentials`) and :func:`relaxation_from_creep` (creep Prony series → relaxation Prony
 series); then the numerics of a piecewise-linear history against a kernel: the corners located
-between samples (:func:`locate_kinks`), the product integration on the history's nodes
-(:func:`history_sums`) and the exponential filters of the retract (:func:`filtered`). The
+between samples (:func:`locate_kinks`) and the product integration on the history's nodes
+(:func:`history_sums`: FFT on a uniform grid, the loop otherwise; piecewise-uniform grids in
+:mod:`viscoforce.physics._ting_segments`). The
 conventions, the numerics and the references are told in :mod:`viscoforce.physics.ting`, the
 public module that re-exports the kernels and :func:`locate_kinks`.
 """
@@ -43,7 +44,6 @@ __all__ = [
     "PowerLawRelaxation",
     "PronyRelaxation",
     "RelaxationKernel",
-    "filtered",
     "history_nonuniform",
     "history_sums",
     "interval_sums",
@@ -537,56 +537,3 @@ def history_nonuniform(t: FloatArray, dx: FloatArray, kernel: RelaxationKernel,
         level += dx[j - 1]
     return out
 
-
-def filtered(t: FloatArray, dx: FloatArray, rates: FloatArray, step: float | None,
-             sample: np.ndarray) -> FloatArray:
-    """A[j, k, :] = ∫_{t_0}^{t_j} e^{−x_k(t_j − s)} dx/ds ds on the nodes ``t`` (x piecewise linear).
-
-    ``dx`` holds the increments over the intervals of ``t`` (one column per history), ``sample``
-    flags the nodes that are samples. On a uniform grid the sums Σ_i b_k a_k^{j−i} u_i over
-    whole sample intervals are one batched FFT convolution, the pieces of intervals split by a
-    node are added through the sample that follows them, and a node inside a split interval
-    decays from the sample before it; on any other grid a recursion over the nodes.
-    """
-    if t.size < 2 or not rates.size:
-        return np.zeros((t.size, rates.size, dx.shape[1]))
-    out = np.empty((t.size, rates.size, dx.shape[1]))
-    out[0] = 0.0
-    steps = np.diff(t)
-    rate_in = dx / steps[:, None]
-    at = np.flatnonzero(sample)
-    if step is None or at.size < 2:
-        gain = -np.expm1(-np.outer(steps, rates)) / rates
-        decay = np.exp(-np.outer(steps, rates))
-        state = np.zeros((rates.size, dx.shape[1]))
-        for j in range(t.size - 1):
-            state = decay[j, :, None] * state + gain[j, :, None] * rate_in[j]
-            out[j + 1] = state
-        return out
-    decay = np.exp(-np.outer(rates, step * np.arange(at.size)))  # e^{−x_k·lag}
-    whole = np.diff(at) == 1
-    cells = np.where(whole[:, None], rate_in[at[:-1]], 0.0)
-    kern = decay[:, :-1] * (-np.expm1(-rates * step) / rates)[:, None]
-    at_samples = np.zeros((at.size, rates.size, dx.shape[1]))
-    at_samples[1:] = fftconvolve(kern[:, :, None], cells[None, :, :], axes=1)[
-        :, :at.size - 1].transpose(1, 0, 2)
-    split = np.ones(t.size - 1, dtype=bool)
-    split[at[:-1][whole]] = False
-    pieces = np.flatnonzero(split)
-    gain = {i: -np.expm1(-rates * steps[i]) / rates for i in pieces}
-    for i in pieces:  # through the first sample after the piece
-        k = int(np.searchsorted(at, i + 1))
-        if k < at.size and rate_in[i].any():
-            piece = np.exp(-rates * (t[at[k]] - t[i + 1]))[:, None] * gain[i][:, None] * rate_in[i]
-            at_samples[k:] += decay[:, :at.size - k].T[:, :, None] * piece[None]
-    if at.size == t.size:
-        return at_samples
-    out[at] = at_samples
-    for j in np.flatnonzero(~sample):  # from the sample before it and the pieces since
-        k = int(np.searchsorted(at, j)) - 1
-        since = at[k] if k >= 0 else 0
-        value = np.exp(-rates * (t[j] - t[since]))[:, None] * at_samples[k] if k >= 0 else 0.0
-        for i in pieces[(pieces >= since) & (pieces < j)]:
-            value = value + (np.exp(-rates * (t[j] - t[i + 1])) * gain[i])[:, None] * rate_in[i]
-        out[j] = value
-    return out

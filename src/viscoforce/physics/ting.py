@@ -54,11 +54,14 @@ between, t₁ is found for every retract sample at once by bisection over the lo
 (O(N log N)): there the kernel at lags ≥ one sample is a sum of exponentials, exact for a Prony
 kernel and a quadrature of t^(−β) = Γ(β)⁻¹∫ x^(β−1) e^(−xt) dx for the power law (trapezoidal in
 log x, relative error ≤ ``rtol``, about 45 terms over 4 decades), so that the histories
-∫ e^{−x(t−s)} dδ over the loading branch are recursive (batched FFT convolutions on a uniform
+∫ e^{−x(t_m−s)} dδ over the loading branch are one cumulative sum over its nodes (exact on any
 grid). Inside the bracketing node interval δ is linear and the condition is solved exactly with
-R (bisection on the fraction), and the load follows with R as well. Non-uniform grids take the
-exponential recursion for every lag beyond the current interval (which stays exact): O(N·K) with
-a Python loop over the nodes.
+R (bisection on the fraction), and the load follows with R as well. Grids recorded segment by
+segment at different rates (JPK files) are piecewise uniform: each uniformly sampled run takes
+the FFT sums, the earlier runs enter through the exponentials
+(:mod:`viscoforce.physics._ting_segments`; 20,424 samples in 8 runs: ~45 ms per evaluation
+against 0.6–1.3 s for the loop). Scattered grids take the exponential recursion for every lag
+beyond the current interval (which stays exact): O(N·K) with a Python loop.
 
 The discretisation error is second order in the sample spacing except near the first contact of
 a curved tip (g ∝ t^{3/2} taken linear between nodes against t^−β: order 1.5 − β for a
@@ -107,13 +110,11 @@ from viscoforce.physics._ting_kernels import (
     PowerLawRelaxation,
     PronyRelaxation,
     RelaxationKernel,
-    filtered,
-    history_sums,
-    interval_sums,
     locate_kinks,
     relaxation_from_creep,
 )
 from viscoforce.physics._ting_kernels import SECULAR_STEPS as SECULAR_STEPS
+from viscoforce.physics._ting_segments import BOUND, Runs, decays, grid_sums, sample_runs
 from viscoforce.physics.tips import Flat, Tip
 
 __all__ = [
@@ -210,7 +211,9 @@ class _History:
     ``nodes`` [s], ``delta`` δ [m] and ``g`` = force_shape(δ) [m²]; the first node is a virtual
     sample one interval before t[0] at δ = 0 (a trace that starts in contact is indented from 0
     over it). ``base`` indexes the samples among the nodes, ``step`` is their spacing on a
-    uniform grid (else None), ``kinks`` the sample intervals whose kink was located.
+    uniform grid (else None), ``runs`` the uniformly spaced runs of a piecewise-uniform grid
+    (else None: uniform, or the loop over the nodes), ``kinks`` the sample intervals whose kink
+    was located.
     """
 
     nodes: FloatArray
@@ -218,7 +221,17 @@ class _History:
     g: FloatArray
     base: np.ndarray
     step: float | None
+    runs: Runs | None
     kinks: np.ndarray
+
+    @property
+    def shortest(self) -> float:
+        """The shortest lag [s] the exponentials serve (module docstring, Numerics)."""
+        if self.step is not None:
+            return self.step
+        if self.runs is not None:
+            return float(np.min(self.runs.steps))
+        return float(np.min(np.diff(self.nodes)))
 
 
 def _history(t: FloatArray, z: FloatArray, c: float, tip: Tip) -> _History:
@@ -242,8 +255,9 @@ def _history(t: FloatArray, z: FloatArray, c: float, tip: Tip) -> _History:
     dd = np.insert(np.concatenate(([0.0], delta)), at,
                    np.concatenate((z_kink[keep] - c, np.zeros(cross.size)))[order])
     base = np.arange(tt.size) + np.searchsorted(at, np.arange(tt.size), side="right")
+    runs = None if uniform else sample_runs(tt, UNIFORM_RTOL)
     return _History(nodes, dd, np.asarray(tip.force_shape(dd), dtype=float), base,
-                    float(np.mean(steps)) if uniform else None, cell[keep])
+                    float(np.mean(steps)) if uniform else None, runs, cell[keep])
 
 
 def ting_solve(t: ArrayLike, position: ArrayLike, contact_point: float, tip: Tip,
@@ -254,8 +268,9 @@ def ting_solve(t: ArrayLike, position: ArrayLike, contact_point: float, tip: Tip
     Parameters
     ----------
     t : array_like
-        Sample times [s], strictly increasing, ≥ 3 samples (uniform spacing takes the fast path:
-        FFT and recursive filters, O(N log N); otherwise O(N·K) with a Python loop).
+        Sample times [s], strictly increasing, ≥ 3 samples (uniform spacing, or uniform runs
+        at different rates, takes the fast path: FFT and exponential sums, O(N log N + N·K);
+        scattered times O(N·K) with a Python loop).
     position : array_like
         Tip position z(t) [m] toward the sample (``tip_position`` of a curves dataset), finite.
     contact_point : float
@@ -413,8 +428,9 @@ def _error_bound(history: _History, z: FloatArray, t1: FloatArray, tip: Tip,
                                       tip.contact_stiffness_factor(d[1:]))) - np.diff(g) / h
     r = kernel.primitive
     worst = np.max(np.abs(ends), axis=0)
-    bound = interval_sums(t, worst[None, :], base, history.step,
-                           lambda w, u: 2 * r(u + w / 2) - r(u) - r(u + w))[0]
+    soe = kernel.exponentials(history.shortest, float(t[-1] - t[0]))
+    bound = grid_sums(t, worst[None, :], kernel, soe, base, history.step, history.runs,
+                      BOUND)[0]
     tn = t[base]
     partial = np.flatnonzero(np.isfinite(t1) & (t1 < tn))  # retract samples in contact
     j = np.clip(np.searchsorted(t, t1[partial], side="right") - 1, 0, h.size - 1)
@@ -454,9 +470,10 @@ def _hereditary(history: _History, kernel: RelaxationKernel, rtol: float, *, fla
                                history.step)
     n = t.size
     dg, dd = np.diff(g), np.diff(delta)
-    # the exponentials serve lags ≥ one sample interval on a uniform grid (the retract's
-    # branch before t_m seen from a later sample), ≥ the shortest node interval otherwise
-    soe = kernel.exponentials(step or float(np.min(np.diff(t))), float(t[-1] - t[0]), rtol)
+    # the exponentials serve lags ≥ one sample interval on a (piecewise) uniform grid (the
+    # retract's branch before t_m seen from a later sample, the earlier runs), ≥ the shortest
+    # node interval on the loop's
+    soe = kernel.exponentials(history.shortest, float(t[-1] - t[0]), rtol)
     m = int(np.argmax(delta))
     retract = not flat and 0 < m < n - 1 and delta[m] > 0
     j0 = int(np.flatnonzero(delta[:m + 1] <= 0)[-1]) if retract else 0
@@ -467,7 +484,7 @@ def _hereditary(history: _History, kernel: RelaxationKernel, rtol: float, *, fla
     parts = [dg]
     if retract:
         parts += [dd * (after > j0), dd * (after > m), dg * (after <= j0), dg * (after <= m)]
-    sums = history_sums(t, np.array(parts), kernel, soe, base, step)
+    sums = grid_sums(t, np.array(parts), kernel, soe, base, step, history.runs)
     load, tb, db = sums[0], t[base], delta[base]
     if flat:  # constant contact radius: the approach formula throughout, no tension
         contact = ((load > 0) & (np.arange(base.size) >= int(np.argmax(db > 0)))
@@ -479,7 +496,7 @@ def _hereditary(history: _History, kernel: RelaxationKernel, rtol: float, *, fla
         return load, t1, contact
     later = base > m
     force, t1_retract, lost = _unloading(t, delta, g, m, j0, tb[later], sums[1:, later], soe,
-                                         kernel, step, base)
+                                         kernel)
     load = load.copy()
     load[later] = force
     t1[later] = np.where(lost, np.nan, t1_retract)
@@ -493,8 +510,7 @@ THETA_STEPS = 30
 
 def _unloading(t: FloatArray, delta: FloatArray, g: FloatArray, m: int, j0: int,
                later: FloatArray, ends: FloatArray, soe: Exponentials,
-               kernel: RelaxationKernel, step: float | None, base: np.ndarray
-               ) -> tuple[FloatArray, FloatArray, np.ndarray]:
+               kernel: RelaxationKernel) -> tuple[FloatArray, FloatArray, np.ndarray]:
     """Ting's t₁ and load at the samples ``later`` after the turning point t_m (node m).
 
     ``ends`` holds Φ(t_n, t_j0), Φ(t_n, t_m), Φ(t_n, t_j) = ∫_{t_j}^{t_n} E(t_n − s) dδ, and the
@@ -511,13 +527,15 @@ def _unloading(t: FloatArray, delta: FloatArray, g: FloatArray, m: int, j0: int,
     if not active.size:
         return force, t1, lost
     x, c, c0 = soe.rates, soe.amplitudes, soe.constant
-    branch = slice(j0, m + 1)
-    sample = np.zeros(t.size, dtype=bool)
-    sample[base] = True
-    hist = filtered(t[branch], np.column_stack([dd[j0:m], dg[j0:m]]), x, step, sample[branch])
-    # scaled to the turning point: Q[j, k] = e^{−x_k(t_m − t_j)}·A[j, k] (≤ |A|: no overflow)
-    to_m = np.exp(-np.outer(t[m] - t[branch], x))
-    qa, qb = to_m * hist[:, :, 0], to_m * hist[:, :, 1]
+    # the loading branch's histories seen from the turning point, Q[j, k] = ∫_{t_j0}^{t_j}
+    # e^{−x_k(t_m − s)} dx(s) for x = δ (and g, at the end): a cumulative sum over its node
+    # intervals, exact on any grid (x linear on each: Δx·e^{−x_k(t_m − end)}·(1 − e^{−x_k h})/
+    # (x_k h), the last factor once per distinct interval length h); |Q| ≤ ∫|dx|
+    lengths, which = np.unique(np.diff(t[j0:m + 1]), return_inverse=True)
+    xh = np.outer(x, lengths)
+    weight = decays(x, t[m] - t[m:j0:-1])[:, ::-1] * (-np.expm1(-xh) / xh)[:, which]
+    qa = np.zeros((x.size, m - j0 + 1))  # (K, nodes of the branch)
+    np.cumsum(weight * dd[j0:m], axis=1, out=qa[:, 1:])
     tn = later[active]
     p = np.exp(-np.outer(tn - t[m], x)) * c  # (n, k): c_k e^{−x_k(t_n − t_m)}
     base_phi = phi_bottom[active]
@@ -526,7 +544,7 @@ def _unloading(t: FloatArray, delta: FloatArray, g: FloatArray, m: int, j0: int,
     def phi(j: np.ndarray, n: np.ndarray) -> np.ndarray:
         """Φ(t_n, t_j) = Φ(t_n, t_j0) − ∫_{t_j0}^{t_j} E(t_n − s) dδ for j0 ≤ j ≤ m."""
         return base_phi[n] - c0 * (delta[j] - delta[j0]) - np.einsum(
-            "nk,nk->n", p[n], qa[j - j0])
+            "nk,kn->n", p[n], qa[:, j - j0])
 
     lo = np.full(active.size, j0)
     hi = np.full(active.size, m)
@@ -558,8 +576,20 @@ def _unloading(t: FloatArray, delta: FloatArray, g: FloatArray, m: int, j0: int,
     t1_active = t[j] + theta * width
     # F(t_n) = ∫_0^{t1} E(t_n − s) dg = load(t_n, t_j0) + ∫_{t_j0}^{t_j} … + (Δg/h)[R(t_n − t_j)
     # − R(t_n − t1)]
-    inner = c0 * (g[j] - g[j0]) + np.einsum("nk,nk->n", p, qb[j - j0])
+    inner = c0 * (g[j] - g[j0]) + np.einsum("nk,nk->n", p, _prefix(weight * dg[j0:m], j - j0))
     edge = dg[j] / width * (r_lag - kernel.primitive(tn - t1_active))
     force[active] = load_bottom[active] + inner + np.where(theta > 0, edge, 0.0)
     t1[active] = t1_active
     return force, t1, lost
+
+
+
+def _prefix(terms: FloatArray, at: np.ndarray) -> FloatArray:
+    """Σ_{i < at_n} terms[:, i] for each n, as rows (n, K): sums of blocks, not a whole cumsum."""
+    stops, back = np.unique(at, return_inverse=True)
+    lead = stops[0] > 0
+    sums = np.cumsum(np.add.reduceat(terms, np.concatenate(([0], stops)) if lead else stops,
+                                     axis=1), axis=1).T
+    if not lead:
+        sums = np.concatenate((np.zeros((1, terms.shape[0])), sums))
+    return sums[back]

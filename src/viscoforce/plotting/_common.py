@@ -133,3 +133,56 @@ def _new_or_given_axes(ax: Any, figsize: tuple[float, float]) -> tuple[Figure, A
     return ax.figure, ax
 
 
+
+
+# ── which modulus a person reads: Young's first (issue 38 item 3) ───────────────────────────────
+
+
+def _main_variable(result: Any) -> str | None:
+    """The variable a map shows by default: Young's modulus of the main modulus where present.
+
+    The first fitted parameter (``param_i``) with a derived ``<name>_young`` gives
+    ``<name>_young``; without one, the first fitted parameter; None without ``param_i``.
+    """
+    if "param_i" not in result.coords:
+        return None
+    names = [str(n) for n in result["param_i"].values]
+    young = [n for n in names if f"{n}_young" in result.variables]
+    return f"{young[0]}_young" if young else (names[0] if names else None)
+
+
+def _mapped_variables(result: Any) -> list[str]:
+    """The fitted parameters with their derived moduli, Young's before the paper's, then shear.
+
+    Per fitted parameter ``<name>``: ``<name>_young`` (where present), ``<name>``,
+    ``<name>_shear`` (where present).
+    """
+    names = [str(n) for n in result["param_i"].values] if "param_i" in result.coords else []
+    return [v for n in names for v in (f"{n}_young", n, f"{n}_shear")
+            if v == n or v in result.variables]
+
+
+def _what(result: Any, name: str) -> str:
+    """What a variable is, for a person: Young's, shear or the paper's modulus; else ''.
+
+    ``E_young`` → ``"Young's modulus"``; ``E`` (with ``E_young`` beside it) → ``"paper's E,
+    2 E_young/(1 − ν²)"``; ``mu_young`` → ``"Young's viscosity"``.
+    """
+    for suffix, what in (("_young", "Young's"), ("_shear", "shear")):
+        base = name.removesuffix(suffix)
+        if base != name and name in result.variables:
+            kind = "viscosity" if base == "mu" else "modulus"
+            return f"{what} {kind}"
+    if f"{name}_young" in result.variables:
+        return f"paper's {name} = 2 {name}_young/(1 − ν²)"
+    return ""
+
+
+def _variable_label(result: Any, name: str, unit: str) -> str:
+    """An axis or colour-bar label: ``"Young's modulus E_young [kPa]"``, ``"tau [ms]"``."""
+    what = _what(result, name)
+    if what.startswith("paper's"):
+        text = f"{name} (paper's convention: 2 {name}_young/(1 − ν²))"
+    else:
+        text = f"{what} {name}" if what else name
+    return f"{text} [{unit}]" if unit and unit != "1" else text

@@ -52,31 +52,32 @@ def _quantity(value: float, err: float, unit: str) -> str:
 
 
 def _parameter_text(fit: xr.Dataset) -> str:
-    """The fit's model, each parameter, redchi (and non-convergence), then the fixed inputs.
+    """The fit's model, Young's moduli, each parameter, redchi (and non-convergence), the inputs.
 
-    A determined parameter reads value ± stderr; one the data bound on one side only reads as
-    that bound (``E0 > 2.1 kPa``); one they do not determine reads ``not determined`` (never a
-    value with an error larger than itself). Last, what the moduli rest on: the tip, Poisson's
-    ratio and the indentation, where the fit records them.
+    Young's moduli lead (``<name>_young``, issue 38 item 3: what people read first), under
+    Poisson's ratio; the fitted parameters follow, their moduli labelled as the paper's
+    convention (E = 2 E_young/(1 − ν²), twice Johnson's E*), then the shear moduli. A
+    determined parameter reads value ± stderr; one the data bound on one side only reads as
+    that bound (``E0 > 2.1 kPa``, Young's form converted alike); one they do not determine
+    reads ``not determined`` (never a value with an error larger than itself). Last, what the
+    moduli rest on: the tip, Poisson's ratio and the indentation, where the fit records them.
     """
     lines = [f"fit: {' '.join(str(fit.attrs[k]) for k in ('model', 'candidate') if k in fit.attrs)}"]
     names = [str(n) for n in fit["param_i"].values]
     codes = (np.asarray(fit["identifiability"].values).reshape(-1)
              if "identifiability" in fit.variables else np.zeros(len(names), dtype=int))
-    for name, code in zip(names, codes, strict=True):
-        unit = str(fit[name].attrs["units"])
-        limit = {1: ("lower", ">"), 2: ("upper", "<")}.get(int(code))
-        if limit and f"{name}_{limit[0]}" in fit.variables and np.isfinite(
-                float(fit[f"{name}_{limit[0]}"].values)):
-            bound = float(fit[f"{name}_{limit[0]}"].values)
-            shown = _quantity(bound, np.nan, unit).replace(" (no stderr)", "")
-            lines.append(f"{name} {limit[1]} {shown} (bound only)")
-        elif int(code) in (1, 2, 3):
-            lines.append(f"{name} not determined")
-        else:
-            value = float(fit[name].values)
-            err = float(fit[f"{name}_stderr"].values)
-            lines.append(f"{name} = {_quantity(value, err, unit)}")
+    code_of = {n: int(c) for n, c in zip(names, codes, strict=True)}
+    young = [n for n in names if f"{n}_young" in fit.variables]
+    nu = _poisson(fit, young)
+    if young:
+        lines.append(f"Young's modulus (nu = {nu:g}):")
+        lines.extend(_line(fit, f"{n}_young", code_of[n], n, nu) for n in young)
+        lines.append("fitted (paper's E = 2 E_young/(1 - nu^2)):")
+    lines.extend(_line(fit, n, code_of[n]) for n in names)
+    shear = [n for n in names if f"{n}_shear" in fit.variables]
+    if shear:
+        lines.append("shear modulus:")
+        lines.extend(_line(fit, f"{n}_shear", code_of[n], n, nu) for n in shear)
     lines.append(f"redchi = {float(fit['redchi'].values):.3g}")
     if "chi2_pvalue" in fit.variables and np.isfinite(float(fit["chi2_pvalue"].values)):
         lines.append(f"p(chi2) = {float(fit['chi2_pvalue'].values):.2g}")
@@ -84,6 +85,53 @@ def _parameter_text(fit: xr.Dataset) -> str:
         lines.append("(did not converge)")
     lines.extend(_caption_lines(fit.attrs))
     return "\n".join(lines)
+
+
+def _poisson(fit: xr.Dataset, young: list[str]) -> float:
+    """Poisson's ratio of the fit's Young's moduli (their attrs, else the fit's; default 0.5)."""
+    for n in young:
+        if "poisson" in fit[f"{n}_young"].attrs:
+            return float(fit[f"{n}_young"].attrs["poisson"])
+    return float(fit.attrs.get("poisson", 0.5))
+
+
+def _line(fit: xr.Dataset, name: str, code: int, base: str | None = None,
+          nu: float = 0.5) -> str:
+    """One variable's line: ``name = value ± stderr``, its one-sided bound, or not determined.
+
+    ``code`` is the identifiability of the fitted parameter ``base`` (``name`` itself when
+    None) that ``name`` derives from; a bound of ``base`` is shown in ``name``'s form (Young's
+    or shear modulus at Poisson's ratio ``nu``).
+    """
+    base = name if base is None else base
+    unit = str(fit[name].attrs.get("units", fit[base].attrs.get("units", "")))
+    limit = {1: ("lower", ">"), 2: ("upper", "<")}.get(code)
+    if limit and f"{base}_{limit[0]}" in fit.variables and np.isfinite(
+            float(fit[f"{base}_{limit[0]}"].values)):
+        bound = _converted(float(fit[f"{base}_{limit[0]}"].values), name, base, nu)
+        if bound is not None:
+            shown = _quantity(bound, np.nan, unit).replace(" (no stderr)", "")
+            return f"{name} {limit[1]} {shown} (bound only)"
+        return f"{name} not determined"
+    if code in (1, 2, 3):
+        return f"{name} not determined"
+    value = float(fit[name].values)
+    err = float(fit[f"{name}_stderr"].values) if f"{name}_stderr" in fit.variables else np.nan
+    return f"{name} = {_quantity(value, err, unit)}"
+
+
+def _converted(bound: float, name: str, base: str, nu: float) -> float | None:
+    """A bound of the paper's modulus ``base`` in the form of ``name`` (None: not a modulus)."""
+    if name == base:
+        return bound
+    from viscoforce.exceptions import ParameterError
+    from viscoforce.physics.moduli import shear_from_young, young_from_paper
+
+    try:
+        young = float(young_from_paper(bound, nu))
+        return young if name.endswith("_young") else float(shear_from_young(young, nu))
+    except ParameterError:
+        return None
 
 
 def _caption_lines(attrs: Mapping[str, Any]) -> list[str]:

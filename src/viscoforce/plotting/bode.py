@@ -199,14 +199,15 @@ def _draw_spectrum(axes: tuple[Axes, Axes], ds: xr.Dataset, label: str, magnitud
     return drawn
 
 
-def _parameter_box(ax: Axes, fit: xr.Dataset) -> Artist:
-    """The parameter text as an empty legend's title: placed where it covers the least data.
+def _parameter_box(ax: Axes, fit: xr.Dataset, handles: Any = ()) -> Artist:
+    """The parameter text as a legend's title: placed where it covers the least data.
 
-    Returns the title (a Text); an existing legend of ``ax`` stays.
+    ``handles``: lines listed under the text (default none: an empty legend). Returns the
+    title (a Text); an existing legend of ``ax`` stays.
     """
     existing = ax.get_legend()
-    box = ax.legend(handles=[], title=_parameter_text(fit), loc=_legend_loc(ax), fontsize="small",
-                    title_fontsize="small", framealpha=0.85, alignment="left")
+    box = ax.legend(handles=list(handles), title=_parameter_text(fit), loc=_legend_loc(ax),
+                    fontsize="small", title_fontsize="small", framealpha=0.85, alignment="left")
     box.get_title().set_family("monospace")
     if existing is not None:
         ax.add_artist(existing)
@@ -519,8 +520,8 @@ def fit_curve_plot(fit: xr.Dataset, *, data: tuple[Any, Any] | None = None,
     if x_name == "tip_position":
         drawn.append(axes.axvline(0.0, color="0.6", lw=0.8, ls=":", label="contact point"))
     axes.set_ylabel(y_label)
-    axes.legend(loc="lower left" if x_name == "time" else "upper left")
-    drawn.append(_parameter_box(axes, fit))
+    # one box: the lines' legend under the parameters (Young's first), placed off the data
+    drawn.append(_parameter_box(axes, fit, handles=drawn))
     if title:
         axes.set_title(title)
     if residual_axes is None:

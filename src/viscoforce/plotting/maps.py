@@ -3,6 +3,8 @@
 :func:`map_plot` draws one variable of a fitted map (:func:`viscoforce.fitting.maps.fit_map`,
 ``fit MAP --out fits.nc``) or of a spectrum map. Pixels sit on their ``x``/``y`` coordinates
 (the instrument's grid positions [m], drawn in µm) as touching cells, so there are no gaps;
+by default it is Young's modulus (``E_young``, ``E0_young``: issue 38 item 3), labelled so, with
+the paper's modulus one ``variable=`` away;
 a map without ``x``/``y`` is drawn on its two dims' indices. Pixels whose fit failed or does not
 describe its data (``quality``, :data:`viscoforce.fitting.pixels.MAP_QUALITY`), or where the
 drawn parameter is not determined, are left grey and counted in the title, so a colour never
@@ -20,7 +22,13 @@ import xarray as xr
 
 from viscoforce._validation import describe_value
 from viscoforce.exceptions import ParameterError
-from viscoforce.plotting._common import PlotHandle, _new_or_given_axes, _require_flag
+from viscoforce.plotting._common import (
+    PlotHandle,
+    _main_variable,
+    _new_or_given_axes,
+    _require_flag,
+    _variable_label,
+)
 from viscoforce.units import format_quantity, unit_factor
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -129,7 +137,9 @@ def map_plot(result: xr.Dataset, variable: str | None = None, *, ax: Axes | None
         ``variable`` spans one or two map dims (``x``/``y`` coordinates over them place the
         pixels; ``quality`` over them masks).
     variable : str, optional
-        The variable to draw (default: the first fitted parameter, ``param_i[0]``).
+        The variable to draw (default: Young's modulus of the main modulus, ``<name>_young``
+        of the first fitted parameter that has one; else the first fitted parameter,
+        ``param_i[0]``).
     ax : matplotlib Axes, optional
         Axes to draw on (default: a new figure).
     good_only : bool
@@ -161,7 +171,7 @@ def map_plot(result: xr.Dataset, variable: str | None = None, *, ax: Axes | None
         if "param_i" not in result.coords:
             raise ParameterError("variable is needed: this dataset has no fitted parameters "
                                  "(param_i)")
-        variable = str(result["param_i"].values[0])
+        variable = _main_variable(result)
     if not isinstance(variable, str) or variable not in result.variables:
         names = [str(n) for n in result.data_vars if 0 < result[n].ndim <= 2
                  and "omega" not in result[n].dims]
@@ -203,8 +213,7 @@ def map_plot(result: xr.Dataset, variable: str | None = None, *, ax: Axes | None
     mesh = axes.pcolormesh(xe, ye, np.ma.masked_invalid(grid), norm=norm, cmap="viridis",
                            shading="flat")
     bar = figure.colorbar(mesh, ax=axes)
-    bar.set_label(f"{variable} [{label_unit}]" if label_unit and label_unit != "1"
-                  else variable)
+    bar.set_label(_variable_label(result, variable, label_unit))
     axes.set_xlabel(xlabel)
     if ylabel:
         axes.set_ylabel(ylabel)

@@ -7,6 +7,7 @@ from collections.abc import Mapping
 import numpy as np
 
 from viscoforce.fitting import _params as P
+from viscoforce.fitting._layer import layer_window, layered, require_layer_depth
 from viscoforce.fitting.base import (
     FitModel,
     ModelSpec,
@@ -17,9 +18,10 @@ from viscoforce.fitting.curve_models import (
     contact_window,
     hertz_start,
 )
-from viscoforce.fitting.models._inputs import CONTACT_WINDOW, TIP
+from viscoforce.fitting.models._inputs import CONTACT_WINDOW, SAMPLE_BASE, SAMPLE_HEIGHT, TIP
 from viscoforce.fitting.registry import ModelEntry, register
 from viscoforce.fitting.segments import approach_data
+from viscoforce.physics.layered_tip import LayeredTip, layer_attrs
 
 
 def _hertz_model(spec: ModelSpec) -> FitModel:
@@ -28,21 +30,34 @@ def _hertz_model(spec: ModelSpec) -> FitModel:
     ``E`` the paper's modulus, ``contact_point`` c [m], ``baseline`` b [N] (the free-cantilever
     force at contact) and ``baseline_slope`` s [N/m] (a tilted baseline, kept in contact); the
     tip's ``force_shape`` (:mod:`viscoforce.physics.tips`) gives the indentation law.
+
+    With ``sample_height`` h (and ``sample_base``, default bonded) the law is the layer's,
+    E·shape(δ)·f(δ, h) with the bottom-effect force factor f at each indentation
+    (:class:`~viscoforce.physics.layered_tip.LayeredTip`), so the fitted
+    ``E`` is the sample's, corrected. The contact point is then bounded so that no fitted depth
+    exceeds the series' accepted range, and an approach whose half-space contact point lies
+    deeper than that is refused before the fit
+    (:func:`~viscoforce.fitting.ting_model.require_layer_depth`). The result's attrs carry
+    ``sample_height``, ``sample_base``, ``bottom_effect_series`` and ``bottom_effect_max_depth``.
     """
     (tip,) = need(spec, "tip")
+    law = layered(tip, spec.fixed)
     window = spec.fixed.get("contact_window")
 
     def function(z: np.ndarray, v: Mapping[str, float]) -> np.ndarray:
         z = np.asarray(z, dtype=float)
         delta = np.maximum(z - v["contact_point"], 0.0)
         return (v["baseline"] + v["baseline_slope"] * (z - v["contact_point"])
-                + v["E"] * tip.force_shape(delta))
+                + v["E"] * law.force_shape(delta))
 
     def guesser(f: np.ndarray, z: np.ndarray) -> dict[str, float]:
-        return hertz_start(tip, np.asarray(z, dtype=float), np.asarray(f, dtype=float))
+        z, f = np.asarray(z, dtype=float), np.asarray(f, dtype=float)
+        require_layer_depth(law, z, f)
+        return hertz_start(law, z, f)
 
     def windows(z: np.ndarray, f: np.ndarray | None = None) -> dict[str, tuple[float, float]]:
-        out = {"contact_point": window if window is not None else contact_window(tip, z)}
+        out = {"contact_point": layer_window(law, z, window) if window is not None
+               else contact_window(law, z)}
         if f is not None:
             out.update(baseline_windows(f, z))
         return out
@@ -50,16 +65,20 @@ def _hertz_model(spec: ModelSpec) -> FitModel:
     layout: list[P.Item] = [P.Chain(("E",)), P.Bounded("contact_point", -1.0, 1.0),
                             P.Bounded("baseline", -1.0, 1.0),
                             P.Bounded("baseline_slope", -1.0, 1.0)]
+    if isinstance(law, LayeredTip):
+        spec = ModelSpec(spec.name, spec.modes, {**spec.fixed, **layer_attrs(law)})
     return FitModel(spec, function, layout, "z", guesser, bounded_windows=windows)
+
 
 
 ENTRY = register(ModelEntry(
     name="hertz", data="curve",
     summary="the approach: contact point, tilted baseline, Hertz/Sneddon law of the tip",
-    build=_hertz_model, inputs=(TIP, CONTACT_WINDOW),
+    build=_hertz_model, inputs=(TIP, CONTACT_WINDOW, SAMPLE_HEIGHT, SAMPLE_BASE),
     parameters=lambda modes, material: ["E", "contact_point", "baseline", "baseline_slope"],
     cut=approach_data,
-    validity="elastic contact of the tip's shape on a half-space (Sneddon/Hertz/Bilodeau): "
-             "valid for indentations small against the sample's thickness, with no adhesion; a "
+    validity="elastic contact of the tip's shape on a half-space (Sneddon/Hertz/Bilodeau), or "
+             "on a layer of sample_height (bottom-effect series, docs/bottom_effect.md): valid "
+             "for indentations small against the sample's thickness, with no adhesion; a "
              "viscoelastic sample's E is an effective modulus at the approach speed",
     autocorrelated=True))

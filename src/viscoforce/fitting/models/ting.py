@@ -8,6 +8,8 @@ from viscoforce.fitting.models._inputs import (
     FIT_DRAG,
     POSITION_TRACE,
     REFERENCE_FREQUENCY,
+    SAMPLE_BASE,
+    SAMPLE_HEIGHT,
     TIP,
     material_input,
     require_bool,
@@ -32,7 +34,7 @@ ENTRY = register(ModelEntry(
     inputs=(TIP, POSITION_TRACE, material_input(MATERIALS), DRAG, FIT_DRAG, CONTACT_POINT,
             CONTACT_WINDOW, REFERENCE_FREQUENCY,
             Input("newtonian", require_bool, "", "the structural material's Newtonian term "
-                  "mu (False: none)", "--no-newtonian")),
+                  "mu (False: none)", "--no-newtonian"), SAMPLE_HEIGHT, SAMPLE_BASE),
     parameters=parameters, units={"drag": "N s/m"}, max_modes=MAX_MODES, materials=MATERIALS,
     cut=ting_data,
     validity="not estimated", autocorrelated=True))

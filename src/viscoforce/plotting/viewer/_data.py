@@ -18,7 +18,9 @@ import xarray as xr
 
 from viscoforce._validation import describe_value
 from viscoforce.exceptions import ParameterError, SchemaError
+from viscoforce.plotting._common import _mapped_variables, _variable_label, _what
 from viscoforce.plotting.maps import _DIMENSIONS, _bad_pixels, _rows
+from viscoforce.plotting.viewer._curves import CURVE_MODELS, force_curves, is_curves
 from viscoforce.schema import flag_meanings, flat_over
 from viscoforce.units import format_quantity, unit_factor
 
@@ -42,23 +44,27 @@ class MapView:
         The map dims of the fit result.
     params : tuple of str
         The fitted parameters (``param_i``), in order.
+    variables : tuple of str
+        What the page maps and tabulates, Young's modulus first (issue 38 item 3): per fitted
+        parameter ``<name>_young`` (where the fit derived it), ``<name>`` (the paper's
+        convention for a modulus), ``<name>_shear``; the first is the default map.
     units : dict
-        Parameter → (SI unit, display unit, factor: display value = SI value / factor).
+        Variable → (SI unit, display unit, factor: display value = SI value / factor).
     x, y, width, height : numpy.ndarray
         Cell centres and sizes in the display units of ``axis_labels``.
     axis_labels : tuple of str
         (x label, y label) of the map.
     colour : dict
-        Parameter → per-pixel display values, NaN where the pixel is masked for it.
+        Variable → per-pixel display values, NaN where the pixel is masked for it.
     log : dict
-        Parameter → whether its colour scale is logarithmic.
+        Variable → whether its colour scale is logarithmic.
     quality : numpy.ndarray
         Per-pixel quality code (0 good).
     table : list of dict
-        Per pixel: ``y``, ``x`` (the map's coordinates, SI, or indices), each parameter and its
+        Per pixel: ``y``, ``x`` (the map's coordinates, SI, or indices), each variable and its
         ``_stderr``, ``redchi``, ``chi2_pvalue``, ``quality`` (code) and ``quality_name``.
     histograms : dict
-        Parameter → (bin left edges, right edges, counts) over its unmasked pixels (display
+        Variable → (bin left edges, right edges, counts) over its unmasked pixels (display
         units).
     frequency : numpy.ndarray or None
         The spectra's frequency axis (display unit ``frequency_label``), None without spectra.
@@ -77,6 +83,15 @@ class MapView:
         The residual plot's y label.
     notes : tuple of str
         What the page cannot show and why (no spectra, no best-fit curves).
+    what : dict
+        Variable → what it is for a person (``"Young's modulus"``, ``"paper's E = 2
+        E_young/(1 − ν²)"``, ``""`` for a parameter that is not a modulus).
+    labels : dict
+        Variable → its axis and colour-bar label (``"Young's modulus E_young [kPa]"``).
+    curves : dict
+        A curve map's force curves (hertz, with ``data=`` a curves dataset): flat per-pixel
+        ``position`` [µm from the pixel's contact point], ``force``, ``fit_force`` [nN] and
+        ``offsets`` (pixel i's samples are ``offsets[i]:offsets[i + 1]``). Empty otherwise.
     """
 
     title: str
@@ -100,6 +115,10 @@ class MapView:
     frequency_label: str = "frequency [Hz]"
     residual_label: str = "residual / stderr"
     notes: tuple[str, ...] = ()
+    variables: tuple[str, ...] = ()
+    what: dict[str, str] = field(default_factory=dict)
+    labels: dict[str, str] = field(default_factory=dict)
+    curves: dict[str, np.ndarray] = field(default_factory=dict)
 
     @property
     def n_pixels(self) -> int:
@@ -195,14 +214,15 @@ def pixel_table(fits: xr.Dataset) -> list[dict[str, Any]]:
     list of dict
         Per pixel: ``index`` (C order over the map dims), the map dims' indices, ``y``, ``x``
         (the pixel's coordinates [m], or its indices without coordinates), each fitted
-        parameter and ``<name>_stderr`` [SI], ``redchi``, ``chi2_pvalue``, ``quality`` (the
+        parameter and ``<name>_stderr`` [SI] with, before a modulus, its Young's modulus
+        ``<name>_young`` and after it the shear modulus ``<name>_shear`` (each with
+        ``_stderr``) where the fit derived them, ``redchi``, ``chi2_pvalue``, ``quality`` (the
         code) and ``quality_name``. Non-finite values are None (JSON ``null``).
     """
     dims = check_map(fits)
     *_, xs, ys = _layout(fits, dims)
-    names = [str(n) for n in fits["param_i"].values]
-    columns = {n: flat_over(fits, n, dims) for name in names for n in (name, f"{name}_stderr")
-               if n in fits.variables}
+    columns = {n: flat_over(fits, n, dims) for name in _mapped_variables(fits)
+               for n in (name, f"{name}_stderr") if n in fits.variables}
     columns.update({n: flat_over(fits, n, dims) for n in ("redchi", "chi2_pvalue")
                     if n in fits.variables})
     quality = flat_over(fits, "quality", dims).astype(int)
@@ -379,7 +399,8 @@ def best_fit_curves(fits: xr.Dataset, spectra: xr.Dataset, *, points: int = FIT_
 
 
 def map_view(fits: xr.Dataset, spectra: xr.Dataset | None = None,
-             fit_curves: xr.Dataset | None = None, *, title: str | None = None) -> MapView:
+             fit_curves: xr.Dataset | None = None, *, title: str | None = None,
+             tip: Any = None) -> MapView:
     """Everything the viewer draws, from a fitted map and (optionally) its spectra.
 
     Parameters
@@ -388,23 +409,36 @@ def map_view(fits: xr.Dataset, spectra: xr.Dataset | None = None,
         A fitted map (:func:`viscoforce.fitting.maps.fit_map`).
     spectra : xarray.Dataset, optional
         The map's spectra (``stiffness``, ``phase``, their ``_stderr`` over the map dims and
-        ``omega``): the Bode plots' data.
+        ``omega``): the Bode plots' data. For a map of ``hertz`` fits, the force curves it
+        was fitted to: each pixel's approach and best fit (``curves``,
+        :func:`~viscoforce.plotting.viewer._curves.force_curves`) instead of Bode plots.
     fit_curves : xarray.Dataset, optional
         Best-fit ``fit_stiffness`` and ``fit_phase`` over (map dims, ``omega``)
         (:func:`best_fit_curves`); default: those of ``fits`` if it has them.
     title : str, optional
         The page title (default: the model and the pixel count).
+    tip : Tip or str, optional
+        The tip of a ``hertz`` map's fits (default: the one its attrs record), for its
+        best-fit force curves.
 
     Returns
     -------
     MapView
+
+    Raises
+    ------
+    SchemaError
+        ``fits`` is not a fitted map; force curves given for a map of spectrum fits.
+    ParameterError
+        The spectra or curves are not over this map's pixels.
     """
     dims = check_map(fits)
     names = tuple(str(n) for n in fits["param_i"].values)
+    variables = tuple(_mapped_variables(fits))
     x, y, width, height, labels, _, _ = _layout(fits, dims)
     quality = flat_over(fits, "quality", dims).astype(int)
     units, colour, log, hists = {}, {}, {}, {}
-    for name in names:
+    for name in variables:
         values = flat_over(fits, name, dims).astype(float)
         bad = _bad_pixels(fits, name, dims).reshape(-1)
         shown = np.isfinite(values) & ~bad
@@ -420,6 +454,26 @@ def map_view(fits: xr.Dataset, spectra: xr.Dataset | None = None,
             fits["fit_stiffness"].dims) == {*dims, "omega"}:
         fit_curves = fits
     notes: list[str] = []
+    model = str(fits.attrs.get("model", ""))
+    curves: dict[str, np.ndarray] = {}
+    if model in CURVE_MODELS:
+        if spectra is not None and not is_curves(spectra):
+            raise SchemaError(f"a {model} map was fitted to force curves: give them as --data "
+                              "(the map file), not spectra")
+        if spectra is None:
+            notes.append(f"no force curves given (--data MAP, the file the {model} map was "
+                         "fitted to): the force-curve plot stays empty")
+            empty = np.zeros(0)
+            curves = {"position": empty, "force": empty, "fit_force": empty,
+                      "offsets": np.zeros(quality.size + 1, dtype=np.int64)}
+        else:
+            curves, more = force_curves(fits, spectra, dims, tip=tip)
+            notes.extend(more)
+        spectra = None
+    elif spectra is not None and is_curves(spectra):
+        raise SchemaError(f"--data holds force curves; the viewer draws them for maps of "
+                          f"{', '.join(CURVE_MODELS)} fits, this is a {model} map: give its "
+                          "spectra ('viscoforce load MAP --out spectra.nc')")
     frequency, data, f_label, r_label, scale = None, {}, "frequency [Hz]", "residual", 1.0
     if spectra is not None:
         frequency, data, f_label, r_label, scale = _spectra(fits, spectra, dims, fit_curves)
@@ -433,7 +487,9 @@ def map_view(fits: xr.Dataset, spectra: xr.Dataset | None = None,
             f_label = "frequency [Hz]"
         fit_arrays = {k: np.asarray(fit_curves[f"fit_{k}"].transpose(*order).values,
                                     dtype=float).reshape(-1) for k in ("stiffness", "phase")}
-    if spectra is None and fit_curves is None:
+    if curves or model in CURVE_MODELS:
+        pass  # a curve map: no Bode plots (the force-curve notes are above)
+    elif spectra is None and fit_curves is None:
         notes.append("no spectra (--data SPECTRA.nc) and no best-fit curves in the fit result: "
                      "the Bode plots stay empty")
     elif spectra is None:
@@ -445,8 +501,10 @@ def map_view(fits: xr.Dataset, spectra: xr.Dataset | None = None,
     return MapView(
         title=title or f"viscoforce map viewer: {fits.attrs.get('model', 'fit')} model, "
                        f"{quality.size} pixels, {n_good} good",
-        dims=dims, params=names, units=units, x=x, y=y, width=width, height=height,
+        dims=dims, params=names, variables=variables, units=units, x=x, y=y, width=width, height=height,
         axis_labels=labels, colour=colour, log=log, quality=quality,
         table=pixel_table(fits), histograms=hists, frequency=frequency, spectra=data,
         fit_frequency=fit_frequency, fits=fit_arrays, frequency_label=f_label,
-        residual_label=r_label, notes=tuple(notes))
+        residual_label=r_label, notes=tuple(notes),
+        what={n: _what(fits, n) for n in variables},
+        labels={n: _variable_label(fits, n, units[n][1]) for n in variables}, curves=curves)

@@ -4,7 +4,9 @@ Bokeh is imported here only, inside :func:`report_html`. The page is one HTML fi
 Bokeh's JavaScript inline (:data:`bokeh.resources.INLINE`), so it opens from a ``file://`` URL
 with no network. Its parts and the Bokeh models the tests find by ``name``:
 
-- ``parameter``: the selector of the mapped parameter;
+- ``parameter``: the selector of the mapped variable (Young's modulus of the main modulus
+  first and by default, then the paper's modulus and the shear modulus of each fitted
+  parameter: :attr:`MapView.variables`, issue 38 item 3);
 - ``map`` / ``map_data``: the map, one rectangle per pixel, coloured by the data source's
   ``value`` column (NaN, drawn grey, where the pixel is masked for that parameter); a click
   selects a pixel;
@@ -12,8 +14,12 @@ with no network. Its parts and the Bokeh models the tests find by ``name``:
 - ``bode_magnitude``, ``bode_phase``, ``bode_residuals``, with ``bode_data`` (the clicked
   pixel's data: ``frequency``, ``stiffness``, ``phase``, error-bar ends, residuals) and
   ``fit_data`` (its best-fit curve);
-- ``pixel_table`` / ``pixel_table_data``: the clicked pixel's parameters with stderr,
-  ``redchi``, ``chi2_pvalue`` and ``quality``;
+- ``force_curve`` with ``curve_data`` (a map of ``hertz`` fits, in place of the Bode plots:
+  the clicked pixel's approach, ``position`` from its contact point [µm] and ``force`` [nN],
+  and its best fit ``fit_force``), the pixels' curves in ``curve_store``;
+- ``pixel_table`` / ``pixel_table_data``: the clicked pixel's variables (Young's modulus
+  first, the paper's modulus beside it labelled as the paper's convention in the ``what``
+  column) with stderr, ``redchi``, ``chi2_pvalue`` and ``quality``;
 - ``export_csv``: a button that downloads the per-pixel table as CSV.
 
 The per-pixel table is also a JSON data island, ``<script type="application/json"
@@ -77,23 +83,30 @@ const part = (a) => a ? a.slice(i * m, (i + 1) * m) : [];
 fit_data.data = {frequency: fit_frequency, stiffness: part(fit_store.data.stiffness),
                  phase: part(fit_store.data.phase)};
 const p = island.pixels[i];
-const rows = {name: [], value: [], stderr: [], unit: []};
-for (const [name, factor, unit] of params) {
+const rows = {name: [], value: [], stderr: [], unit: [], what: []};
+for (const [name, factor, unit, what] of params) {
   rows.name.push(name);
-  rows.value.push(p[name] === null ? NaN : p[name] / factor);
+  rows.value.push(p[name] === null || p[name] === undefined ? NaN : p[name] / factor);
   const e = p[name + '_stderr'];
   rows.stderr.push(e === null || e === undefined ? NaN : e / factor);
   rows.unit.push(unit);
+  rows.what.push(what);
 }
 for (const name of ['redchi', 'chi2_pvalue']) {
   rows.name.push(name);
   rows.value.push(p[name] === null || p[name] === undefined ? NaN : p[name]);
   rows.stderr.push(NaN);
   rows.unit.push('');
+  rows.what.push('');
 }
 rows.name.push('quality'); rows.value.push(p.quality); rows.stderr.push(NaN);
-rows.unit.push(p.quality_name);
+rows.unit.push(p.quality_name); rows.what.push('');
 table_data.data = rows;
+if (curve_offsets.length > 1) {  // a curve map (hertz): the pixel's approach and its fit
+  const a = curve_offsets[i], b = curve_offsets[i + 1], c = curve_store.data;
+  curve_data.data = {position: c.position.slice(a, b), force: c.force.slice(a, b),
+                     fit_force: c.fit_force.slice(a, b)};
+}
 // Bokeh 3.9 redraws a DataTable when its view's rows change, not when the same rows get new
 // values (issue 38; bokeh/bokeh#15328): ask for the redraw
 table.view.change.emit();
@@ -215,8 +228,16 @@ def content_security_policy(page: str) -> str:
 
 
 def _label(view: MapView, name: str) -> str:
+    """The axis and colour-bar label of a variable (``"Young's modulus E_young [kPa]"``)."""
+    if name in view.labels:
+        return view.labels[name]
     display = view.units[name][1]
     return f"{name} [{display}]" if display else name
+
+
+def _variables(view: MapView) -> tuple[str, ...]:
+    """What the page maps and tabulates (Young's first), or the fitted parameters."""
+    return view.variables or view.params
 
 
 def _range(values: np.ndarray, log: bool) -> tuple[float, float]:
@@ -241,6 +262,7 @@ def _padded(values: np.ndarray, n: int) -> np.ndarray:
 def _island(view: MapView) -> str:
     """The JSON data island (:func:`_script_json`: nothing in it can end it or open markup)."""
     text = _script_json({"dims": list(view.dims), "params": list(view.params),
+                         "variables": list(_variables(view)),
                          "pixels": view.table})
     return f'<script type="application/json" id="{DATA_ISLAND_ID}">{text}</script>'
 
@@ -248,6 +270,32 @@ def _island(view: MapView) -> str:
 def _first_pixel(view: MapView) -> int:
     good = np.flatnonzero(view.quality == 0)
     return int(good[0]) if good.size else 0
+
+
+def _force_curve(view: MapView, i0: int) -> tuple[Any, Any, Any, list[int]]:
+    """A curve map's force-curve figure and its data.
+
+    Returns the figure, the store of every pixel's curve, the shown pixel's source (pixel
+    ``i0``) and the pixels' offsets in the store (empty: not a curve map).
+    """
+    from bokeh.models import ColumnDataSource
+    from bokeh.plotting import figure
+
+    keys = ("position", "force", "fit_force")
+    offsets = [int(k) for k in view.curves.get("offsets", ())]
+    store = ColumnDataSource({k: np.asarray(view.curves.get(k, np.zeros(0)), dtype=np.float32)
+                              for k in keys}, name="curve_store")
+    a, b = (offsets[i0], offsets[i0 + 1]) if offsets else (0, 0)
+    shown = ColumnDataSource({k: store.data[k][a:b] for k in keys}, name="curve_data")
+    fig = figure(name="force_curve", width=520, height=320, tools="pan,wheel_zoom,reset,save",
+                 x_axis_label=_plain("tip position toward the sample from the contact point "
+                                     "[µm]"), y_axis_label=_plain("force [nN]"))
+    fig.title.text = _plain("approach and Hertz fit")
+    fig.scatter("position", "force", source=shown, size=3, color="#777777", legend_label="data")
+    fig.line("position", "fit_force", source=shown, color="black", line_width=2,
+             legend_label="fit")
+    fig.legend.location = "top_left"
+    return fig, store, shown, offsets
 
 
 def report_html(view: MapView, *, csv_name: str = "viscoforce-map.csv") -> str:
@@ -286,10 +334,11 @@ def report_html(view: MapView, *, csv_name: str = "viscoforce-map.csv") -> str:
     from bokeh.plotting import figure
     from bokeh.resources import INLINE
 
-    first_name = view.params[0]
-    ranges = {n: _range(view.colour[n], view.log[n]) for n in view.params}
-    labels = {n: _plain(_label(view, n)) for n in view.params}
-    colour = ColumnDataSource({n: view.colour[n] for n in view.params}, name="colour_store")
+    variables = _variables(view)
+    first_name = variables[0]  # Young's modulus of the main modulus, where the fit has one
+    ranges = {n: _range(view.colour[n], view.log[n]) for n in variables}
+    labels = {n: _plain(_label(view, n)) for n in variables}
+    colour = ColumnDataSource({n: view.colour[n] for n in variables}, name="colour_store")
     map_data = ColumnDataSource({
         "x": view.x, "y": view.y, "width": view.width, "height": view.height,
         "pixel": np.arange(view.n_pixels), "value": view.colour[first_name],
@@ -321,7 +370,7 @@ def report_html(view: MapView, *, csv_name: str = "viscoforce-map.csv") -> str:
     map_fig.add_layout(bar, "right")
 
     n_bins = max((h[0].size for h in view.histograms.values()), default=0)
-    hist = ColumnDataSource({f"{n}_{k}": _padded(v, n_bins) for n in view.params
+    hist = ColumnDataSource({f"{n}_{k}": _padded(v, n_bins) for n in variables
                              for k, v in zip(("left", "right", "count"), view.histograms[n],
                                              strict=True)}, name="histogram_store")
     left, right, count = view.histograms[first_name]
@@ -377,17 +426,21 @@ def report_html(view: MapView, *, csv_name: str = "viscoforce-map.csv") -> str:
     residuals.line("frequency", 0, source=fit_data, color="grey")
     residuals.legend.location = "top_left"
 
-    table_data = ColumnDataSource({"name": [], "value": [], "stderr": [], "unit": []},
-                                  name="pixel_table_data")
+    force_figure, curve_store, curve_data, curve_offsets = _force_curve(view, i0)
+    table_data = ColumnDataSource({"name": [], "value": [], "stderr": [], "unit": [],
+                                   "what": []}, name="pixel_table_data")
     number = NumberFormatter(format="0.0000 a", nan_format="–")
-    table = DataTable(source=table_data, name="pixel_table", width=420, height=260,
+    table = DataTable(source=table_data, name="pixel_table", width=640, height=300,
                       index_position=None, reorderable=False, columns=[
-                          TableColumn(field="name", title="parameter"),
-                          TableColumn(field="value", title="value", formatter=number),
-                          TableColumn(field="stderr", title="stderr", formatter=number),
-                          TableColumn(field="unit", title="unit")])
+                          TableColumn(field="name", title="parameter", width=110),
+                          TableColumn(field="value", title="value", formatter=number,
+                                      width=80),
+                          TableColumn(field="stderr", title="stderr", formatter=number,
+                                      width=80),
+                          TableColumn(field="unit", title="unit", width=70),
+                          TableColumn(field="what", title="what it is", width=300)])
 
-    select = Select(title="mapped parameter", value=first_name, options=list(view.params),
+    select = Select(title="mapped parameter", value=first_name, options=list(variables),
                     name="parameter")
     select.js_on_change("value", CustomJS(args={
         "select": select, "map_data": map_data, "colour": colour, "renderer": renderer,
@@ -398,9 +451,11 @@ def report_html(view: MapView, *, csv_name: str = "viscoforce-map.csv") -> str:
     on_select = CustomJS(args={
         "map_data": map_data, "store": store, "fit_store": fit_store, "bode_data": bode_data,
         "fit_data": fit_data, "frequency": frequency, "fit_frequency": fit_frequency,
+        "curve_store": curve_store, "curve_data": curve_data, "curve_offsets": curve_offsets,
         "keys": list(_SPECTRUM_KEYS), "table_data": table_data, "table": table,
         "title": pixel_title,
-        "params": [[n, view.units[n][2], view.units[n][1]] for n in view.params],
+        "params": [[n, view.units[n][2], view.units[n][1], view.what.get(n, "")]
+                   for n in variables],
         "dims": list(view.dims), "dims_html": [_html_text(d) for d in view.dims],
         "quality_html": {str(row["quality"]): _html_text(row["quality_name"])
                          for row in view.table}}, code=_ON_SELECT)
@@ -409,13 +464,16 @@ def report_html(view: MapView, *, csv_name: str = "viscoforce-map.csv") -> str:
     export = Button(label="export table as CSV", name="export_csv", button_type="primary")
     export.js_on_event("button_click", CustomJS(args={"filename": csv_name}, code=_EXPORT_CSV))
     notes = Div(text="<br>".join(_html_text(n) for n in view.notes), name="notes")
-    help_text = Div(text=_html_text("Click a pixel to see its Bode plot and parameters. Grey "
-                                    "pixels: the fit failed, does not describe the data, or "
-                                    "the parameter is not determined there."))
-    layout = column(
-        row(select, export, help_text), notes,
-        row(map_fig, column(histogram)),
-        pixel_title, row(magnitude, phase, residuals), row(table))
+    shown = "force curve" if curve_offsets else "Bode plot"
+    help_text = Div(text=_html_text(f"Click a pixel to see its {shown} and parameters (Young's "
+                                    "modulus first; E, E0, ... in the paper's convention, "
+                                    "2/E = Σ(1 − ν²)/E_i). Grey pixels: the fit failed, does "
+                                    "not describe the data, or the parameter is not determined "
+                                    "there."))
+    plots = (row(force_figure, table) if curve_offsets else
+             column(row(magnitude, phase, residuals), row(table)))
+    layout = column(row(select, export, help_text), notes, row(map_fig, column(histogram)),
+                    pixel_title, plots)
     # the first pixel's table and title are filled by the same callback when the page loads
     from bokeh.document import Document
 
