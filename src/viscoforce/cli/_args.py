@@ -43,6 +43,7 @@ from viscoforce.cli._flag_names import (
 )
 from viscoforce.cli._negative_args import normalize_negative_args, value_options
 from viscoforce.cli._outputs_check import (
+    CSV,
     DIRECTORY,
     FIGURE,
     NETCDF,
@@ -70,6 +71,7 @@ __all__ = [
     "FIGURE",
     "MATERIAL_FLAGS",
     "NETCDF",
+    "CSV",
     "NETCDF_OR_CSV",
     "NUMERICS_FLAGS",
     "PARAMETER_FLAGS",

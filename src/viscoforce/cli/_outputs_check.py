@@ -18,6 +18,7 @@ from viscoforce._files import same_file
 from viscoforce.cli._usage import UsageError
 
 __all__ = [
+    "CSV",
     "DIRECTORY",
     "FIGURE",
     "NETCDF",
@@ -35,6 +36,8 @@ __all__ = [
 NETCDF, FIGURE, DIRECTORY = "netcdf", "figure", "directory"
 #: An output that is a netCDF file (.nc) or a CSV table (.csv), by its extension.
 NETCDF_OR_CSV = "netcdf-or-csv"
+#: An output that is a CSV table (.csv).
+CSV = "csv"
 
 #: Figure formats assumed when matplotlib cannot be asked.
 _FALLBACK_FIGURE_FORMATS = ("eps", "jpeg", "jpg", "pdf", "png", "ps", "svg", "tif", "tiff",
@@ -115,6 +118,8 @@ def _check_one(flag: str, text: str, kind: str) -> None:
     suffix = path.suffix.lower()
     if kind == NETCDF and suffix != ".nc":
         raise UsageError(f"{shown}: a netCDF file name must end in .nc")
+    if kind == CSV and suffix != ".csv":
+        raise UsageError(f"{shown}: a CSV table's file name must end in .csv")
     if kind == NETCDF_OR_CSV and suffix not in (".nc", ".csv"):
         raise UsageError(f"{shown}: the file name must end in .nc (netCDF) or .csv (a table)")
     if kind == FIGURE:

@@ -12,6 +12,7 @@ from typing import Any
 
 from viscoforce._files import write_netcdf
 from viscoforce.cli._args import (
+    CSV,
     FIGURE,
     NETCDF_OR_CSV,
     Output,
@@ -76,7 +77,11 @@ def add_fit(parser: argparse.ArgumentParser) -> None:
                                 "curve/pixel with units in the headers (.csv)"),
                          Output("--plot", FIGURE, "FILE.png",
                                 "data and fit (one spectrum/curve), or a map of one fitted "
-                                "variable over the pixels (a map; --plot-variable)")])
+                                "variable over the pixels (a map; --plot-variable)"),
+                         Output("--curves-out", CSV, "FILE.csv",
+                                "write the data, the best fit and the residual of every fitted "
+                                "point (one spectrum or curve, or a map of spectra: a long "
+                                "table with a column per pixel coordinate)")])
     parser.add_argument("--reports", action="store_true",
                         help="a map: keep each pixel's lmfit report in --out (the text variable "
                              "fit_report; one more least-squares run per pixel)")
@@ -201,6 +206,9 @@ def run_fit(args: argparse.Namespace) -> int:
     if not is_map and getattr(args, "plot_variable", None) is not None:
         raise UsageError("--plot-variable chooses what a map's --plot shows; this is one "
                          "spectrum or curve")
+    if getattr(args, "curves_out", None) and is_map and kind == "curves":
+        raise UsageError("--curves-out writes best-fit curves of one curve or of spectra; a "
+                         "map of curve fits keeps none: add --curve I for one curve")
     if is_map and args.model == "auto":
         raise UsageError("--model auto fits one spectrum: add --curve I, or name the model "
                          "for the whole map")
@@ -239,6 +247,10 @@ def run_fit(args: argparse.Namespace) -> int:
         if why:
             info["height_record"] = why
     info["warnings"] = texts
+    if getattr(args, "curves_out", None):
+        from viscoforce.io.fit_tables import export_fits
+
+        info["curves_out"] = export_fits(result, ds if is_map else kept.data, args.curves_out)
     if args.out and args.out.lower().endswith(".csv"):
         write_table(result, args.out)
     elif args.out:
@@ -252,7 +264,7 @@ def run_fit(args: argparse.Namespace) -> int:
         _print_map(info)
     else:
         _print_single(info)
-    print_written(args.out, args.plot)
+    print_written(args.out, args.plot, getattr(args, "curves_out", None))
     return 0
 
 
@@ -294,6 +306,9 @@ def run_batch(args: argparse.Namespace, paths: list[str]) -> int:
         raise UsageError("--model auto fits one spectrum: name the model for a batch of files")
     if args.plot:
         raise UsageError("--plot draws one spectrum or curve: give one file")
+    if getattr(args, "curves_out", None):
+        raise UsageError("--curves-out writes the best fits of one file: give one file (or "
+                         "fit each file apart)")
     if args.curve is not None:
         raise UsageError("--curve picks a curve of one file: give one file")
     progress = sys.stderr.isatty() if args.progress is None else args.progress

@@ -18,6 +18,7 @@ import numpy as np
 
 from viscoforce.exceptions import ParameterError
 from viscoforce.fitting import _params as P
+from viscoforce.fitting._hertz_scan import hertz_scan
 from viscoforce.fitting.base import (
     MODULUS_BOUNDS,
     FitModel,
@@ -97,33 +98,21 @@ def hertz_linear(tip: Any, z: np.ndarray, f: np.ndarray, contact: float
     return coef, float(np.sum((design @ coef - f) ** 2))
 
 
-def hertz_grid(tip: Any, z: np.ndarray, f: np.ndarray
+def hertz_grid(tip: Any, z: np.ndarray, f: np.ndarray, *, coarse: bool = True
                ) -> tuple[float, float, np.ndarray] | None:
     """The best (contact point, SSE, (E, baseline, slope)) of a grid of contact points.
 
     Given the contact point the model is linear in (E, baseline, slope); the grid spans the
-    contact window (:func:`contact_window`), then one refinement between its neighbours. Only
-    contact points with E > 0 count; None when there is none (the force does not rise with z
-    beyond any of them).
+    contact window (:func:`contact_window`): :data:`HERTZ_GUESS_POINTS` quantiles of the samples
+    in it, then 21 points within one median grid step of the best. Only contact points with
+    E > 0 count; None when there is none (the force does not rise with z beyond any of them).
+    The candidates are solved all at once in closed form
+    (:func:`~viscoforce.fitting._hertz_scan.hertz_scan`; ``coarse``: the quantiles on a subsample
+    first, then on every sample near its best; False: every candidate on every sample); they
+    equal :func:`hertz_linear` at each candidate to rounding.
     """
-    lo, hi = contact_window(tip, z)
-    inner = np.sort(z[(z >= lo) & (z <= hi)])
-    if inner.size < 4:
-        raise ParameterError("the approach has fewer than 4 points where contact may lie")
-    # candidates: quantiles of the data (dense where the data are), excluding the last points
-    grid = np.quantile(inner, np.linspace(0.02, 0.98, HERTZ_GUESS_POINTS))
-    best = None
-    for _ in range(2):
-        for c in grid:
-            coef, sse = hertz_linear(tip, z, f, float(c))
-            if coef[0] > 0 and (best is None or sse < best[1]):
-                best = (float(c), sse, coef)
-        if best is None:
-            break
-        step = float(np.median(np.diff(grid))) if grid.size > 1 else float(np.ptp(z)) / 10
-        grid = np.linspace(best[0] - step, best[0] + step, 21)
-        grid = grid[(grid >= lo) & (grid <= hi)]
-    return best
+    return hertz_scan(tip, z, f, contact_window(tip, z), points=HERTZ_GUESS_POINTS,
+                      coarse=coarse)
 
 
 def _clipped_modulus(e: float) -> float:

@@ -3,8 +3,11 @@
 :func:`hertz_checks` checks a Hertz fit of an approach against its own data (the significance of
 the indentation, the direction the force rises in, E against the depth, the baseline before
 contact) and says where E is not determined; :func:`hertz_verdict` and :func:`depth_check` are
-the same verdicts without warnings (a map's pixels). It refits (the depth check), so it sits
-above :mod:`viscoforce.fitting.fit`.
+the same verdicts without warnings (a map's pixels). Its grids of contact points are
+:func:`~viscoforce.fitting.curve_models.hertz_grid`'s, and the depth check's refit is the same
+scan carried to its minimum (:func:`~viscoforce.fitting._hertz_scan.hertz_least_squares`): each
+candidate contact point solved in closed form, coarse then local
+(:mod:`viscoforce.fitting._hertz_scan`, issue 41 item 4).
 """
 
 from __future__ import annotations
@@ -22,9 +25,9 @@ from viscoforce.exceptions import (
     ParameterError,
     ViscoforceError,
 )
-from viscoforce.fitting.curve_models import hertz_grid
+from viscoforce.fitting._hertz_scan import hertz_least_squares
+from viscoforce.fitting.curve_models import HERTZ_GUESS_POINTS, contact_window, hertz_grid
 from viscoforce.fitting.data import FitData
-from viscoforce.fitting.fit import fit_data
 from viscoforce.fitting.outcome import residual_lag1
 from viscoforce.fitting.report import carry
 from viscoforce.fitting.verdict import CHECKED_ATTR, listed_names
@@ -319,7 +322,11 @@ def depth_check(z: np.ndarray, f: np.ndarray, values: dict[str, float], e_err: f
     """E refitted on the shallow part of an approach, against the full fit ``values`` (no warning).
 
     The approach (z [m], F [N]) is refitted up to :data:`DEPTH_CHECK_FRACTION` of its maximum
-    contact force. The shallow samples are a subset of the full fit's, so the two E share
+    contact force: the hertz model's least squares over those samples, by variable projection
+    (:func:`~viscoforce.fitting._hertz_scan.hertz_least_squares`: the contact-point scan of the
+    fit's guess, then the minimum of its closed-form sum of squares over the contact point; what
+    the fitting engine reaches from that guess, to its tolerance, without a second fit's
+    machinery). The shallow samples are a subset of the full fit's, so the two E share
     their noise: under a law that describes the curve the variance of their difference is
     σ²·(A_shallow − A_full), A = ((JᵀJ)⁻¹)_EE with the model's Jacobian J over each fit's
     samples, both at the full fit's values (:func:`_hertz_jacobian`; for a linear model this is
@@ -358,14 +365,17 @@ def depth_check(z: np.ndarray, f: np.ndarray, values: dict[str, float], e_err: f
         return {"made": False,
                 "text": "not made (too few contact points, or E without stderr)"}
     try:
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")
-            shallow = fit_data(FitData(z[keep], f[keep], None, {}), "hertz", tip=tip,
-                               profile=False)
+        shallow = hertz_least_squares(tip, z[keep], f[keep], contact_window(tip, z[keep]),
+                                      points=HERTZ_GUESS_POINTS)
     except (ViscoforceError, ValueError, ArithmeticError) as exc:
         return {"made": False, "text": f"not made: the shallow refit failed ({exc})"}
-    e_half = float(shallow["E"])
-    own = {n: float(shallow[n]) for n in values}
+    if shallow is None:
+        return {"made": False, "text": "not made: the shallow refit failed (no contact point "
+                                       "gives a positive modulus)"}
+    c_half, _, coef = shallow
+    own = {"E": float(coef[0]), "contact_point": c_half, "baseline": float(coef[1]),
+           "baseline_slope": float(coef[2])}
+    e_half = own["E"]
     jacobian = _hertz_jacobian(z, values, tip)
     excess_factor = _e_variance_factor(jacobian[keep]) - _e_variance_factor(jacobian)
     noise = _noise_variance(_hertz_residual(z[keep], f[keep], own, tip), z[keep], 4)

@@ -61,7 +61,7 @@ import lmfit
 import numpy as np
 
 from viscoforce.exceptions import ViscoforceError
-from viscoforce.fitting import _params
+from viscoforce.fitting import _engine, _params
 
 #: Identifiability codes of a fitted parameter.
 IDENTIFIABILITY: dict[int, str] = {0: "determined", 1: "lower_bound_only",
@@ -227,7 +227,7 @@ def _profile_one(layout: Sequence[_params.Item], residual: Residual, best: _para
     limits = []
     bounded = []
 
-    solved: dict[float, list[tuple[float, lmfit.Parameters]]] = {-1.0: [], 1.0: []}
+    solved: dict[float, list[tuple[float, _params.ParameterSet]]] = {-1.0: [], 1.0: []}
 
     def root_at(step: float, side: float) -> float:
         """√(Δχ²/scale) at ``step`` from the best value (NaN: the window holds it there).
@@ -334,7 +334,7 @@ def _bisect(root_at: Callable[[float], float], lo: float, r_lo: float, hi: float
 def _delta_chi2(layout: Sequence[_params.Item], residual: Residual, best: _params.ParameterSet,
                 name: str, log: bool, target: float, chisqr: float, scale: float, *,
                 start: _params.ParameterSet | None = None
-                ) -> tuple[float, lmfit.Parameters | None]:
+                ) -> tuple[float, _params.ParameterSet | None]:
     """Profile Δχ² with ``name`` held at ``target`` (log10 for positive parameters).
 
     Returns (Δχ², the constrained fit's parameters where it met the target, else None); Δχ² is
@@ -354,15 +354,11 @@ def _delta_chi2(layout: Sequence[_params.Item], residual: Residual, best: _param
     if not lo <= target <= hi:
         return math.nan, None  # beyond the parameters' window: it bounds it, not the data
     first = _shifted(layout, best if start is None else start, name, log, target)
-    n_var = sum(1 for p in first.values() if p.vary)
-    max_nfev = PROFILE_NFEV * (n_var + 1)
     try:
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore", RuntimeWarning)
-            res = lmfit.minimize(constrained, first, method="leastsq", max_nfev=max_nfev)
-    except (ArithmeticError, ViscoforceError):  # the model gave NaN/inf, or cannot be solved
-        return math.nan, None  # here (a state outside its grid): nothing measured, say unknown
-    if res.nfev >= max_nfev:  # not converged: its Δχ² would be an overestimate
+        res = _constrained_fit(constrained, first)
+    except (ArithmeticError, ViscoforceError, _Unconverged):
+        # the model gave NaN/inf or cannot be solved here (a state outside its grid), or the
+        # fit did not converge within PROFILE_NFEV: nothing measured, say unknown
         return math.nan, None
     if _window_bounds(layout, res.params) - _window_bounds(layout, best):
         return math.nan, None  # a bound of the parameters' window held the fit, not the data
@@ -374,6 +370,39 @@ def _delta_chi2(layout: Sequence[_params.Item], residual: Residual, best: _param
         return math.inf, None  # nothing at a bound: the data held the fit off its target
     r = np.asarray(res.residual, dtype=float)[:-1]  # the data part (the penalty is last)
     return max(float(r @ r) - chisqr, 0.0), res.params
+
+
+class _Unconverged(Exception):
+    """A constrained fit of the profile reached :data:`PROFILE_NFEV` evaluations per parameter."""
+
+
+def _constrained_fit(constrained: Residual, first: _params.InternalParameters
+                     ) -> _engine.LeastSquares:
+    """Minimise ``constrained`` from ``first`` (in place) on the package's engine.
+
+    :func:`viscoforce.fitting._engine.leastsq` is lmfit's ``leastsq`` without lmfit's per-fit
+    and per-evaluation machinery (the same MINPACK call, the same numbers); the residual is
+    handed ``first`` itself with the trial values set (it reads ``valuesdict()`` or
+    ``params[name].value``). More than :data:`PROFILE_NFEV` evaluations per varied parameter
+    raise :class:`_Unconverged`: a fit stopped there would overestimate Δχ².
+    """
+    varied = [n for n, p in first.items() if p.vary]
+    work = first.copy()
+    cap = PROFILE_NFEV * (len(varied) + 1)
+    calls = 0
+
+    def vector(x: np.ndarray) -> np.ndarray:
+        nonlocal calls
+        calls += 1
+        if calls > cap:
+            raise _Unconverged
+        for key, value in zip(varied, x, strict=True):
+            work[key].value = float(value)
+        return constrained(work)
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)
+        return _engine.leastsq(vector, first, scale_covar=False)
 
 
 def _window_bounds(layout: Sequence[_params.Item], params: _params.ParameterSet) -> set[str]:
@@ -410,9 +439,9 @@ def _window(layout: Sequence[_params.Item], best: _params.ParameterSet, name: st
 
 
 def _shifted(layout: Sequence[_params.Item], base: _params.ParameterSet, name: str, log: bool,
-             target: float) -> lmfit.Parameters:
+             target: float) -> _params.InternalParameters:
     """A copy of ``base`` with ``name``'s own internal parameter moved to meet ``target``."""
-    start = _params.as_lmfit(base)  # lmfit.minimize's own Parameters
+    start = _as_internal(base)
     values, _ = _params.to_reported(layout, base.valuesdict())
     key = f"log_{name}" if log else name
     if key not in start or not start[key].vary:
@@ -421,3 +450,15 @@ def _shifted(layout: Sequence[_params.Item], base: _params.ParameterSet, name: s
     shift = target - math.log10(values[name]) if log else target - values[name]
     p.set(value=min(max(p.value + shift, p.min), p.max))
     return start
+
+
+def _as_internal(params: _params.ParameterSet) -> _params.InternalParameters:
+    """A copy of ``params`` in the engine's container (values, bounds, vary)."""
+    if isinstance(params, _params.InternalParameters):
+        return params.copy()
+    out = _params.InternalParameters()
+    for name, p in params.items():
+        if p.expr:  # an lmfit expression: the SPEC names of a chain, not varied
+            continue
+        out[name] = _params.Internal(name, p.value, p.min, p.max, p.vary)
+    return out

@@ -220,7 +220,10 @@ def fit_once(model: FitModel, data: FitData, *, starts: int = 2, settle: bool = 
     residual = _vector_residual(model, data, first)
     best: Outcome | None = None
     errors: list[str] = []
-    for params in itertools.chain([first], _alternative_starts(model, first, starts - 1)):
+    # a model that searched its other starts itself (the exponential sums, by variable
+    # projection: fitting._varpro) hands over the best of them: they are not run again here
+    others = 0 if getattr(model, "searched_starts", False) else starts - 1
+    for params in itertools.chain([first], _alternative_starts(model, first, others)):
         if settle and best is not None and _settled(best):
             break
         try:

@@ -13,6 +13,7 @@ from __future__ import annotations
 from typing import Any
 
 from viscoforce.exceptions import ParameterError
+from viscoforce.fitting._varpro import exponential_model
 from viscoforce.fitting.base import (
     MAX_MODES,
     FitModel,
@@ -64,7 +65,8 @@ def _creep_model(spec: ModelSpec) -> FitModel:
     if extra:
         raise ParameterError(f"model 'creep' takes {', '.join(extra)} with a tip only (the "
                              "Lee-Radok form); give tip= (--tip)")
-    return _exponential_model(spec, "z_inf", "dz")
+    # the search of each fit by variable projection (amplitudes linear; issue 41 item 2)
+    return exponential_model(_exponential_model(spec, "z_inf", "dz"), "z_inf", "dz")
 
 
 CREEP_HISTORY = Input("creep_history", check_history, "",

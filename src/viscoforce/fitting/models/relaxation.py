@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from viscoforce.fitting._varpro import exponential_model
 from viscoforce.fitting.base import (
     MAX_MODES,
     FitModel,
@@ -21,7 +22,8 @@ def parameters(modes: int, material: str | None = None) -> list[str]:
 
 
 def _relaxation_model(spec: ModelSpec) -> FitModel:
-    return _exponential_model(spec, "F_inf", "dF")
+    # the search of each fit by variable projection (amplitudes linear; issue 41 item 2)
+    return exponential_model(_exponential_model(spec, "F_inf", "dF"), "F_inf", "dF")
 
 
 ENTRY = register(ModelEntry(
