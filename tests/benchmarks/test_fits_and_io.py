@@ -127,9 +127,13 @@ OVERHEAD_CASE_KEYS = {"case", "model", "modes", "points", "floor_nfev", "library
     f"{path}_{what}" for path in ("library", "floor", "local", "profile", "pixel")
     for what in ("cpu_s", "cpu_min_s", "ratio")} | {
     "library_all_cpu_s", "floor_all_cpu_s", "library_all_ratio", "paired_samples"}
+#: The exact case's closed-form SLS floor (issue 41 item 3).
+OVERHEAD_EXACT_KEYS = {"sls_floor_cpu_s", "sls_floor_cpu_min_s", "sls_floor_nfev", "sls_ratio",
+                       "exact_floor_ratio", "bar_ratio", "bar_passed"}
 OVERHEAD_SUMMARY_KEYS = {"worst_closed_form_ratio", "worst_closed_form_all_ratio", "exact_ratio",
                          "closed_form_passed", "exact_passed", "passed", "verdict",
-                         "wall_time_s", "loadavg_end"}
+                         "wall_time_s", "loadavg_end", "exact_floor_ratio", "exact_ms",
+                         "exact_floor_ms", "sls_floor_ms", "exact_bar_passed"}
 
 
 def test_bench_overhead_quick_run_writes_documented_files(quick_run):
@@ -141,7 +145,8 @@ def test_bench_overhead_quick_run_writes_documented_files(quick_run):
     assert [c["case"] for c in report["cases"]] == ["svda", "contact", "prony", "relaxation",
                                                     "exact"]
     for case in report["cases"]:
-        assert set(case) == OVERHEAD_CASE_KEYS
+        assert set(case) == OVERHEAD_CASE_KEYS | (
+            OVERHEAD_EXACT_KEYS if case["model"] == "exact" else set())
         assert case["floor_ratio"] == pytest.approx(1.0)
     assert set(report["summary"]) == OVERHEAD_SUMMARY_KEYS
     assert report["summary"]["verdict"] in ("PASS", "FAIL")

@@ -21,18 +21,22 @@ _MATERIALS = ("sls", "prony", "power-law", "structural")
 
 
 def read_data(path: str, fmt: str | None = None, *, height_channel: str | None = None,
-              phase_reference=None):
+              phase_reference=None, raw: bool = False):
     """The dataset of DATA: :func:`viscoforce.measured.open.open_data` (a single curve squeezed).
 
     A netCDF file as written (measured data in it checked), an instrument file through
     ``load``'s route (a JPK map demodulated in chunks of curves); ``height_channel`` the
     reader's (``--height-channel``), ``phase_reference`` the lock-in's (``--phase-reference``:
-    sensor, piezo, delay or a hard-surface file; default the one the data support).
+    sensor, piezo, delay or a hard-surface file; default the one the data support); ``raw``:
+    an instrument file's force curves even where it has modulation segments (what a curve
+    model fits: ``load --raw``'s route).
     """
     from viscoforce.measured.open import OptionError, open_data
 
     options = {k: v for k, v in (("height_channel", height_channel),
                                  ("phase_reference", phase_reference)) if v is not None}
+    if raw:
+        options["raw"] = True
     try:
         return one_curve_squeezed(open_data(path, format=fmt, **options))
     except OptionError as exc:

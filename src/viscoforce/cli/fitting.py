@@ -184,6 +184,18 @@ def _refuse_writing_inputs(args: argparse.Namespace, paths: list[str]) -> None:
                                  "file name")
 
 
+def _reader(args: argparse.Namespace):
+    """:func:`read_data` for ``args.model``.
+
+    A curve model reads an instrument file's force curves even where the file has modulation
+    segments (``load --raw``'s route), so ``fit MAP --model hertz`` fits the map's approaches
+    instead of refusing its spectrum.
+    """
+    import functools
+
+    return functools.partial(read_data, raw=args.model in _CURVE_MODELS)
+
+
 def run_fit(args: argparse.Namespace) -> int:
     """Fit DATA; one spectrum/curve → parameters, a map → per-pixel parameters.
 
@@ -194,7 +206,8 @@ def run_fit(args: argparse.Namespace) -> int:
     if len(paths) > 1:
         return run_batch(args, paths)
     args.data = paths[0]
-    ds = read_data(args.data, args.format, height_channel=height_channel(args),
+    read = _reader(args)
+    ds = read(args.data, args.format, height_channel=height_channel(args),
                    phase_reference=args.phase_reference)
     kind = _kind(ds)
     _check_model(args, kind)
@@ -233,13 +246,13 @@ def run_fit(args: argparse.Namespace) -> int:
 
         result, texts = _fit_recording(fit_all, ds)
         result, alternatives, described = map_alternatives(
-            args, ds, kind, result, lambda data: fit_all(data, False), read_data)
+            args, ds, kind, result, lambda data: fit_all(data, False), read)
         result = with_map_budget(args, result, fixed, alternatives, described)
         info = _map_json(result)
     else:
         first, first_texts, first_caught = recorded(fit_one, args, ds, kind)
         kept = Kept(first, ds, first_texts, first_caught)
-        kept, result, why = budgeted(args, kept, kind, fit_one, read_data)
+        kept, result, why = budgeted(args, kept, kind, fit_one, read)
         show(kept.caught)
         texts = kept.texts
         info = _single_json(result)
@@ -272,7 +285,7 @@ def run_fit(args: argparse.Namespace) -> int:
 
 def _fit_file(args: argparse.Namespace, path: str):
     """The fit result of one file of a batch (a map's curves fitted in this process)."""
-    ds = read_data(path, args.format, height_channel=height_channel(args),
+    ds = _reader(args)(path, args.format, height_channel=height_channel(args),
                    phase_reference=args.phase_reference)
     kind = _kind(ds)
     _check_model(args, kind)

@@ -102,6 +102,18 @@ def _derived(ds: xr.Dataset) -> list[str]:
             or str(n) in ("ting_E0", "beta")]
 
 
+def _reading_order(ds: xr.Dataset) -> list[str]:
+    """The parameters and derived moduli in the order people read them.
+
+    Each modulus' Young's value first, then the paper's, then the shear modulus (issue 38 item 3).
+    """
+    derived = _derived(ds)
+    out: list[str] = []
+    for name in _parameters(ds):
+        out += [n for n in (f"{name}_young", name, f"{name}_shear") if n == name or n in derived]
+    return out + [n for n in derived if n not in out]
+
+
 def _unit(ds: xr.Dataset, name: str) -> str:
     return str(ds[name].attrs.get("units", ""))
 
@@ -300,7 +312,7 @@ def _with_budget(ds: xr.Dataset, shifts: Mapping[str, Mapping[str, Any]],
         return out
     notes: list[str] = []
     mirrored = [s for s in sources if s in _MIRRORED]  # ± to first order
-    for name in _parameters(ds) + _derived(ds):
+    for name in _reading_order(ds):
         value = ds[name]
         if not per_pixel and value.size != 1:
             continue

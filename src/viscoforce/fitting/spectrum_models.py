@@ -16,6 +16,7 @@ from typing import Any
 
 import numpy as np
 
+from viscoforce.closed_form import prony_compliance_core
 from viscoforce.exceptions import ModelValidityError, ParameterError
 from viscoforce.fitting.base import (
     MODULUS_BOUNDS,
@@ -121,14 +122,39 @@ def _expand_one_mode(v: Mapping[str, float], modes: int) -> dict[str, float]:
 
 
 def exact_stiffness(problem: ContactProblem, position: float | None, mean_force: float | None,
-                    material: ViscoelasticMaterial, omega: np.ndarray) -> np.ndarray:
-    """Exact small-amplitude k*(ω) [N/m] of ``material`` at h̄0 = ``position`` or at the load."""
-    from viscoforce.experiments.linear_response import linearized_state
+                    material: ViscoelasticMaterial, omega: np.ndarray, *,
+                    states: Any = None) -> np.ndarray:
+    """Exact small-amplitude k*(ω) [N/m] of ``material`` at h̄0 = ``position`` or at the load.
+
+    ``states``: the :class:`~viscoforce.experiments.linear_response.ModulusStates` to evaluate
+    on (the exact model's fitting grid: Newton warm-started from the nearest solved E_inf,
+    direct solves for a few frequencies; ``problem`` is then not used); else at a position
+    those of :func:`~viscoforce.experiments.linear_response.modulus_states` on ``problem``, at
+    a load :func:`~viscoforce.experiments.linear_response.linearized_state`.
+    """
+    from viscoforce.experiments.linear_response import linearized_state, modulus_states
 
     e_inf = material.relaxed_modulus
-    state = (linearized_state(problem, position, e_inf) if position is not None
-             else linearized_state(problem, None, e_inf, load=mean_force))
-    return state.stiffness(2.0 * np.asarray(material.complex_compliance(omega), dtype=complex))
+    compliance = 2.0 * _compliance(material, omega)
+    if states is not None:
+        return states.stiffness(e_inf, compliance)
+    if position is not None:
+        return modulus_states(problem, position).stiffness(e_inf, compliance)
+    return linearized_state(problem, None, e_inf, load=mean_force).stiffness(compliance)
+
+
+def _compliance(material: ViscoelasticMaterial, omega: np.ndarray) -> np.ndarray:
+    """C*(ω) [1/Pa] of a Prony ``material`` (its closed form) at frequencies ``omega``.
+
+    Without the argument checks for the 1-D nonnegative finite frequencies a fit passes (else
+    the material's checked method, which names a bad value): 75 µs of checks per call.
+    """
+    w = np.asarray(omega)
+    if w.ndim != 1 or w.dtype.kind != "f" or not bool(np.all(w >= 0) and np.all(np.isfinite(w))):
+        return np.asarray(material.complex_compliance(omega), dtype=complex)
+    p = material.prony()
+    return prony_compliance_core(w, p.glassy_compliance, np.asarray(p.delta_compliances),
+                                 np.asarray(p.taus))
 
 
 def contact_tip(radius: float | None, tip: Any = None):

@@ -15,7 +15,7 @@ from viscoforce._validation import (
 from viscoforce.exceptions import ConvergenceError, ParameterError
 from viscoforce.problem import ContactProblem, _bracketed_root, check_half_space, contact_radius
 from viscoforce.schema import SIGN_CONVENTION, make_equilibrium
-from viscoforce.solvers.newton import NewtonResult, solve_gap
+from viscoforce.solvers.newton import _GETRS, NewtonResult, solve_gap
 from viscoforce.units import format_quantity
 
 #: Newton tolerance on the gap update, in units of the surface force's decay length.
@@ -48,6 +48,48 @@ def equilibrium_gap(problem: ContactProblem, position: float, modulus: float, *,
         initial = np.maximum(base, problem.surface_force.decay_length)
     xtol = STATIC_XTOL * problem.surface_force.decay_length
     return solve_gap(problem, base, 2.0 / modulus, initial, xtol=xtol)
+
+
+def modulus_slope(problem: ContactProblem, position: float, modulus: float,
+                  sol: NewtonResult) -> np.ndarray:
+    """dh/dE [m/Pa]: how the equilibrium gaps of :func:`equilibrium_gap` move with the modulus.
+
+    Differentiating h − b − (2/E) A p(h) = 0 gives J dh/dE = (b − h)/E, with J = I − (2/E) A p'
+    the Newton Jacobian and (2/E) A p = h − b at the solution. ``sol.factor`` holds J's LU
+    factors at the last Newton iterate (within the tolerance of ``sol.gap``), so this is one
+    back-substitution: a predictor for a nearby modulus (:func:`equilibrium_gap`'s ``initial``),
+    accurate to first order, not a sensitivity to rely on beyond that.
+
+    Parameters
+    ----------
+    problem : ContactProblem
+        The system ``sol`` was solved for.
+    position : float
+        Apex position h0 [m] of ``sol``.
+    modulus : float
+        Modulus E [Pa] of ``sol``, > 0.
+    sol : NewtonResult
+        A solution of :func:`equilibrium_gap` with its factors.
+
+    Returns
+    -------
+    numpy.ndarray
+        dh/dE at the nodes [m/Pa].
+
+    Raises
+    ------
+    ParameterError
+        ``sol`` carries no factors (``factor`` is None) or ``modulus`` ≤ 0.
+    """
+    modulus = require_positive("modulus (E)", modulus)
+    if sol.factor is None:
+        raise ParameterError("sol must carry the Newton Jacobian's factors (sol.factor is None)")
+    rhs = (problem.undeformed_gap(position) - sol.gap) / modulus
+    lu, piv = sol.factor
+    out, info = _GETRS(lu, piv, rhs)
+    if info != 0:  # pragma: no cover - factors of a nonsingular Jacobian
+        raise ConvergenceError(f"LAPACK getrs reported illegal argument {-info}", iterations=0)
+    return out
 
 
 def static_equilibrium(problem: ContactProblem, position: float, *, modulus: float | None = None,
