@@ -18,6 +18,10 @@ paper's pressure law, a standard linear solid E0 = 1e10 Pa, E_inf = 1e9 Pa, τ =
      steps per period, N ∈ {8, …, 512}, for both steppers.
    At the paper's η the converged time-domain response minus the linear one: the genuine
    nonlinear (rectification) effect, not an error.
+   Periods (issue 41 item 6): ``sweep(..., periods=4)`` (the former default) against ``sweep(...)``
+   (periods chosen from the accuracy, 1e-3) at the same ω, interleaved: seconds per ω and the
+   error of each. Target: seconds per ω ≤ 0.75 × the 4-period cost at equal error (the ratio of
+   the summed medians, measured in the same run).
 3. The Fig. 4 phase peak (paper: 38° at ω ≈ 2/τ): the linear peak (bounded search over log ω),
    the converged time-domain peak at η = 1 nm (bounded search), and explicit Euler's peak at
    coarse steps dt = period/N.
@@ -59,6 +63,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))  # benchmarks/_common.p
 from _common import (  # noqa: E402
     cold_build,
     fmt,
+    gc_paused,
     machine_facts,
     parse_args,
     pf,
@@ -87,7 +92,10 @@ LINEAR_REPEATS, QUICK_LINEAR_REPEATS = 21, 10
 SMALL_ETA = 0.01e-9  # [m]: the linear response is the reference at this amplitude
 TD_METHODS = ("exponential", "euler")
 MODES = ("sweep", "fixed dt")
-PERIODS = 4  # demodulated periods (sweep's default)
+PERIODS = 4  # demodulated periods of the fixed-dt recipe (sweep's default before issue 41)
+PERIODS_TARGET = 0.75  # chosen periods: seconds per ω <= 0.75 x those of 4 periods ...
+EQUAL_ERROR = 0.05  # ... at equal error: |e_chosen - e_4| <= 5 % of e_4 at every point
+PERIODS_REPEATS, QUICK_PERIODS_REPEATS = 3, 1  # interleaved timings per variant and point
 CHEAP_RUN = 0.25  # [s]: time-domain runs faster than this are timed 3x (median)
 CHECK_TOL_FACTOR = 0.1  # paper-η check: tol = 0.1 × sweep's default (1e-5 η)
 # part 3: Fig. 4 peak
@@ -108,6 +116,7 @@ CASES = (
      "fixed_steps": (8, 16, 32, 64, 128, 256, 512)},
     {"part": "paper_eta", "omegas": (100.0, 1e3, 1e4)},
     {"part": "fig4_peak", "euler_steps": (16, 32, 64, 128), "euler_sweep_samples": (16, 32)},
+    {"part": "periods", "omegas": (100.0, 1e3, 1e4)},
 )
 #: --quick: grid factors 2 and 1, one frequency, fewer steps.
 QUICK_CASES = (
@@ -115,6 +124,7 @@ QUICK_CASES = (
     {"part": "time_domain", "omegas": (1e4,), "samples": (32,), "fixed_steps": (16, 32)},
     {"part": "paper_eta", "omegas": (1e3,)},
     {"part": "fig4_peak", "euler_steps": (16, 32), "euler_sweep_samples": (16,)},
+    {"part": "periods", "omegas": (1e3,)},
 )
 SCHEMA = "viscoforce.bench_spectrum/1"
 #: Top-level keys of spectrum_benchmark.json (documented in benchmarks/README.md).
@@ -352,6 +362,66 @@ def convergence_orders(rows: list[dict]) -> list[dict]:
                             "n_first_stable": pts[0]["n_per_period"] if pts else None,
                             "orders": orders})
     return out
+
+
+def bench_periods(problems: dict, lin: dict, omegas, repeats: int) -> dict:
+    """Chosen periods against 4 at each (scene, ω): interleaved medians, steps and errors.
+
+    ``lin``: (scene, ω) → the linear k* at η = 0.01 nm (:func:`bench_time_domain`).
+    """
+    rows = []
+    for scene, (h0, _) in SCENES.items():
+        for omega in omegas:
+            k_lin = lin[(scene, omega)]
+            runs = {"4": lambda s=scene, w=omega: sweep(problems[s], SCENES[s][0], SMALL_ETA, [w],
+                                                        periods=PERIODS, progress=False),
+                    "chosen": lambda s=scene, w=omega: sweep(problems[s], SCENES[s][0],
+                                                             SMALL_ETA, [w], progress=False)}
+            wall = {key: [] for key in runs}
+            cpu = {key: [] for key in runs}
+            out = {}
+            with gc_paused():
+                for _ in range(repeats):
+                    for key, run in runs.items():
+                        c0, t0 = time.process_time(), time.perf_counter()
+                        out[key] = run()
+                        wall[key].append(time.perf_counter() - t0)
+                        cpu[key].append(time.process_time() - c0)
+            row = {"scene": scene, "h0": h0, "eta": SMALL_ETA, "omega": omega,
+                   "repeats": repeats}
+            for key, ds in out.items():
+                row.update({f"periods_{key}": int(ds.periods.values[0]),
+                            f"time_{key}_s": statistics.median(wall[key]),
+                            f"cpu_{key}_s": statistics.median(cpu[key]),
+                            f"steps_{key}": int(ds.steps.values[0]),
+                            f"error_{key}": errors(kstar(ds), k_lin)["complex_rel_error"],
+                            f"estimate_{key}": float(ds.error_estimate.values[0]),
+                            f"lockin_bound_{key}": float(ds.lockin_error.values[0])})
+            row["difference"] = abs(kstar(out["chosen"]) / kstar(out["4"]) - 1.0)
+            row["equal_error"] = bool(abs(row["error_chosen"] - row["error_4"])
+                                      <= EQUAL_ERROR * row["error_4"]
+                                      and row["error_chosen"] <= row["estimate_chosen"])
+            rows.append(row)
+            print(f"{scene:>7} {omega:7.0f} {row['periods_chosen']:3d} "
+                  f"{row['time_4_s']:8.3f} {row['time_chosen_s']:8.3f} "
+                  f"{row['time_chosen_s'] / row['time_4_s']:6.2f} {row['steps_4']:6d} "
+                  f"{row['steps_chosen']:6d} {row['error_4']:10.2e} {row['error_chosen']:10.2e} "
+                  f"{row['estimate_chosen']:10.2e} {row['difference']:10.1e}", flush=True)
+    per_omega = {key: sum(r[f"time_{key}_s"] for r in rows) / len(rows) for key in ("4", "chosen")}
+    ratio = per_omega["chosen"] / per_omega["4"]
+    cpu_ratio = (sum(r["cpu_chosen_s"] for r in rows) / sum(r["cpu_4_s"] for r in rows))
+    equal = all(r["equal_error"] for r in rows)
+    passed = bool(ratio <= PERIODS_TARGET and equal)
+    return {"rows": rows, "seconds_per_omega_4": per_omega["4"],
+            "seconds_per_omega_chosen": per_omega["chosen"], "ratio": ratio,
+            "cpu_ratio": cpu_ratio, "steps_ratio": sum(r["steps_chosen"] for r in rows)
+            / sum(r["steps_4"] for r in rows), "equal_error": equal, "target": PERIODS_TARGET,
+            "passed": passed, "verdict": pf(passed)}
+
+
+PERIODS_HEAD = (f"{'scene':>7} {'omega':>7} {'N':>3} {'t4 [s]':>8} {'tN [s]':>8} {'ratio':>6} "
+                f"{'steps4':>6} {'stepsN':>6} {'error 4':>10} {'error N':>10} {'stated N':>10} "
+                f"{'|kN/k4-1|':>10}")
 
 
 def paper_eta(problems: dict, omegas, check: bool) -> list[dict]:
@@ -692,7 +762,7 @@ def main(argv: list[str] | None = None) -> int:
               f"< {CHEAP_RUN:g} s)")
         print(TD_HEAD)
         print("-" * len(TD_HEAD))
-        td_rows, _ = bench_time_domain(problems, omegas, samples, fixed_steps, not quick)
+        td_rows, lin_td = bench_time_domain(problems, omegas, samples, fixed_steps, not quick)
         floor = td_floor(td_rows)
         orders = convergence_orders(td_rows)
         print("  observed orders log2(e(N)/e(2N)) of the fixed-dt lines (first stable N):")
@@ -710,6 +780,21 @@ def main(argv: list[str] | None = None) -> int:
         print("-" * len(PAPER_ETA_HEAD))
         paper_rows = paper_eta(problems, eta_omegas, check=not quick)
 
+        period_omegas = cases["periods"]["omegas"]
+        missing = [w for w in period_omegas if (next(iter(SCENES)), w) not in lin_td]
+        if missing:  # the reference at frequencies part 2 did not run
+            for scene, (h0, _) in SCENES.items():
+                ref = linear_response(problems[scene], h0, SMALL_ETA, missing)
+                lin_td.update({(scene, w): kstar(ref, i) for i, w in enumerate(missing)})
+        period_repeats = QUICK_PERIODS_REPEATS if quick else PERIODS_REPEATS
+        print(f"\n   Periods (issue 41 item 6): sweep(periods={PERIODS}) against sweep() (periods "
+              f"chosen for accuracy 1e-3) at eta = {SMALL_ETA * 1e9:g} nm, {period_repeats} "
+              "interleaved runs each (median); errors |dk*|/|k*| vs the linear response; stated "
+              "N = the chosen run's error_estimate")
+        print(PERIODS_HEAD)
+        print("-" * len(PERIODS_HEAD))
+        periods = bench_periods(problems, lin_td, period_omegas, period_repeats)
+
         print(f"\n3. Fig. 4 phase peak (paper: {PAPER_PEAK_DEG:g} deg at omega = 2/tau = "
               f"{PAPER_PEAK_OMEGA:g} rad/s)")
         peak = fig4_peak(problems["Fig. 4"], quick, cases["fig4_peak"])
@@ -717,11 +802,16 @@ def main(argv: list[str] | None = None) -> int:
     png = args.out / "spectrum_speed_accuracy.png"
     lin_csv = args.out / "spectrum_linear.csv"
     td_csv = args.out / "spectrum_time_domain.csv"
+    periods_csv = args.out / "spectrum_periods.csv"
     json_path = args.out / "spectrum_benchmark.json"
     plot(lin_rows, td_rows, png)
     write_csv(lin_rows, lin_csv)
     write_csv(td_rows, td_csv)
+    write_csv(periods["rows"], periods_csv)
     summary = summarise(lin_rows, td_rows, peak)
+    summary.update({"periods_ratio": periods["ratio"], "periods_cpu_ratio": periods["cpu_ratio"],
+                    "periods_equal_error": periods["equal_error"],
+                    "periods_passed": periods["passed"], "periods_verdict": periods["verdict"]})
     summary.update(run_end(t_start))
     report = {
         **report_head(SCHEMA, quick, machine),
@@ -739,19 +829,22 @@ def main(argv: list[str] | None = None) -> int:
                      "td_omegas": list(omegas), "samples_per_period": list(samples),
                      "paper_eta_omegas": list(eta_omegas),
                      "fixed_steps_per_period": list(fixed_steps), "periods": PERIODS,
+                     "periods_omegas": list(period_omegas), "periods_repeats": period_repeats,
+                     "periods_target": PERIODS_TARGET, "periods_equal_error": EQUAL_ERROR,
                      "settle_s": settle_time(), "euler_default_dt": euler_default_dt(),
                      "cheap_run_s": CHEAP_RUN, "td_methods": list(TD_METHODS),
                      "modes": list(MODES)},
         "linear": {"rows": lin_rows, "references": lin_refs},
-        "time_domain": {"rows": td_rows, "floor": floor, "orders": orders},
+        "time_domain": {"rows": td_rows, "floor": floor, "orders": orders,
+                        "periods": periods},
         "paper_eta": paper_rows,
         "fig4_peak": peak,
         "summary": summary,
         "files": {"png": str(png), "linear_csv": str(lin_csv), "time_domain_csv": str(td_csv),
-                  "json": str(json_path)},
+                  "periods_csv": str(periods_csv), "json": str(json_path)},
     }
     write_json(report, json_path)
-    print(f"\nwrote {json_path}, {lin_csv}, {td_csv}, {png}")
+    print(f"\nwrote {json_path}, {lin_csv}, {td_csv}, {periods_csv}, {png}")
     s = summary
     print(f"SUMMARY: linear method, {N_OMEGA} frequencies, default grid: worst time "
           f"{1e3 * s['linear_worst_time_s']:.2f} ms [{pf(s['time_passed'])}, target <= "
@@ -764,6 +857,13 @@ def main(argv: list[str] | None = None) -> int:
     print("SUMMARY: time domain per frequency (library sweep, eta = 0.01 nm): "
           + "; ".join(f"{m} median {fmt(v['median_time_per_frequency_s'], '.3f')} s, worst error "
                       f"{fmt(v['worst_error'], '.1e')}" for m, v in td.items()))
+    print(f"SUMMARY: time domain, periods chosen by the accuracy (issue 41 item 6): "
+          f"{periods['seconds_per_omega_chosen']:.3f} s per omega against "
+          f"{periods['seconds_per_omega_4']:.3f} s at {PERIODS} periods: ratio "
+          f"{periods['ratio']:.2f} (CPU {periods['cpu_ratio']:.2f}, steps "
+          f"{periods['steps_ratio']:.2f}), errors equal within {EQUAL_ERROR:.0%}: "
+          f"{periods['equal_error']} [target ratio <= {PERIODS_TARGET:g} at equal error] "
+          f"-> periods {periods['verdict']}")
     eu = ", ".join(f"N={n}: {fmt(p, '.1f')}" for n, p in s["fig4_euler_peaks_deg"].items())
     print(f"SUMMARY: Fig. 4 phase peak: paper {PAPER_PEAK_DEG:g} deg at {PAPER_PEAK_OMEGA:g} rad/s; "
           f"linear {s['fig4_linear_peak_deg']:.2f} deg at {s['fig4_linear_peak_omega']:.0f} rad/s; "

@@ -39,15 +39,8 @@ from viscoforce._validation import (
 )
 from viscoforce.exceptions import ParameterError
 
-__all__ = [
-    "demodulate",
-    "harmonics",
-    "sin_phase",
-    "amplitude_phase_from_complex",
-    "demodulate_dataarray",
-    "lockin_filter",
-    "settling_time",
-]
+__all__ = ["demodulate", "harmonics", "sin_phase", "amplitude_phase_from_complex",
+           "demodulate_dataarray", "lockin_filter", "settling_time", "transient_leakage"]
 
 Detrend = Literal["linear"] | None
 
@@ -329,6 +322,45 @@ def harmonics(signal: ArrayLike, time: ArrayLike, omega: float, n_max: int, *,
     win = _window(signal, time, omega, settle=settle, axis=axis, detrend=detrend,
                   max_harmonic=n_max)
     return _project(win, float(omega), np.arange(n_max + 1))
+
+
+def transient_leakage(omega: ArrayLike, time_constant: ArrayLike, start: ArrayLike,
+                      periods: ArrayLike) -> NDArray[np.float64]:
+    """|X̂₁| that a decaying transient x(t) = e^{−t/θ} leaks into :func:`demodulate`.
+
+    Over ``m`` whole periods from ``start`` (T = 2πm/ω; exact for the integral; broadcasting),
+    |X̂₁| = (2θ/T) e^{−t_s/θ} (1 − e^{−T/θ}) / √(1 + (ωθ)²): more periods help where T ≳ θ.
+
+    Parameters
+    ----------
+    omega : array_like
+        Drive angular frequency ω [rad/s], > 0.
+    time_constant : array_like
+        Decay time θ of the transient [s], > 0.
+    start : array_like
+        Window start t_s, counted from the transient's start [s], ≥ 0.
+    periods : array_like
+        Whole periods m demodulated, ≥ 1.
+
+    Returns
+    -------
+    numpy.ndarray
+        |X̂₁| per unit transient amplitude [1].
+
+    Raises
+    ------
+    ParameterError
+        If an argument is not finite or out of its range (the message names it).
+    """
+    w, theta, t0, m = np.broadcast_arrays(*(np.asarray(v, dtype=float)
+                                            for v in (omega, time_constant, start, periods)))
+    for name, v, ok, limit in (("omega", w, w > 0, "> 0 [rad/s]"), ("periods", m, m >= 1, ">= 1"),
+                               ("time_constant", theta, theta > 0, "> 0 [s]"),
+                               ("start", t0, t0 >= 0, ">= 0 [s]")):
+        if not np.all(good := ok & np.isfinite(v)):
+            raise ParameterError(f"{name} must be finite and {limit}, got {float(v[~good][0])!r}")
+    ratio = 2.0 * math.pi * m / (w * theta)  # T/θ
+    return 2.0 * np.exp(-t0 / theta) * -np.expm1(-ratio) / (ratio * np.hypot(1.0, w * theta))
 
 
 def sin_phase(amplitude: ArrayLike) -> NDArray[np.float64] | np.float64:

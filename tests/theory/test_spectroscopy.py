@@ -229,7 +229,10 @@ _SWEEP_ONLY = [
     (dict(settle="1ms"), r"settle must be >= 0 \[s\]"),
     (dict(periods=0), "periods must be an integer >= 1, got 0"),
     (dict(periods=2.0), "periods must be an integer >= 1, got 2.0"),
-    (dict(periods=None), "periods must be an integer >= 1, got None"),
+    (dict(periods="4"), "periods must be an integer >= 1, got '4'"),
+    (dict(periods=2, accuracy=1e-3), r"give periods or accuracy \(which chooses them\), not both"),
+    (dict(accuracy=0.5), r"accuracy must be"),
+    (dict(settle=0.0, accuracy=1e-4), r"settle must be longer for accuracy = 0.0001: settle = 0 s"),
     (dict(samples_per_period=7), "samples_per_period must be an integer >= 8"),
     (dict(tol=0.0), r"tol must be > 0 \[m\]"),
     (dict(tol=np.nan), r"tol must be > 0 \[m\]"),
@@ -350,20 +353,22 @@ def test_time_domain_spectrum_at_1e9_rad_s_is_refused_instantly(make_problem, no
 def test_sweep_effort_counts_every_frequency_and_the_stepper(make_problem, no_compute):
     problem = make_problem(SLS, 1.9e-9)
     # 4000 frequencies at 1e5 rad/s: 160 settling periods x ≥ 8 steps + 4 x 64 samples = 1536
-    # steps per ω, 6.14e6 in all
+    # steps per ω, 6.14e6 in all (4 periods given; the 1 chosen by default: 5.38e6)
     with pytest.raises(EffortError, match=r"\(4000 frequencies.*about 6.14e\+06 needed"):
+        sweep(problem, 2e-9, 1e-10, np.full(4000, 1e5), periods=4)
+    with pytest.raises(EffortError, match=r"\(4000 frequencies.*about 5.38e\+06 needed"):
         sweep(problem, 2e-9, 1e-10, np.full(4000, 1e5))
     # a fixed step of period/1e5 at 1e3 rad/s: 6 periods x 1e5 steps = 6e5 per ω; 10 ω = 6e6
     with pytest.raises(EffortError, match=r"steps_per_period = 100000\): about 6e\+06 needed"):
-        sweep(problem, 2e-9, 1e-10, np.full(10, 1e3), steps_per_period=100_000)
+        sweep(problem, 2e-9, 1e-10, np.full(10, 1e3), steps_per_period=100_000, periods=4)
     # explicit Euler's default dt = 0.1 τ E_inf/E0 = 1e-5 s: 5 periods at 10 rad/s = 3.14 s,
     # 3.1e5 steps per ω; 20 ω = 6.28e6
     with pytest.raises(EffortError, match=r"euler stepper's default dt = 1e-05 s\): about "
                                           r"6.28e\+06 needed"):
-        sweep(problem, 2e-9, 1e-10, np.full(20, 10.0), stepper="euler")
+        sweep(problem, 2e-9, 1e-10, np.full(20, 10.0), stepper="euler", periods=4)
     with pytest.raises(EffortError, match=r"output samples of the time-domain sweep \(2 "
                                           r"frequencies x 40000001\): about 8e\+07"):
-        sweep(problem, 2e-9, 1e-10, [1e3, 2e3], samples_per_period=10_000_000)
+        sweep(problem, 2e-9, 1e-10, [1e3, 2e3], samples_per_period=10_000_000, periods=4)
 
 
 def test_linear_response_refuses_more_than_max_samples_frequencies(make_problem, no_compute):

@@ -350,7 +350,7 @@ def test_svda_sweep_needs_the_svda_material_and_law():
 
 
 def test_svda_sweep_refuses_huge_effort_before_integrating(monkeypatch):
-    import viscoforce.experiments.spectroscopy as sp_module
+    import viscoforce.experiments.svda_routes as sp_module
 
     def forbidden(*args, **kwargs):
         raise AssertionError("integrated although the request should have been refused")

@@ -25,6 +25,7 @@ from viscoforce.exceptions import ParameterError
 from viscoforce.experiments.phase_reference import PIEZO_VARIABLE
 from viscoforce.io.curves import _read_block, unique_curves
 from viscoforce.io.jpk import JPKArchive, read_jpk
+from viscoforce.io.map_grid import map_grid
 from viscoforce.io.quality import SENSOR_CHANNELS
 from viscoforce.lockin import harmonics
 from viscoforce.schema import clean_attrs, validate_curves
@@ -328,7 +329,8 @@ class _Input:
     ``curves``: per selected curve, its segments as (segment-table row, time, force,
     tip_position, height), rows in order of first appearance; ``rows`` the curve rows of the
     dataset (for messages); per segment-table row ``names``, ``freq`` [Hz], ``nominal`` [m],
-    ``base`` [N]; per curve ``x``, ``y`` [m] and ``index``; ``attrs`` those of the curves dataset;
+    ``base`` [N]; per curve ``x``, ``y`` [m], ``index`` and the map's integer ``row``,
+    ``column`` (None where nothing places the curves); ``attrs`` those of the curves dataset;
     ``piezo``, when asked for and present in every modulation segment beside a sensor height:
     per curve, segment-table row → the piezo height record [m] of that segment.
     """
@@ -344,6 +346,8 @@ class _Input:
     index: np.ndarray
     attrs: dict[str, Any]
     piezo: list[dict[int, np.ndarray]] | None = None
+    row: np.ndarray | None = None
+    column: np.ndarray | None = None
 
 
 def _input_of_archive(archive: JPKArchive, curves: int | Iterable[int] | None,
@@ -371,7 +375,9 @@ def _input_of_archive(archive: JPKArchive, curves: int | Iterable[int] | None,
                   x=np.asarray([c.x for c in block.decoded], dtype=float),
                   y=np.asarray([c.y for c in block.decoded], dtype=float),
                   index=np.asarray(block.picked, dtype=np.int32), attrs=attrs,
-                  piezo=_piezo_of_archive(archive, block, segments) if piezo else None)
+                  piezo=_piezo_of_archive(archive, block, segments) if piezo else None,
+                  row=np.asarray([c.row for c in block.decoded], dtype=np.int32),
+                  column=np.asarray([c.column for c in block.decoded], dtype=np.int32))
 
 
 def _piezo_of_archive(archive: JPKArchive, block: Any, segments: list
@@ -445,12 +451,31 @@ def _input_of_dataset(ds: xr.Dataset, rows: np.ndarray | None, piezo: bool = Fal
     if record is not None and not all(np.all(np.isfinite(v)) for p in piezos
                                       for v in p.values()):
         record = None
+    grid = _grid_of_dataset(ds)
     return _Input(curves=segments, rows=[int(r) for r in rows], names=names, freq=freq,
                   nominal=nominal, base=base,
                   x=ds["x"].values[rows] if "x" in ds.variables else np.full(len(rows), np.nan),
                   y=ds["y"].values[rows] if "y" in ds.variables else np.full(len(rows), np.nan),
                   index=ds["curve"].values[rows] if "curve" in ds.coords else rows,
-                  attrs=dict(ds.attrs), piezo=piezos if record is not None else None)
+                  attrs=dict(ds.attrs), piezo=piezos if record is not None else None,
+                  row=None if grid is None else grid[0][rows],
+                  column=None if grid is None else grid[1][rows])
+
+
+def _grid_of_dataset(ds: xr.Dataset) -> tuple[np.ndarray, np.ndarray] | None:
+    """Per curve of ``ds`` its integer map (row, column): the dataset's, else from x and y.
+
+    Positions are placed on the grid of every curve of the dataset
+    (:func:`~viscoforce.io.map_grid.map_grid`), so a selection keeps the map's indices; None
+    without positions.
+    """
+    if "row" in ds.variables and "column" in ds.variables:
+        return (np.asarray(ds["row"].values, dtype=np.int32),
+                np.asarray(ds["column"].values, dtype=np.int32))
+    if "x" not in ds.variables or "y" not in ds.variables:
+        return None
+    grid = map_grid(ds["x"].values, ds["y"].values)
+    return grid.row, grid.column
 
 
 def _curves_of(data: Any, curves: int | Iterable[int] | None, height_channel: str | None,

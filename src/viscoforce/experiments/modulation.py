@@ -338,7 +338,8 @@ class _Demodulated:
     ``F`` [N], ``d`` (δ̂), ``h`` (the height channel's) [m] and, where every modulation segment
     has a piezo record beside a sensor, those of :data:`_PIEZO` (``cov_*`` over (curve,
     frequency, 4, 4)); ``fr`` the frequencies [Hz]; per curve ``z_contact`` [m], ``x``, ``y``
-    [m], ``index``; ``attrs`` those of the curves.
+    [m], ``index`` and the map's integer ``row``, ``column`` (None where unknown); ``attrs``
+    those of the curves.
     """
 
     fr: np.ndarray
@@ -348,6 +349,8 @@ class _Demodulated:
     y: np.ndarray
     index: np.ndarray
     attrs: dict[str, Any]
+    row: np.ndarray | None = None
+    column: np.ndarray | None = None
 
 
 def _demodulate(data: Any, curves: Any, height_channel: str | None,
@@ -412,7 +415,7 @@ def _demodulate(data: Any, curves: Any, height_channel: str | None,
             for key, value in values.items():
                 arrays[key][i, j] = value
     return _Demodulated(fr=fr, arrays=arrays, z_contact=z_contact, x=inp.x, y=inp.y,
-                        index=inp.index, attrs=inp.attrs)
+                        index=inp.index, attrs=inp.attrs, row=inp.row, column=inp.column)
 
 
 def _joined(parts: list[_Demodulated]) -> _Demodulated:
@@ -425,10 +428,23 @@ def _joined(parts: list[_Demodulated]) -> _Demodulated:
             raise ParameterError(f"the curves modulate different frequency sets {sets}; select "
                                  "curves with the same set")
     keys = [k for k in first.arrays if all(k in p.arrays for p in parts)]
+    placed = all(p.row is not None and p.column is not None for p in parts)
     return _Demodulated(
         fr=first.fr, arrays={k: np.concatenate([p.arrays[k] for p in parts]) for k in keys},
         **{k: np.concatenate([getattr(p, k) for p in parts])
-           for k in ("z_contact", "x", "y", "index")}, attrs=first.attrs)
+           for k in ("z_contact", "x", "y", "index")}, attrs=first.attrs,
+        **{k: np.concatenate([getattr(p, k) for p in parts]) if placed else None
+           for k in ("row", "column")})
+
+
+def _grid_coords(dem: _Demodulated) -> dict[str, tuple]:
+    """The map's integer ``row`` and ``column`` coordinates over ``curve`` (none if unknown)."""
+    if dem.row is None or dem.column is None:
+        return {}
+    return {name: ("curve", np.asarray(values, dtype=np.int32), {
+        "units": "1", "long_name": f"grid {name} of the curve (along {axis}, from 0; -1: no "
+                                  "position)"})
+            for name, values, axis in (("row", dem.row, "y"), ("column", dem.column, "x"))}
 
 
 def _spectrum(dem: _Demodulated, options: dict[str, Any]) -> xr.Dataset:
@@ -497,7 +513,7 @@ def _spectrum(dem: _Demodulated, options: dict[str, Any]) -> xr.Dataset:
         omega, k, a["mean"], eta, dims=("curve", "omega"), attrs=attrs,
         coords={"curve": ("curve", np.asarray(dem.index)),
                 "x": ("curve", np.asarray(dem.x, float)),
-                "y": ("curve", np.asarray(dem.y, float))},
+                "y": ("curve", np.asarray(dem.y, float)), **_grid_coords(dem)},
         stderr={"stiffness": sigma_c, "phase": phase_se, "drive_amplitude": eta_se,
                 "mean_force": a["mean_se"]},
         quality=quality, quality_comment=notes["comment"], amplitude=False, source=source,

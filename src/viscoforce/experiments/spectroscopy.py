@@ -4,8 +4,9 @@ Four routes to the same Spectrum (SPEC convention: ``phase`` χ = lead of the fo
 compression, ``stiffness`` = |F1|/η, ``amplitude`` a = |F1|/F̄):
 
 * :func:`sweep` — time domain: h0(t) = h̄0 + η sin ωt from the static E_inf state, simulated with
-  the exact solver for a settling time and then ``periods`` whole periods, demodulated by
-  :func:`viscoforce.lockin.demodulate`. Valid at any η (it includes the nonlinear response).
+  the exact solver for a settling time and then as many whole periods as the accuracy needs
+  (:func:`lockin_error`), demodulated by :func:`viscoforce.lockin.demodulate`. Valid at any η
+  (it includes the nonlinear response).
 * :func:`~viscoforce.experiments.linear_response.linear_response` — exact small-η response in the
   frequency domain (one complex solve per ω).
 * :func:`svda_spectrum` — the SVDA closed forms (paper Eqs. 23–26, Eq. 24 corrected), valid before
@@ -29,14 +30,22 @@ import numpy as np
 import xarray as xr
 from numpy.typing import ArrayLike, NDArray
 
-from viscoforce._limits import MAX_SAMPLES, MAX_STEPS, check_effort
 from viscoforce._validation import (
     require_finite,
     require_int,
     require_nonnegative,
     require_positive,
 )
-from viscoforce.choice import double_layer
+from viscoforce.choice import (
+    DEFAULT_ACCURACY,
+    DEFAULT_SWEEP_TOL,
+    GRID_ERROR,
+    SAFETY,
+    SWEEP_ERROR,
+    SWEEP_EXPONENT,
+    SWEEP_TOL_FACTORS,
+    require_accuracy,
+)
 from viscoforce.exceptions import ApproximationWarning, ParameterError
 from viscoforce.experiments._checks import (
     require_frequencies,
@@ -47,27 +56,108 @@ from viscoforce.experiments._checks import (
 from viscoforce.experiments.contact_spectrum import contact_spectrum
 from viscoforce.experiments.drives import STEPS_PER_PERIOD, Sinusoid
 from viscoforce.experiments.linear_response import linear_response
-from viscoforce.lockin import demodulate
+from viscoforce.experiments.svda_routes import (  # noqa: F401 - SVDA_SETTLE_TAUS: public here
+    SVDA_SETTLE_TAUS,
+    _check_sweep_effort,
+    _settling_periods,
+    _svda_parameters,
+    _track,
+    svda_spectrum,
+    svda_sweep,
+)
+from viscoforce.lockin import demodulate, transient_leakage
 from viscoforce.problem import ContactProblem
 from viscoforce.schema import make_spectrum
 from viscoforce.solvers.base import TimeStepper
 from viscoforce.solvers.simulate import EULER_DEFAULT_FRACTION, simulate
 from viscoforce.solvers.steppers import METHODS
-from viscoforce.solvers.svda_ode import check_ode_settings, solve_svda
-from viscoforce.svda import svda_harmonic_response, svda_static_deformation, warn_svda_error
 
 #: Settling time before demodulation, in units of the longest creep time.
 DEFAULT_SETTLE_TAUS = 10.0
-#: Local error tolerance of the time-domain sweep, as a fraction of η.
-DEFAULT_SWEEP_TOL = 1e-5
-#: Settling time of the SVDA ODE sweep, in creep times τ (the linearised SVDA transient decays at
-#: least as fast as e^{−t/τ}).
-SVDA_SETTLE_TAUS = 20.0
+#: Share of the accuracy that the lock-in's start-up transient may take (``sweep(periods=None)``).
+LOCKIN_SHARE = 0.1
+#: Most periods ``sweep(periods=None)`` demodulates (beyond: the settle is too short).
+MAX_PERIODS = 64
 
 
-def _settling_periods(settle: float, omega: NDArray[np.float64]) -> NDArray[np.float64]:
-    """Whole drive periods covering ``settle`` [s] at each ω (the same rounding as the runs)."""
-    return np.ceil(settle * omega / (2.0 * math.pi) - 1e-9)
+def lockin_error(problem: ContactProblem, omega: ArrayLike, settle: float,
+                 periods: ArrayLike) -> NDArray[np.float64]:
+    """Bound on the relative error of k*(ω) that the start-up transient leaves in :func:`sweep`.
+
+    From the relaxed static state at h̄0, each relaxation mode j (stiffness g_j, time θ_j) of
+    the linear force response leaves −g_j η x/(1 + x²) e^{−t/θ_j} (x = ωθ_j), which leaks
+    :func:`~viscoforce.lockin.transient_leakage` into F̂ over ``periods`` whole periods after
+    ⌈settle ω/2π⌉ settling ones. With Σg_j ≤ (E0/E_inf − 1) k_inf (a series surface-force layer
+    lowers the ratio), |F̂| ≥ k_inf η and θ_j ≤ τ_max (driven by position, the system relaxes
+    no slower than its material creeps): ε = (E0/E_inf − 1) max_{θ ≤ τ_max} x/(1 + x²) ·
+    leakage(ω, θ, t_s, N), on 40 points per decade of θ; 0 for an elastic material. Measured
+    (tests/theory/test_spectrum_periods.py) 10–50× above the transient error at settle = 0.
+
+    Parameters
+    ----------
+    problem : ContactProblem
+        The system (its material's E0/E_inf and longest creep time τ_max).
+    omega : array_like
+        Angular frequencies [rad/s], > 0.
+    settle : float
+        Settling time [s], ≥ 0 (rounded up to whole periods, as :func:`sweep` does).
+    periods : array_like
+        Whole periods demodulated, ≥ 1 (broadcast against ``omega``).
+
+    Returns
+    -------
+    numpy.ndarray
+        ε per ω [1].
+    """
+    material = problem.material
+    taus = material.prony().taus
+    w, n = np.broadcast_arrays(np.asarray(omega, float), np.asarray(periods, float))
+    if not taus:
+        return np.zeros(w.shape)
+    tau = max(taus)
+    decades = 6.0 + max(0.0, math.log10(float(np.max(w)) * tau))
+    theta = tau * 10.0 ** -np.linspace(0.0, decades, int(40 * decades) + 1)
+    x = w[..., np.newaxis] * theta
+    start = (_settling_periods(settle, w) * 2.0 * math.pi / w)[..., np.newaxis]
+    leak = transient_leakage(w[..., np.newaxis], theta, start, n[..., np.newaxis])
+    ratio = material.instantaneous_modulus / material.relaxed_modulus - 1.0
+    return ratio * np.max(x / (1.0 + x * x) * leak, axis=-1)
+
+
+def _choose_periods(problem: ContactProblem, omega: NDArray[np.float64], settle: float,
+                    accuracy: float) -> tuple[NDArray[np.int64], NDArray[np.float64]]:
+    """Per ω the fewest periods whose :func:`lockin_error` is ≤ LOCKIN_SHARE × ``accuracy``."""
+    budget = LOCKIN_SHARE * accuracy
+    periods = np.ones(omega.shape, dtype=np.int64)
+    error = lockin_error(problem, omega, settle, periods)
+    for n in range(2, MAX_PERIODS + 1):
+        short = error > budget
+        if not short.any():
+            break
+        periods[short] = n
+        error[short] = lockin_error(problem, omega[short], settle, n)
+    if np.any(error > budget):
+        i = int(np.argmax(error))
+        raise ParameterError(
+            f"settle must be longer for accuracy = {accuracy:g}: settle = {settle:.3g} s leaves "
+            f"a lock-in transient bound of {error[i]:.2g} at omega = {omega[i]:.4g} rad/s even "
+            f"over {MAX_PERIODS} periods (allowed {budget:.2g}); use the default settle "
+            "(10 tau_max), or give periods")
+    return periods, error
+
+
+def _stepper_error(stepper: type[TimeStepper], steps_per_period: int | None, tol: float,
+                   eta: float) -> float | None:
+    """Measured error of the adaptive exponential stepper and lock-in, × SAFETY (else None).
+
+    :data:`viscoforce.choice.SWEEP_ERROR` at tol = 1e-5 η, ∝ tol^0.7 over the measured range
+    (:data:`~viscoforce.choice.SWEEP_TOL_FACTORS`), plus the grid's own error.
+    """
+    factor = tol / (DEFAULT_SWEEP_TOL * eta)
+    if (stepper is not METHODS["exponential"] or steps_per_period is not None
+            or not SWEEP_TOL_FACTORS[0] <= factor <= SWEEP_TOL_FACTORS[1]):
+        return None
+    return GRID_ERROR + SAFETY * SWEEP_ERROR * factor ** SWEEP_EXPONENT
 
 
 def _one_frequency(problem: ContactProblem, position: float, eta: float, omega: float,
@@ -99,18 +189,14 @@ def _stepper_class(stepper: object) -> type[TimeStepper]:
 
 
 def _sweep_steps(problem: ContactProblem, stepper: type[TimeStepper], omega: NDArray[np.float64],
-                 periods: int, settle: float, samples: int,
+                 periods: int | NDArray[np.int64], settle: float, samples: int,
                  steps_per_period: int | None) -> tuple[NDArray[np.float64], str]:
     """Lower-bound estimate of the time steps of each frequency's run, and its basis (text).
 
-    Every settling and demodulated period is stepped; steps also land on every output
-    (``samples`` per demodulated period). Between them a fixed-step run takes
-    ``steps_per_period`` (or explicit Euler's default dt), an adaptive one at least
-    :data:`~viscoforce.experiments.drives.STEPS_PER_PERIOD` (8) per period — the drives' lower
-    bound (:meth:`~viscoforce.experiments.drives.Sinusoid.min_steps`), not a prediction: on the
-    paper's Fig. 3 and 4 systems at ω = 1e2–1e5 rad/s the exponential stepper takes 20–260 steps
-    per period at the default tol (and Radau on the SVDA ODE at rtol = 1e-10 about 1200–2000
-    right-hand-side evaluations per period).
+    Every settling and demodulated period is stepped, landing on every output; between them a
+    fixed-step run takes ``steps_per_period`` (or explicit Euler's default dt), an adaptive one
+    at least :data:`~viscoforce.experiments.drives.STEPS_PER_PERIOD` (8) per period: a lower
+    bound (the paper's Fig. 3 and 4 systems take 20–260 per period at the default tol).
     """
     n_settle = _settling_periods(settle, omega)
     if steps_per_period is not None:
@@ -133,23 +219,20 @@ def _sweep_steps(problem: ContactProblem, stepper: type[TimeStepper], omega: NDA
     return n_settle * per_period + periods * np.maximum(per_period, samples), basis
 
 
-def _check_sweep_effort(what: str, steps: NDArray[np.float64], basis: str, samples: int,
-                        periods: int, n_omega: int, hint: str) -> None:
-    """Refuse a sweep whose output samples or (lower-bound) time steps exceed the limits."""
-    frequencies = f"{n_omega} frequenc{'y' if n_omega == 1 else 'ies'}"
-    check_effort(f"output samples of {what} ({frequencies} x {periods * samples + 1})",
-                 float(n_omega) * (periods * samples + 1), MAX_SAMPLES,
-                 hint="fewer frequencies, periods or samples_per_period")
-    check_effort(f"time steps of {what} ({frequencies}, settling and demodulated periods, "
-                 f"{basis})", float(np.sum(steps)), MAX_STEPS, hint=hint)
-
-
 def sweep(problem: ContactProblem, position: float, eta: float, omega: ArrayLike, *,
-          periods: int = 4, settle: float | None = None, samples_per_period: int = 64,
-          tol: float | None = None, stepper: str | type[TimeStepper] = "exponential",
-          steps_per_period: int | None = None, n_jobs: int = 1,
-          progress: bool | None = None) -> xr.Dataset:
+          periods: int | None = None, accuracy: float | None = None,
+          settle: float | None = None, samples_per_period: int = 64, tol: float | None = None,
+          stepper: str | type[TimeStepper] = "exponential", steps_per_period: int | None = None,
+          n_jobs: int = 1, progress: bool | None = None) -> xr.Dataset:
     """Time-domain force spectroscopy: simulate each ω to steady state and demodulate.
+
+    Periods: by default, per ω the fewest whole periods (≤ :data:`MAX_PERIODS`) whose lock-in
+    transient bound :func:`lockin_error` is ≤ :data:`LOCKIN_SHARE` × ``accuracy``: after the
+    default settle of 10 τ_max, 1 period at E0/E_inf = 10 for any accuracy ≥ 5e-4 (a lock-in
+    over whole periods of the periodic steady state is exact for every harmonic; more periods
+    only average the transient down). The stated error ``error_estimate`` = the stepper's
+    measured error (:func:`_stepper_error`) + ``lockin_error``; ``tol`` sets the former,
+    ``accuracy`` only the periods.
 
     Parameters
     ----------
@@ -161,8 +244,11 @@ def sweep(problem: ContactProblem, position: float, eta: float, omega: ArrayLike
         Drive amplitude η [m], > 0.
     omega : array_like
         Angular frequencies [rad/s], > 0 (non-empty, 1-D).
-    periods : int
-        Whole periods demodulated after settling (≥ 1).
+    periods : int, optional
+        Whole periods demodulated after settling (≥ 1); default chosen per ω from ``accuracy``.
+    accuracy : float, optional
+        Relative error of k* the periods are chosen for, in [1e-4, 0.1] (default 1e-3); not
+        with ``periods``.
     settle : float, optional
         Settling time [s] before demodulation, ≥ 0 (rounded up to whole periods); default
         10 τ_max (the transient from the resting start decays as e^{−t/τ} or faster).
@@ -184,12 +270,15 @@ def sweep(problem: ContactProblem, position: float, eta: float, omega: ArrayLike
     Returns
     -------
     xarray.Dataset
-        Spectrum with ``method = "time-domain"`` and the per-ω step counts in ``steps``.
+        Spectrum with ``method = "time-domain"``; over ``omega``: ``steps`` (time steps),
+        ``periods`` (demodulated), ``lockin_error`` and, for the adaptive exponential stepper
+        at tol within 0.1–10 × 1e-5 η, ``error_estimate`` (relative error bounds of k*).
 
     Raises
     ------
     ParameterError
-        If an argument is missing or out of range (the message names it and the range).
+        If an argument is missing or out of range (the message names it and the range), both
+        ``periods`` and ``accuracy`` are given, or ``settle`` is too short for ``accuracy``.
     EffortError
         If the estimated time steps (settling + demodulated periods, summed over ω) exceed
         :data:`~viscoforce._limits.MAX_STEPS` or the output samples exceed
@@ -200,7 +289,11 @@ def sweep(problem: ContactProblem, position: float, eta: float, omega: ArrayLike
                               "finite [m] (h0, the undeformed apex separation)")
     eta = require_number("eta", eta, require_positive, "> 0 [m] (finite)")
     omega = require_frequencies(omega, allow_zero=False)
-    periods = require_int("periods", periods, 1)
+    if periods is not None:
+        periods = require_int("periods", periods, 1)
+        if accuracy is not None:
+            raise ParameterError("give periods or accuracy (which chooses them), not both")
+    accuracy = require_accuracy(DEFAULT_ACCURACY if accuracy is None else accuracy)
     samples = require_int("samples_per_period", samples_per_period, 8)
     n_jobs = require_int("n_jobs", n_jobs, 1)
     stepper_class = _stepper_class(stepper)
@@ -215,6 +308,11 @@ def sweep(problem: ContactProblem, position: float, eta: float, omega: ArrayLike
     if steps_per_period is not None:
         steps_per_period = require_int("steps_per_period", steps_per_period, 1)
     show = require_progress(progress)
+    if periods is None:
+        periods, bound = _choose_periods(problem, omega, settle, accuracy)
+    else:
+        periods, bound = np.full(omega.shape, periods), lockin_error(problem, omega, settle,
+                                                                     periods)
     steps, basis = _sweep_steps(problem, stepper_class, omega, periods, settle, samples,
                                 steps_per_period)
     _check_sweep_effort(
@@ -222,8 +320,8 @@ def sweep(problem: ContactProblem, position: float, eta: float, omega: ArrayLike
         hint="fewer or lower frequencies, a shorter settle or fewer periods; the small-amplitude "
              "spectrum needs no time stepping (method 'linear')")
     problem.check_covers(position - eta)
-    args = [(problem, position, eta, float(w), periods, settle, samples, tol, stepper,
-             steps_per_period) for w in omega]
+    args = [(problem, position, eta, float(w), int(n), settle, samples, tol, stepper,
+             steps_per_period) for w, n in zip(omega, periods, strict=True)]
     show = sys.stderr.isatty() if show is None else show
     if n_jobs > 1 and len(omega) > 1:
         with ProcessPoolExecutor(max_workers=n_jobs) as pool:
@@ -234,225 +332,22 @@ def sweep(problem: ContactProblem, position: float, eta: float, omega: ArrayLike
     k = np.array([r[0] for r in results])
     mean = np.array([r[1] for r in results])
     attrs = dict(problem.parameters())
+    stepper_error = _stepper_error(stepper_class, steps_per_period, tol, eta)
     attrs.update({"method": "time-domain", "position": position, "eta": eta,
-                  "periods": periods, "settle": settle, "samples_per_period": samples,
+                  "accuracy": accuracy, "settle": settle, "samples_per_period": samples,
                   "tol": tol, "stepper": stepper_class.name,
                   "steps_per_period": 0 if steps_per_period is None else steps_per_period})
     ds = make_spectrum(omega, k, mean, eta, attrs=attrs)
-    ds["steps"] = xr.DataArray(np.array([r[2] for r in results]), dims="omega",
-                               attrs={"units": "1", "long_name": "time steps taken"})
-    return ds
-
-
-def _track(iterable, total: int, show: bool):
-    if not show:
-        return iterable
-    from tqdm.auto import tqdm
-
-    return tqdm(iterable, total=total, desc="spectrum", unit="ω", leave=False)
-
-
-def _svda_parameters(problem: ContactProblem) -> dict[str, float]:
-    """The SVDA inputs of ``problem``: one creep time and exactly one double-layer term.
-
-    Returns the keyword arguments ``E0, E_inf, tau, radius, P, debye_length`` of the SVDA closed
-    forms and of :func:`~viscoforce.solvers.svda_ode.solve_svda`.
-    """
-    material = problem.material
-    prony = material.prony()
-    if prony.n_modes != 1:
-        raise ParameterError(
-            f"the SVDA closed form needs a single-relaxation-time material, got {prony.n_modes} "
-            "modes; use method 'linear'")
-    dl = double_layer(problem)
-    if dl is None:
-        raise ParameterError("the SVDA closed form needs exactly one DoubleLayer term")
-    return {"E0": material.instantaneous_modulus, "E_inf": material.relaxed_modulus,
-            "tau": prony.taus[0], "radius": problem.sphere.radius, "P": dl.P,
-            "debye_length": dl.debye_length}
-
-
-def _svda_inputs(problem: object, position: object, eta: object,
-                 omega: object, *, allow_zero: bool
-                 ) -> tuple[ContactProblem, dict[str, float], float, float, NDArray[np.float64]]:
-    """Check the common arguments of the SVDA routes; refuse positions in contact."""
-    problem = require_problem(problem)
-    params = _svda_parameters(problem)
-    position = require_number("position", position, require_finite,
-                              "finite [m] (h0, the undeformed apex separation)")
-    eta = require_number("eta", eta, require_positive, "> 0 [m] (finite)")
-    omega = require_frequencies(omega, allow_zero=allow_zero)
-    u0 = float(svda_static_deformation(position, params["E_inf"], params["radius"], params["P"],
-                                       params["debye_length"]))
-    central_gap = position - u0
-    if central_gap < params["debye_length"]:
-        raise ParameterError(
-            f"the SVDA closed form holds before contact only: at position {position:.3g} m its "
-            f"central gap {central_gap:.3g} m is below the Debye length "
-            f"{params['debye_length']:.3g} m; use method 'linear' (exact) here")
-    return problem, params, position, eta, omega
-
-
-def svda_spectrum(problem: ContactProblem, position: float, eta: float,
-                  omega: ArrayLike) -> xr.Dataset:
-    """SVDA closed-form spectrum (paper Eqs. 23–26, Eq. 24 corrected; pre-contact only).
-
-    Requires a standard linear solid and a double-layer law (the soft wall is ignored by the SVDA).
-
-    Parameters
-    ----------
-    problem : ContactProblem
-        System: one-mode material, exactly one :class:`~viscoforce.physics.surface_forces.DoubleLayer`.
-    position : float
-        Mean position h̄0 [m], finite, before contact (central gap ≥ the Debye length).
-    eta : float
-        Drive amplitude η [m], > 0 (scales ``force_amplitude`` and ``amplitude`` only).
-    omega : array_like
-        Angular frequencies [rad/s], ≥ 0 (non-empty, 1-D).
-
-    Returns
-    -------
-    xarray.Dataset
-        Spectrum with ``method = "svda"`` and the SVDA ``svda_c``, ``svda_u0`` in attrs.
-
-    Raises
-    ------
-    ParameterError
-        If an argument is missing or out of range, the material or law is not the SVDA's, or
-        the position is in contact.
-    """
-    problem, params, position, eta, omega = _svda_inputs(problem, position, eta, omega,
-                                                         allow_zero=False)
-    resp = svda_harmonic_response(omega, position, eta, **params)
-    k = resp.stiffness * np.exp(1j * np.radians(resp.phase))
-    attrs = dict(problem.parameters())
-    attrs.update({"method": "svda", "position": position, "eta": eta,
-                  "svda_c": float(resp.c), "svda_u0": float(resp.u0)})
-    return make_spectrum(omega, k, resp.mean_force, eta, attrs=attrs)
-
-
-def _svda_one_frequency(params: dict[str, float], position: float, eta: float, omega: float,
-                        periods: int, settle: float, samples: int, ode_method: str, rtol: float,
-                        atol: float) -> tuple[complex, float, complex, float, int]:
-    period = 2.0 * math.pi / omega
-    n_settle = math.ceil(settle / period - 1e-9)
-    drive = Sinusoid(position, eta, omega, periods=float(n_settle + periods))
-    t_eval = n_settle * period + period * np.arange(periods * samples + 1) / samples
-    t_eval[-1] = min(t_eval[-1], drive.duration)
-    run = solve_svda(drive, **params, t_eval=t_eval, ode_method=ode_method, rtol=rtol, atol=atol)
-    force_hat = complex(demodulate(run.force, run.time, omega))
-    mean_force = float(np.real(demodulate(run.force, run.time, omega, harmonic=0)))
-    u_hat = complex(demodulate(run.deformation, run.time, omega))
-    mean_u = float(np.real(demodulate(run.deformation, run.time, omega, harmonic=0)))
-    # drive h0 − h̄0 = Re[−iη e^{iωt}], compression D̂ = iη: k* = F̂/D̂, ν̂/η = Û/(−iη)
-    return force_hat / (1j * eta), mean_force, u_hat / (-1j * eta), mean_u, run.nfev
-
-
-def svda_sweep(problem: ContactProblem, position: float, eta: float, omega: ArrayLike, *,
-               periods: int = 4, settle: float | None = None, samples_per_period: int = 64,
-               ode_method: str = "Radau", rtol: float = 1e-10, atol: float | None = None,
-               progress: bool | None = None) -> xr.Dataset:
-    """SVDA spectrum in the time domain: the ODE (Eqs. 17–18) under a sine, then lock-in.
-
-    For each ω the drive :class:`~viscoforce.experiments.drives.Sinusoid` h0(t) = h̄0 + η sin ωt
-    starts from the E_inf static SVDA state at h̄0, runs a whole number of settling periods (at
-    least ``settle``) and then ``periods`` more, sampled uniformly and demodulated by
-    :func:`viscoforce.lockin.demodulate` — the same drive and lock-in as :func:`sweep`, with
-    :func:`~viscoforce.solvers.svda_ode.solve_svda` in place of the exact solver. At small η it
-    reproduces :func:`svda_spectrum`; at finite η it includes the SVDA's nonlinear response.
-
-    Parameters
-    ----------
-    problem : ContactProblem
-        System: one-mode material, exactly one :class:`~viscoforce.physics.surface_forces.DoubleLayer`
-        (its grid is not used).
-    position : float
-        Mean position h̄0 [m], finite, before contact (central gap ≥ the Debye length).
-    eta : float
-        Drive amplitude η [m], > 0.
-    omega : array_like
-        Angular frequencies [rad/s], > 0 (non-empty, 1-D).
-    periods : int
-        Whole periods demodulated after settling (≥ 1).
-    settle : float, optional
-        Settling time [s], ≥ 0 (rounded up to whole periods); default 20τ
-        (:data:`SVDA_SETTLE_TAUS`).
-    samples_per_period : int
-        Output samples per period fed to the lock-in (≥ 8).
-    ode_method : {"Radau", "BDF", "LSODA"}
-        ``solve_ivp`` method (:data:`~viscoforce.solvers.svda_ode.ODE_METHODS`).
-    rtol : float
-        Relative tolerance of ``solve_ivp``, in [1e-13, 0.1].
-    atol : float, optional
-        Absolute tolerance on u [m], > 0; default 1e-12·debye_length.
-    progress : bool, optional
-        Progress bar over the frequencies (default: when stderr is a terminal).
-
-    Returns
-    -------
-    xarray.Dataset
-        Spectrum with ``method = "svda-ode"``, plus over ``omega``: ``deformation_amplitude`` ν
-        [m] and ``deformation_phase`` φ [degree] of the central deformation
-        u(t) ≈ ū + ν sin(ωt + φ) (the paper's ν and φ; φ ≤ 0, u lags the drive),
-        ``mean_deformation`` ū [m] and ``nfev`` (right-hand-side evaluations).
-
-    Raises
-    ------
-    ParameterError
-        If an argument is missing or out of range, the material or law is not the SVDA's, or
-        the position is in contact.
-    EffortError
-        If the estimated ODE steps (at least
-        :data:`~viscoforce.experiments.drives.STEPS_PER_PERIOD` per period, settling included,
-        summed over ω) exceed :data:`~viscoforce._limits.MAX_STEPS` or the output samples exceed
-        :data:`~viscoforce._limits.MAX_SAMPLES`; refused before integrating.
-    ConvergenceError
-        If the time integration fails.
-    """
-    problem, params, position, eta, omega = _svda_inputs(problem, position, eta, omega,
-                                                         allow_zero=False)
-    periods = require_int("periods", periods, 1)
-    samples = require_int("samples_per_period", samples_per_period, 8)
-    if settle is None:
-        settle = SVDA_SETTLE_TAUS * params["tau"]
-    else:
-        settle = require_number("settle", settle, require_nonnegative,
-                                ">= 0 [s] (finite; None for 20 tau)")
-    rtol, atol = check_ode_settings(ode_method, rtol, atol, params["debye_length"])
-    show = require_progress(progress)
-    n_settle = _settling_periods(settle, omega)
-    steps = n_settle * STEPS_PER_PERIOD + periods * max(STEPS_PER_PERIOD, samples)
-    _check_sweep_effort("the SVDA ODE sweep", steps,
-                        f"at least {STEPS_PER_PERIOD} steps per period", samples, periods,
-                        omega.size,
-                        hint="fewer or lower frequencies, a shorter settle or fewer periods; "
-                             "the closed form svda_spectrum needs no time stepping")
-    show = sys.stderr.isatty() if show is None else show
-    results = list(_track((_svda_one_frequency(params, position, eta, float(w), periods, settle,
-                                               samples, ode_method, rtol, atol) for w in omega),
-                          omega.size, show))
-    k = np.array([r[0] for r in results])
-    mean = np.array([r[1] for r in results])
-    nu_rel = np.array([r[2] for r in results])
-    attrs = dict(problem.parameters())
-    attrs.update({"method": "svda-ode", "position": position, "eta": eta, "periods": periods,
-                  "settle": settle, "samples_per_period": samples, "ode_method": ode_method,
-                  "rtol": rtol, "atol": atol})
-    ds = make_spectrum(omega, k, mean, eta, attrs=attrs)
-
-    def over_omega(values: NDArray, units: str, long_name: str) -> xr.DataArray:
-        return xr.DataArray(values, dims="omega", attrs={"units": units, "long_name": long_name})
-
-    ds["deformation_amplitude"] = over_omega(eta * np.abs(nu_rel), "m",
-                                             "central deformation amplitude nu")
-    ds["deformation_phase"] = over_omega(np.degrees(np.angle(nu_rel)), "degree",
-                                         "phase of the central deformation relative to the drive")
-    ds["mean_deformation"] = over_omega(np.array([r[3] for r in results]), "m",
-                                        "mean central deformation")
-    ds["nfev"] = over_omega(np.array([r[4] for r in results]), "1",
-                            "right-hand-side evaluations")
-    warn_svda_error(position, params["E_inf"], params["radius"], params["P"],
-                    params["debye_length"])
+    variables = {"steps": ([r[2] for r in results], "time steps taken"),
+                 "periods": (periods, "whole periods demodulated"),
+                 "lockin_error": (bound, "bound on the relative error of k* the start-up "
+                                         "transient leaves in the lock-in (linear theory)")}
+    if stepper_error is not None:
+        variables["error_estimate"] = (stepper_error + bound, "estimated relative error of k*: "
+                                       "the stepper's (measured, x 2) + lockin_error")
+    for name, (values, long_name) in variables.items():
+        ds[name] = xr.DataArray(np.asarray(values), dims="omega",
+                                attrs={"units": "1", "long_name": long_name})
     return ds
 
 
@@ -485,7 +380,8 @@ def spectrum(problem: ContactProblem, position: float, eta: float, omega: ArrayL
         :func:`~viscoforce.experiments.choice.choose_spectrum` and stores its reason in
         ``attrs["explanation"]`` and its estimate in ``attrs["estimated_error"]``.
     accuracy : float, optional
-        Required relative error of ``"auto"`` (default 1e-3); only with ``"auto"``.
+        Required relative error of ``"auto"`` (default 1e-3); with ``"time-domain"``, the one
+        :func:`sweep` chooses its periods for; not with the other routes.
     **options
         Passed to the time-domain routes (:func:`sweep`: ``periods``, ``n_jobs``,
         ``progress``, ...; :func:`svda_sweep`); ``"auto"`` passes on those its route takes.
@@ -515,8 +411,9 @@ def spectrum(problem: ContactProblem, position: float, eta: float, omega: ArrayL
     if not isinstance(method, str) or (method != "auto" and method not in SPECTRUM_METHODS):
         raise ParameterError(
             f"method must be 'auto' or one of {sorted(SPECTRUM_METHODS)}, got {method!r}")
-    if accuracy is not None and method != "auto":
-        raise ParameterError(f"accuracy applies to method 'auto' only, not {method!r}")
+    if accuracy is not None and method not in ("auto", "time-domain"):
+        raise ParameterError(f"accuracy applies to method 'auto' only (and 'time-domain', whose "
+                             f"periods it chooses), not {method!r}")
     choice = None
     if method == "auto" and set(options) & _AUTO_CHOOSES:
         raise TypeError(f"method 'auto' chooses {', '.join(sorted(set(options) & _AUTO_CHOOSES))} "
@@ -531,6 +428,9 @@ def spectrum(problem: ContactProblem, position: float, eta: float, omega: ArrayL
             options = {k: v for k, v in options.items() if k in ("periods", "progress")}
     if options and method not in _WITH_OPTIONS:
         raise TypeError(f"method {method!r} takes no options, got {sorted(options)}")
+    if method == "time-domain" and options.get("periods") is None:
+        options = {**options, "periods": None, "accuracy": accuracy if choice is None
+                   else choice.accuracy}
     if choice is None:
         ds = SPECTRUM_METHODS[method](problem, position, eta, omega, **options)
     else:
@@ -539,7 +439,8 @@ def spectrum(problem: ContactProblem, position: float, eta: float, omega: ArrayL
         with warnings.catch_warnings():  # the choice weighed the approximations' estimates
             warnings.simplefilter("ignore", ApproximationWarning)
             ds = SPECTRUM_METHODS[method](problem, position, eta, omega, **options)
-        ds.attrs["explanation"] = choice.explanation
-        ds.attrs["estimated_error"] = choice.estimated_error
+        ds.attrs["explanation"] = choice.explanation  # + the periods' lock-in bound, if any
+        ds.attrs["estimated_error"] = choice.estimated_error + float(
+            ds["lockin_error"].max()) if "lockin_error" in ds else choice.estimated_error
         ds.attrs["accuracy"] = choice.accuracy
     return ds
