@@ -29,7 +29,13 @@ from viscoforce.exceptions import (
 from viscoforce.physics.materials import Elastic, PronySeries, StandardLinearSolid
 from viscoforce.physics.paper import PAPER, PaperParameters, paper_pressure_law
 from viscoforce.physics.particle import Particle, Sphere
-from viscoforce.physics.surface_forces import DoubleLayer, SoftWall, SumOfLaws
+from viscoforce.physics.surface_forces import (
+    DoubleLayer,
+    LennardJones,
+    SoftWall,
+    SumOfLaws,
+    lennard_jones_pressure_law,
+)
 from viscoforce.problem import ContactProblem, default_grid
 from viscoforce.radial_grid import RadialGrid
 from viscoforce.solvers.static import static_equilibrium
@@ -104,6 +110,7 @@ __all__ = [
     "GapClosureError",
     "GoodnessOfFitWarning",
     "InstrumentFormatError",
+    "LennardJones",
     "ModelValidityError",
     "ModelValidityWarning",
     "PAPER",
@@ -121,6 +128,7 @@ __all__ = [
     "UnitError",
     "ViscoforceError",
     "default_grid",
+    "lennard_jones_pressure_law",
     "paper_pressure_law",
     "static_equilibrium",
     "__version__",

@@ -57,7 +57,7 @@ def test_static_human_output_and_netcdf(capsys, tmp_path):
     (["static", "--h0", "5s", "--E", "1e9"], "expected a length"),
     (["static", "--h0", "-5nm", "--E", "-1e9"], "E must be > 0"),
     (["static", "--h0", "-30nm", "--E", "1e9", "--outer-radius", "500nm"], "too small"),
-    (["static", "--E", "1e9"], "required"),
+    (["static", "--E", "1e9"], "give either --h0 H or --h0-range START:STOP"),
     (["static", "--h0", "1,5nm", "--E", "1e9"], "1.5nm"),
 ])
 def test_user_errors_exit_2_with_one_message(capsys, argv, message):

@@ -290,6 +290,9 @@ def budgeted(args: argparse.Namespace, kept: Kept, kind: str,
     result = with_budget(args, kept.result, {"height_record": other, "phase_reference": phase,
                                              **alternatives},
                          {"height_record": why, "phase_reference": phase_why, **described})
+    free = described.get("fit_window", "").startswith("the depth range")  # the depth check's
+    result.attrs["budget_refits"] = int((other is not None) + (phase is not None) - free
+                                        + sum(1 for v in alternatives.values() if v is not None))
     if phase_why:
         result.attrs["phase_reference_budget"] = phase_why
     for source in ("fit_window", "contact_point", "sample_height"):
@@ -453,4 +456,5 @@ def budget_json(result, params: dict[str, dict[str, Any]]) -> dict[str, Any]:
         entry["determined"] = bool(int(result[f"{name}_budget_determined"]))
     notes = str(result.attrs.get("budget_notes", "none"))
     return {"budget_sources": str(result.attrs.get("budget_sources", "")),
+            "budget_refits": int(result.attrs.get("budget_refits", 0)),
             "budget_notes": [] if notes == "none" else notes.split(" | ")}

@@ -28,7 +28,6 @@ from viscoforce.cli._fit_budget import (
     map_alternatives,
     recorded,
     show,
-    with_budget,
     with_map_budget,
 )
 from viscoforce.cli._fit_inputs import (  # noqa: F401 - read_data, one_curve_squeezed: public here
@@ -285,23 +284,30 @@ def run_fit(args: argparse.Namespace) -> int:
 
 def _fit_file(args: argparse.Namespace, path: str):
     """The fit result of one file of a batch (a map's curves fitted in this process)."""
-    ds = _reader(args)(path, args.format, height_channel=height_channel(args),
-                   phase_reference=args.phase_reference)
+    read = _reader(args)
+    ds = read(path, args.format, height_channel=height_channel(args),
+              phase_reference=args.phase_reference)
     kind = _kind(ds)
     _check_model(args, kind)
     ds = _select_curve(ds, kind, args.curve)
+    one = argparse.Namespace(**{**vars(args), "data": path})  # the refits re-read this file
     if _extra_dims(ds, kind):
         from viscoforce.fitting.maps import fit_map
 
         options = {} if args.identifiability is None else {
             "identifiability": args.identifiability}
         fixed = _fixed(args, ds, kind)
-        return with_map_budget(args, fit_map(
-            ds, args.model, modes=1 if args.modes is None else args.modes,
-            criterion=args.criterion, scheduler=args.scheduler or "synchronous",
-            workers=args.workers, progress=False, segment=args.segment, poisson=args.poisson,
-            **options, **fixed), fixed)
-    return with_budget(args, fit_one(args, ds, kind))  # calibration (no second record: cost)
+
+        def fit_all(data):
+            return fit_map(data, args.model, modes=1 if args.modes is None else args.modes,
+                           criterion=args.criterion, scheduler=args.scheduler or "synchronous",
+                           workers=args.workers, progress=False, segment=args.segment,
+                           poisson=args.poisson, **options, **fixed)
+
+        result, alternatives, described = map_alternatives(one, ds, kind, fit_all(ds), fit_all,
+                                                           read)
+        return with_map_budget(args, result, fixed, alternatives, described)
+    return budgeted(one, Kept(fit_one(args, ds, kind), ds), kind, fit_one, read)[1]
 
 
 def run_batch(args: argparse.Namespace, paths: list[str]) -> int:

@@ -77,13 +77,58 @@ def material_from_args(args: argparse.Namespace) -> ViscoelasticMaterial:
     return StandardLinearSolid(E0=e0, E_inf=e_inf, tau=tau)
 
 
+def law_from_args(args: argparse.Namespace):
+    """The surface force of ``--force-law`` (default the paper's double layer + soft wall).
+
+    ``lennard-jones``: p = A/(6πh³)[(z0/h)⁶ − 1] with ``--hamaker`` and ``--z0``; ``both``: the
+    double layer (``--P``, ``--debye-length``) plus that law (its (z0/h)⁹ term is the wall).
+    """
+    kind = getattr(args, "force_law", None) or "double-layer"
+    hamaker = getattr(args, "hamaker", None)
+    if kind == "double-layer":
+        if hamaker is not None:
+            raise UsageError("--hamaker needs --force-law lennard-jones or both")
+        return paper_pressure_law(args.P, args.debye_length, args.Pw, args.z0)
+    from viscoforce.physics.surface_forces import DoubleLayer, lennard_jones_pressure_law
+
+    if hamaker is None:
+        raise UsageError(f"--force-law {kind} needs --hamaker A (in J, e.g. 1e-20J)")
+    layer = DoubleLayer(args.P, args.debye_length) if kind == "both" else None
+    return lennard_jones_pressure_law(hamaker, args.z0, double_layer=layer)
+
+
+def _hamaker_type(text: str) -> float:
+    """A Hamaker constant: ``1e-20J`` or a bare number of joules."""
+    body = text.strip()
+    body = body[:-1] if body.endswith("J") else body
+    try:
+        return float(body)
+    except ValueError:
+        raise argparse.ArgumentTypeError(
+            f"invalid Hamaker constant {text!r}: give joules, e.g. 1e-20J") from None
+
+
+def _range_type(text: str) -> tuple[float, float]:
+    """``START:STOP`` positions with units (``2nm:-1nm``; the path runs from START to STOP)."""
+    from viscoforce.units import parse_quantity
+
+    parts = text.split(":")
+    if len(parts) != 2:
+        raise argparse.ArgumentTypeError(
+            f"invalid range {text!r}: give START:STOP with units, e.g. 2nm:-1nm")
+    try:
+        return tuple(parse_quantity(p, "length", name="--h0-range") for p in parts)
+    except ValueError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
+
+
 def problem_from_args(args: argparse.Namespace, material: ViscoelasticMaterial,
                       deepest: float) -> ContactProblem:
     """The contact problem of the system and numerics flags, sized for ``deepest`` [m]."""
     from viscoforce.physics.particle import Particle
     from viscoforce.problem import ContactProblem
 
-    law = paper_pressure_law(args.P, args.debye_length, args.Pw, args.z0)
+    law = law_from_args(args)
     return ContactProblem.create(sphere=Particle(args.R), surface_force=law, material=material,
                                  deepest_position=deepest, grid_spacing=args.grid_spacing,
                                  outer_radius=args.outer_radius)
@@ -106,7 +151,10 @@ def _save_figure(handle, path: str) -> None:
 
 STATIC_FLAGS = FlagGroup(None, (
     Flag("--h0", "length", None, "LENGTH",
-         "apex position h0 (may be negative, e.g. --h0=-5nm or --h0 -5nm)", required=True),
+         "apex position h0 (may be negative, e.g. --h0=-5nm or --h0 -5nm); or --h0-range"),
+    Flag("--h0-range", _range_type, None, "START:STOP",
+         "trace the equilibria from START to STOP through the jumps (pseudo-arclength "
+         "continuation), e.g. --h0-range=2nm:-1nm; --json adds jump_in, jump_out, pull_off"),
     Flag("--modulus", "pressure", None, "PRESSURE",
          "elastic modulus E in the paper's convention (2/E = sum (1-nu^2)/E_i)", required=True,
          dest="E", aliases=("--E",)),
@@ -121,13 +169,58 @@ def add_static(parser: argparse.ArgumentParser) -> None:
     add_outputs(parser, [Output("--out", NETCDF, "FILE.nc", "write the profiles (netCDF)")])
     parser.add_argument("--json", action="store_true", help=_JSON)
     add_flags(parser, SYSTEM_FLAGS)
+    add_flags(parser, FORCE_LAW_FLAGS)
     add_flags(parser, NUMERICS_FLAGS)
+
+
+FORCE_LAW_FLAGS = FlagGroup("surface force", (
+    Flag("--force-law", str, "double-layer", "LAW",
+         "double-layer (the paper's, with the soft wall), lennard-jones or both (double layer + "
+         "Lennard-Jones; --z0 is then its equilibrium separation)"),
+    Flag("--hamaker", _hamaker_type, None, "ENERGY",
+         "Hamaker constant A of the Lennard-Jones law, in J (1e-20J or 1e-20)"),
+))
+
+
+def _run_static_path(args: argparse.Namespace) -> int:
+    """``static --h0-range``: the equilibrium path, its jumps and the pull-off."""
+    from viscoforce.solvers.continuation import equilibrium_path
+
+    start, stop = args.h0_range
+    problem = problem_from_args(args, Elastic(args.E), min(start, stop))
+    path = equilibrium_path(problem, start, stop, contact_threshold=args.contact_threshold)
+    if args.out:
+        write_netcdf(path.to_dataset(), args.out, engine="scipy")
+    result = {"position": path.position, "force": path.force, "stable": path.stable.tolist(),
+              "pull_off": path.pull_off}
+    for name in ("jump_in", "jump_out"):
+        fold = getattr(path, name)
+        result[name] = None if fold is None else {"position": fold.position, "time": None,
+                                                  "force": fold.force}
+    if args.json:
+        print_json(result)
+        return 0
+    rows = [(f"{f.kind} at h0", f.position, "length") for f in path.folds]
+    rows += [(f"{f.kind} force", f.force, "force") for f in path.folds]
+    if path.pull_off is not None:
+        rows.append(("pull-off force", path.pull_off, "force"))
+    print_table(rows)
+    print(f"({len(path.position)} equilibria on {problem.grid.size} nodes)")
+    print_written(args.out)
+    return 0
 
 
 def run_static(args: argparse.Namespace) -> int:
     """Static elastic equilibrium at ``--h0``; prints the loads, deformation, contact radius."""
     from viscoforce.solvers.static import static_equilibrium
 
+    if args.force_law not in ("double-layer", "lennard-jones", "both"):
+        raise UsageError(f"--force-law must be double-layer, lennard-jones or both, got "
+                         f"{args.force_law!r}")
+    if (args.h0 is None) == (args.h0_range is None):
+        raise UsageError("give either --h0 H or --h0-range START:STOP")
+    if args.h0_range is not None:
+        return _run_static_path(args)
     problem = problem_from_args(args, Elastic(args.E), args.h0)
     ds = static_equilibrium(problem, args.h0, contact_threshold=args.contact_threshold)
     if args.out:
@@ -317,8 +410,9 @@ SPECTRUM_FLAGS = FlagGroup(None, (
 ))
 
 TIME_DOMAIN_FLAGS = FlagGroup("time-domain method", (
-    Flag("--periods", integer_type(1), 4, "N",
-         "demodulated periods after settling (default 4)"),
+    Flag("--periods", integer_type(1), None, "N",
+         "demodulated periods after settling (default: per frequency the fewest whose lock-in "
+         "transient bound is <= 1/10 of the accuracy, 1e-3; svda-ode: 4)"),
     Flag("--workers", integer_type(1), 1, "N", "worker processes (default 1)", dest="jobs",
          aliases=("--jobs",)),
 ))
@@ -381,9 +475,11 @@ def run_spectrum(args: argparse.Namespace) -> int:
         raise UsageError("--accuracy needs --method auto")
     options: dict = {}
     if args.method == "svda-ode":
-        options = {"progress": args.progress, "periods": args.periods}
+        options = {"progress": args.progress}
     if args.method in ("time-domain", "auto"):  # auto drops them unless it simulates
-        options = {"n_jobs": args.jobs, "progress": args.progress, "periods": args.periods}
+        options = {"n_jobs": args.jobs, "progress": args.progress}
+    if args.periods is not None and options:  # the linear routes take no options
+        options["periods"] = args.periods
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", ModelValidityWarning)
         ds = spectrum(problem, args.h0, args.eta, omega, method=args.method,

@@ -287,3 +287,186 @@ class SumOfLaws(SurfaceForceLaw):
     def describe(self) -> str:
         """The terms, e.g. ``DoubleLayer(P=1e+07, debye_length=1e-09) + SoftWall(...)`` (SI)."""
         return " + ".join(t.describe() for t in self.terms)
+
+
+# ── Lennard-Jones (adhesive) law: issue 39 ───────────────────────────────────────────────────────
+
+#: Plausible Hamaker constants [J]: 1e-25 J (far below any real pair, ~1e-21 J for polymers in
+#: water) to 1e-15 J (far above metals in vacuum, ~4e-19 J).
+HAMAKER_RANGE = (1e-25, 1e-15)
+#: 3^{1/6}: the gap h/z0 of the Lennard-Jones pressure minimum (the largest tensile stress).
+_LJ_WELL = 3.0 ** (1.0 / 6.0)
+
+
+def _hamaker(value: float) -> float:
+    """The Hamaker constant A [J]: > 0, within :data:`HAMAKER_RANGE`."""
+    return require_plausible("hamaker (Hamaker constant A)", require_positive(
+        "hamaker (Hamaker constant A)", value), HAMAKER_RANGE, "J")
+
+
+def lennard_jones_work_of_adhesion(hamaker: float, z0: float) -> float:
+    """Δγ = A / (16 π z0²) [J/m²]: −W(z0) of the Lennard-Jones law (the depth of its well).
+
+    Parameters
+    ----------
+    hamaker : float
+        Hamaker constant A [J], within :data:`HAMAKER_RANGE`.
+    z0 : float
+        Equilibrium separation z0 [m] (p(z0) = 0), within
+        :data:`~viscoforce._limits.SURFACE_FORCE_LENGTH_RANGE`.
+    """
+    return _hamaker(hamaker) / (16.0 * np.pi * _length("z0 (equilibrium separation)", z0) ** 2)
+
+
+def tabor_parameter(radius: float, work_of_adhesion: float, modulus: float, z0: float) -> float:
+    """Tabor's μ = (R Δγ² / (E*² z0³))^{1/3} with E* = E/2 (E in the paper's convention).
+
+    μ → 0: rigid bodies, Bradley/DMT pull-off 2πRΔγ; μ ≳ 5: JKR, 1.5πRΔγ. Maugis' transition
+    parameter is λ ≈ 1.16 μ.
+
+    Parameters
+    ----------
+    radius : float
+        Sphere radius R [m], > 0.
+    work_of_adhesion : float
+        Δγ [J/m²], > 0.
+    modulus : float
+        Elastic modulus E [Pa] in the paper's convention (2/E = Σ(1 − ν_i²)/E_i), > 0.
+    z0 : float
+        Equilibrium separation z0 [m], > 0.
+    """
+    radius = require_positive("radius (R)", radius)
+    work = require_positive("work_of_adhesion", work_of_adhesion)
+    e_star = 0.5 * require_positive("modulus (E)", modulus)
+    z0 = require_positive("z0", z0)
+    return float((radius * work**2 / (e_star**2 * z0**3)) ** (1.0 / 3.0))
+
+
+@dataclass(frozen=True)
+class LennardJones(SurfaceForceLaw):
+    """Lennard-Jones (9-3) pressure p = A/(6π h³)·[(z0/h)⁶ − 1] between half-spaces.
+
+    Attractive (p < 0) beyond z0, repulsive below; the most tensile pressure is
+    −A/(9√3 π z0³) at h = 3^{1/6} z0; the energy per area W(h) = A/(12π h²)·[(z0/h)⁶/4 − 1]
+    has its minimum −Δγ = −A/(16π z0²) at h = z0.
+
+    Parameters
+    ----------
+    hamaker : float
+        Hamaker constant A [J], > 0, within :data:`HAMAKER_RANGE`.
+    z0 : float
+        Equilibrium separation z0 [m] (p(z0) = 0), > 0, within
+        :data:`~viscoforce._limits.SURFACE_FORCE_LENGTH_RANGE`.
+
+    Notes
+    -----
+    The gap must stay > 0 (the (z0/h)⁹ wall keeps it so in any converged equilibrium).
+    :attr:`decay_length` is z0: the pressure changes sign at h = z0 and its well spans a gap of
+    order z0, so z0 sets the grid's interaction length sqrt(2 R z0) and the default contact
+    threshold (gaps below z0 are repulsive). The attractive tail decays only as h⁻³:
+    :meth:`negligible_gap` is correspondingly far out.
+    """
+
+    hamaker: float = 1e-20
+    z0: float = 0.3e-9
+
+    def __post_init__(self):
+        object.__setattr__(self, "hamaker", _hamaker(self.hamaker))
+        object.__setattr__(self, "z0", _length("z0 (equilibrium separation)", self.z0))
+        object.__setattr__(self, "_scale", self.hamaker / (6.0 * np.pi))
+
+    def _evaluate(self, gap, formula: Callable[[FloatArray], FloatArray]) -> FloatArray:
+        """``formula(h)`` for gaps [m] that must be > 0; overflow near h = 0 gives +inf quietly."""
+        h = _as_gap(gap)
+        if not h.size:
+            return formula(h)
+        low = h.min()
+        if not low >= _OVERFLOW_RATIO * self.z0:  # one reduction: NaN, h ≤ 0 or overflow
+            _reject_nan(h)
+            if low <= 0:
+                raise ParameterError(
+                    f"gap must be > 0 for the Lennard-Jones law, got min {float(low):g} m")
+            with np.errstate(over="ignore"):
+                return formula(h)
+        return formula(h)
+
+    def pressure(self, gap):
+        """Pressure [Pa] at gap [m] (< 0 beyond z0: attraction)."""
+        return self._evaluate(gap, lambda h: self._scale / h**3 * ((self.z0 / h) ** 6 - 1.0))
+
+    def pressure_derivative(self, gap):
+        """dp/dh [Pa/m] at gap [m] (> 0 beyond 3^{1/6} z0: the unstable, softening side)."""
+        return self._evaluate(
+            gap, lambda h: self._scale / h**4 * (3.0 - 9.0 * (self.z0 / h) ** 6))
+
+    def energy(self, gap):
+        """Energy per area W(h) [J/m²] at gap [m] (minimum −Δγ at h = z0)."""
+        return self._evaluate(
+            gap, lambda h: self._scale / (2.0 * h**2) * (0.25 * (self.z0 / h) ** 6 - 1.0))
+
+    @property
+    def decay_length(self) -> float:
+        """z0 [m] (see the class notes)."""
+        return self.z0
+
+    @property
+    def work_of_adhesion(self) -> float:
+        """Δγ = A/(16π z0²) [J/m²]."""
+        return lennard_jones_work_of_adhesion(self.hamaker, self.z0)
+
+    @property
+    def max_tensile_pressure(self) -> float:
+        """The largest tensile pressure A/(9√3 π z0³) [Pa] (> 0), at h = 3^{1/6} z0."""
+        return float(self.hamaker / (9.0 * np.sqrt(3.0) * np.pi * self.z0**3))
+
+    def tabor_parameter(self, radius: float, modulus: float) -> float:
+        """Tabor's μ of this law for a sphere of radius R [m] and modulus E [Pa] (paper's E)."""
+        return tabor_parameter(radius, self.work_of_adhesion, modulus, self.z0)
+
+    def negligible_gap(self, rtol: float) -> float:
+        """Gap [m] beyond which |p| < rtol × the largest tensile pressure, for 0 < rtol < 1.
+
+        The tail A/(6π h³) falls below rtol·A/(9√3 π z0³) at h = z0·(3√3/(2 rtol))^{1/3}.
+        """
+        rtol = _as_rtol(rtol)
+        return float(max(self.z0 * (1.5 * np.sqrt(3.0) / rtol) ** (1.0 / 3.0), _LJ_WELL * self.z0))
+
+
+def lennard_jones_pressure_law(hamaker: float, z0: float, *,
+                               double_layer: DoubleLayer | None = None) -> SurfaceForceLaw:
+    """The adhesive Lennard-Jones law, alone or added to a double layer (issue 39).
+
+    Parameters
+    ----------
+    hamaker : float
+        Hamaker constant A [J], within :data:`HAMAKER_RANGE` (e.g. 1e-20 J).
+    z0 : float
+        Equilibrium separation z0 [m] (e.g. 0.3e-9), within
+        :data:`~viscoforce._limits.SURFACE_FORCE_LENGTH_RANGE`.
+    double_layer : DoubleLayer, optional
+        A double-layer repulsion to add (the CLI's ``--force-law both``). The Lennard-Jones
+        (z0/h)⁹ term is then the short-range wall: no separate :class:`SoftWall` is added.
+
+    Returns
+    -------
+    SurfaceForceLaw
+        :class:`LennardJones`, or ``double_layer + LennardJones`` (:class:`SumOfLaws`).
+
+    Examples
+    --------
+    >>> law = lennard_jones_pressure_law(1e-20, 0.3e-9)
+    >>> round(law.work_of_adhesion * 1e3, 3)  # Δγ [mJ/m²]
+    2.21
+    """
+    law = LennardJones(hamaker, z0)
+    if double_layer is None:
+        return law
+    if not isinstance(double_layer, DoubleLayer):
+        raise ParameterError(f"double_layer must be a DoubleLayer or None, got {double_layer!r}")
+    return double_layer + law
+
+
+def is_attractive(law: SurfaceForceLaw) -> bool:
+    """Whether ``law`` has a Lennard-Jones term (an attractive well: jumps and pull-off)."""
+    terms = law.terms if isinstance(law, SumOfLaws) else (law,)
+    return any(isinstance(t, LennardJones) for t in terms)
