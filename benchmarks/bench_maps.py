@@ -30,6 +30,21 @@ map, 1 % seeded noise in stiffness and phase and those stderr columns; 30 freque
    together (2.0 on two free cores, less while other processes use them). Measured once per
    round, beside the fits, so that the speed-up can be read against it.
 
+4. ``schedule`` (issue 41 item 5: does the cost model see the host?): two real-sized maps, the
+   bundled example ``sls_spectrum_map.nc`` (4x4 spectra, the exact model at h0 = -5 nm on the
+   CLI's default system) and the PyFMRheo force map
+   ``/work/shared/data/real/PyFMRheo/map-data-2022.10.29-12.27.34.564.jpk-force-map`` (16
+   curves, hertz with ``tip="sphere:5um"``; skipped where the file is absent), each in
+   :data:`SCHEDULE_ROUNDS` interleaved rounds of ``auto`` (the cost model's choice),
+   ``in_process`` and ``cluster`` (the order rotating), after one untimed round of each (so that
+   every timed cluster is a later one of the process, as the cost model knows); within a round
+   a way is called again until its calls add up to :data:`SCHEDULE_MIN_S` and timed by their
+   mean. Per round the
+   host's 2-process capacity is measured beside the fits (``capacity``, as above) and the cost
+   model's own capacity probe is read from ``attrs["parallel_capacity"]`` (NaN where it did
+   not need one). Target: median(``auto``) <= :data:`TARGET` ``schedule_ratio`` x the smaller of
+   the medians of ``in_process`` and ``cluster``, printed as that ratio, PASS/FAIL.
+
 Every size is timed ``--repeats`` rounds (default 3; the order of the ways rotates from round to
 round, so that load from other processes spreads over all of them); medians are reported.
 Checks, printed PASS/FAIL:
@@ -41,7 +56,9 @@ Checks, printed PASS/FAIL:
   for every size;
 - CLI - API <= the CLI's start-up (+ the cluster library's import where the CLI fitted on a
   cluster) + 0.5 s (what grows with the map: reading it, writing fits.nc, the summary), every
-  size.
+  size;
+- the schedule maps (part 4): median(``auto``) / min(median(``in_process``),
+  median(``cluster``)) <= 1.05, over :data:`SCHEDULE_ROUNDS` rounds (``--repeats`` overrides).
 
 BLAS is pinned to one thread (OPENBLAS/OMP/MKL_NUM_THREADS=1 before NumPy loads; inherited by
 the cluster's workers and the CLI children). Outputs (in ``--out``, default benchmarks/out/):
@@ -86,12 +103,22 @@ from _common import (  # noqa: E402
 SCHEMA = "viscoforce.bench_maps/1"
 DEFAULT_REPEATS = 3
 WAYS = ("in_process", "cluster", "auto", "cli")
-#: The case table: one n × n svda map per row, timed each of its ``ways`` (of :data:`WAYS`).
-CASES = tuple({"size": n, "ways": WAYS} for n in (4, 16, 64))
+#: Ways of the schedule maps (part 4 of the module docstring), and their rounds.
+SCHEDULE_WAYS = ("auto", "in_process", "cluster")
+SCHEDULE_ROUNDS = 7
+#: A schedule map's way is called again within a round until its calls add up to this [s]; the
+#: round's time is their mean (a map fitted in 40 ms would otherwise be timed to the noise).
+SCHEDULE_MIN_S = 0.5
+REAL_MAP = Path("/work/shared/data/real/PyFMRheo/map-data-2022.10.29-12.27.34.564.jpk-force-map")
+#: The case table: one n × n svda map per row (``size``), timed each of its ``ways`` (of
+#: :data:`WAYS`), then the schedule maps (``map``: part 4), timed :data:`SCHEDULE_WAYS`.
+CASES = (*({"size": n, "ways": WAYS} for n in (4, 16, 64)),
+         {"map": "exact_example", "model": "exact", "ways": SCHEDULE_WAYS},
+         {"map": "hertz_pyfmrheo", "model": "hertz", "ways": SCHEDULE_WAYS})
 #: --quick: the 4x4 map in this process and by the cost model (no cluster, no CLI).
 QUICK_CASES = ({"size": 4, "ways": ("in_process", "auto")},)
 TARGET = {"cluster_64_s": 10.0, "speedup_64": 1.6, "auto_rel": 0.10, "auto_abs_s": 0.05,
-          "cli_margin_s": 0.5}
+          "cli_margin_s": 0.5, "schedule_ratio": 1.05}
 OMEGA = np.geomspace(10.0, 1e6, 30)
 NOISE = 0.01
 POSITION = 2e-9
@@ -147,19 +174,107 @@ def cli_command(data: Path, out: Path) -> list[str]:
             "--out", str(out)]
 
 
-def run_api(ds, way: str) -> tuple[float, dict]:
+def schedule_map(name: str):
+    """The dataset, model and fixed inputs of a schedule map (part 4), or None without its file."""
+    import xarray as xr
+
+    import viscoforce as vf
+
+    if name == "hertz_pyfmrheo":
+        if not REAL_MAP.is_file():
+            return None
+        from viscoforce.io.instruments import load_instrument
+
+        return load_instrument(REAL_MAP), "hertz", {"tip": "sphere:5um"}
+    from viscoforce.physics.materials import StandardLinearSolid
+    from viscoforce.physics.paper import PAPER, paper_pressure_law
+    from viscoforce.physics.particle import Particle
+    from viscoforce.problem import ContactProblem
+
+    with xr.open_dataset(vf.example_path("sls_spectrum_map.nc")) as opened:
+        ds = opened.load()
+    a = ds.attrs  # the system the example was made with (the CLI's defaults)
+    problem = ContactProblem.create(
+        sphere=Particle(a["radius"]),
+        surface_force=paper_pressure_law(a["P"], a["debye_length"], a["Pw"], a["z0"]),
+        material=StandardLinearSolid(PAPER.E0, PAPER.E_inf, PAPER.tau),
+        deepest_position=-5e-9 - 2 * a["debye_length"])
+    return ds, "exact", {"position": -5e-9, "problem": problem}
+
+
+def run_api(ds, way: str, model: str = "svda", fixed: dict | None = None) -> tuple[float, dict]:
     """Wall time [s] of one ``fit_map`` call of ``way`` and the result's execution attrs."""
     from viscoforce.fitting.maps import fit_map
 
     options = {"in_process": {"scheduler": "synchronous"}, "cluster": {"workers": 2},
                "auto": {}}[way]
     t0 = time.perf_counter()
-    result = fit_map(ds, "svda", progress=False, **options, **fixed_inputs())
+    with warnings.catch_warnings():  # the models' validity notes on real data: not timed here
+        warnings.simplefilter("ignore")
+        result = fit_map(ds, model, progress=False, **options,
+                         **(fixed_inputs() if fixed is None else fixed))
     wall = time.perf_counter() - t0
     attrs = {k: result.attrs[k] for k in (
         "execution", "execution_reason", "expected_time_s", "pixel_cost_estimated_s",
-        "pixel_cost_measured_s", "pixels_in_process", "cluster_startup_s", "n_good", "n_fits")}
+        "pixel_cost_measured_s", "pixels_in_process", "cluster_startup_s", "n_good", "n_fits",
+        "parallel_capacity")}
     return wall, attrs
+
+
+def time_schedule(case: dict, rounds: int, rows: list[dict]) -> dict | None:
+    """Part 4 on one schedule map: interleaved rounds, the capacity per round; None if absent."""
+    loaded = schedule_map(case["map"])
+    if loaded is None:
+        print(f"{case['map']}: skipped ({REAL_MAP} absent)")
+        return None
+    ds, model, fixed = loaded
+    ways = case["ways"]
+    for way in ways:  # untimed: imports, caches, and this process's first local cluster
+        run_api(ds, way, model, fixed)
+    walls: dict[str, list[float]] = {w: [] for w in ways}
+    seen: dict[str, list[dict]] = {w: [] for w in ways}
+    per_round = []
+    for r in range(rounds):
+        host = capacity()
+        order = ways[r % len(ways):] + ways[:r % len(ways)]
+        line = {"round": r, "capacity": host}
+        for way in order:
+            wall, attrs = run_api(ds, way, model, fixed)
+            calls = [wall]
+            while sum(calls) < SCHEDULE_MIN_S:  # a small map: the mean of enough calls
+                calls.append(run_api(ds, way, model, fixed)[0])
+            wall = statistics.mean(calls)
+            walls[way].append(wall)
+            seen[way].append(attrs)
+            line[way] = wall
+            if way == "auto":
+                line["choice"] = attrs["execution"]
+                line["parallel_capacity"] = float(attrs["parallel_capacity"])
+            rows.append({"size": case["map"], "pixels": attrs["n_fits"], "round": r, "way": way,
+                         "wall_s": wall, "execution": attrs["execution"],
+                         "cluster_startup_s": attrs.get("cluster_startup_s", float("nan")),
+                         "loadavg_1min": (load_average() or [None])[0], "capacity": host,
+                         "parallel_capacity": attrs["parallel_capacity"]})
+        per_round.append(line)
+        probe = line["parallel_capacity"]
+        probe_text = f"{probe:.2f}" if probe == probe else "not needed"
+        print(f"  {case['map']} round {r}: host capacity {host:.2f}, cost model's probe "
+              f"{probe_text}; auto {line['auto']:.2f} s ({line['choice']}), "
+              f"in-process {line['in_process']:.2f} s, cluster {line['cluster']:.2f} s")
+        sys.stdout.flush()
+    out = {"pixels": seen["auto"][0]["n_fits"], "model": model, "rounds": per_round}
+    for way in ways:
+        out[way] = {"time_median_s": statistics.median(walls[way]),
+                    "time_min_s": min(walls[way]), "runs": len(walls[way]),
+                    "executions": sorted({a["execution"] for a in seen[way]}),
+                    "n_good": seen[way][0]["n_good"]}
+    out["auto"]["reasons"] = [a["execution_reason"] for a in seen["auto"]]
+    for key in ("expected_time_s", "pixel_cost_estimated_s", "pixel_cost_measured_s",
+                "pixels_in_process"):
+        out["auto"][key] = statistics.median(float(a[key]) for a in seen["auto"])
+    out["auto"]["chose_cluster"] = sum(a["execution"].startswith("local cluster")
+                                       for a in seen["auto"])
+    return out
 
 
 def run_cli(data: Path, out: Path) -> tuple[float, dict]:
@@ -282,6 +397,16 @@ def judge(results: dict, startup: dict, quick: bool) -> dict:
                                 "passed": speedup >= TARGET["speedup_64"] if chose_cluster
                                 else None}
     for size, res in results.items():
+        if "rounds" in res:  # a schedule map (part 4): the ratio to the better way
+            best = min(res[w]["time_median_s"] for w in ("in_process", "cluster"))
+            ratio = res["auto"]["time_median_s"] / best
+            checks[f"schedule_{size}"] = {
+                "ratio": ratio, "target": TARGET["schedule_ratio"],
+                "auto_s": res["auto"]["time_median_s"], "best_s": best,
+                "capacities": [r["capacity"] for r in res["rounds"]],
+                "chose_cluster": res["auto"]["chose_cluster"], "rounds": len(res["rounds"]),
+                "passed": ratio <= TARGET["schedule_ratio"]}
+            continue
         options = [res[w]["time_median_s"] for w in ("in_process", "cluster") if w in res]
         best = min(options)
         auto = res["auto"]["time_median_s"]
@@ -335,6 +460,10 @@ def print_results(results: dict, startup: dict | None) -> None:
               f"{startup['imports_median_s']:.2f} s; importing dask.distributed as well: "
               f"+{startup['cluster_import_s']:.2f} s)")
     for size, res in results.items():
+        if "rounds" in res:
+            print(f"{size} ({res['pixels']} pixels, {res['model']}): " + ", ".join(
+                f"{w} {res[w]['time_median_s']:.2f} s" for w in SCHEDULE_WAYS) + " (medians)")
+            continue
         parts = [f"{w} {res[w]['time_median_s']:.2f} s" for w in WAYS if w in res]
         auto = res["auto"]
         print(f"{size} ({res['pixels']} pixels): " + ", ".join(parts))
@@ -354,7 +483,13 @@ def print_checks(judged: dict) -> None:
     for name, c in judged["checks"].items():
         verdict = "n/a (the cost model did not choose the cluster)" if c["passed"] is None \
             else pf(c["passed"])
-        if name == "cluster_64":
+        if name.startswith("schedule_"):
+            caps = ", ".join(f"{x:.2f}" for x in c["capacities"])
+            print(f"schedule on {name[9:]}: cost model's choice {c['auto_s']:.2f} s (cluster in "
+                  f"{c['chose_cluster']} of {c['rounds']} rounds) / better of in-process and "
+                  f"cluster {c['best_s']:.2f} s = {c['ratio']:.3f}, target <= "
+                  f"{c['target']:g}: {verdict} (host capacity per round: {caps})")
+        elif name == "cluster_64":
             print(f"64x64 svda map on 2 workers: {c['value_s']:.2f} s, target <= "
                   f"{c['target_s']:g} s: {verdict}")
         elif name == "speedup_64":
@@ -380,7 +515,7 @@ def main(argv: list[str] | None = None) -> int:
                       repeats_help=f"rounds per map size (default {DEFAULT_REPEATS}; --quick 1)")
     repeats = args.repeats or (1 if args.quick else DEFAULT_REPEATS)
     cases = QUICK_CASES if args.quick else CASES
-    sizes = [c["size"] for c in cases]
+    sizes = [c["size"] for c in cases if "size" in c]
     ways = tuple(dict.fromkeys(w for c in cases for w in c["ways"]))
     t_start = time.perf_counter()
     machine = machine_facts()
@@ -399,6 +534,13 @@ def main(argv: list[str] | None = None) -> int:
         if startup is not None:
             print_results({}, startup)
         for case in cases:
+            if "map" in case:
+                found = time_schedule(case, args.repeats or SCHEDULE_ROUNDS, rows)
+                if found is not None:
+                    results[case["map"]] = found
+                    capacities += [r["capacity"] for r in found["rounds"]]
+                    print_results({case["map"]: found}, None)
+                continue
             n = case["size"]
             results[f"{n}x{n}"] = time_size(n, case["ways"], repeats, Path(tmp), rows, capacities)
             print_results({f"{n}x{n}": results[f"{n}x{n}"]}, None)
@@ -415,6 +557,7 @@ def main(argv: list[str] | None = None) -> int:
              "png": str(args.out / "maps.png")}
     report = {**report_head(SCHEMA, args.quick, machine), "target": TARGET,
               "settings": {"sizes": list(sizes), "ways": list(ways), "repeats": repeats,
+                           "schedule_maps": [c["map"] for c in cases if "map" in c],
                            "frequencies": int(OMEGA.size), "noise": NOISE,
                            "position_m": POSITION, "start_method": start_method(),
                            "env": {k: os.environ[k] for k in (

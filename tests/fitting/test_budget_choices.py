@@ -152,3 +152,24 @@ def test_hertz_on_the_real_map_carries_its_depth_range_and_says_calibration_only
     assert set(quiet["params"]["E"]["systematic"]) == {"spring_constant", "sensitivity", "tip",
                                                        "poisson"}
     assert "height_record" not in quiet
+
+
+def test_the_sensor_phase_alternative_is_the_spectrum_made_against_the_sensor():
+    """The budget's phase reference alternative without a second read: the points a delay- or
+    piezo-referred spectrum keeps against the sensor equal the spectrum made with
+    phase_reference="sensor" (the same lock-in, referred otherwise)."""
+    import warnings
+
+    import viscoforce as vf
+    from viscoforce.cli._fit_budget import sensor_phase_data
+
+    path = vf.example_path("real/modulation-map.jpk-force-map")
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        referred, sensor = vf.open_data(path), vf.open_data(path, phase_reference="sensor")
+    assert referred.attrs["phase_reference_mode"] == "delay"
+    alt = sensor_phase_data(referred)
+    for name in ("stiffness", "phase", "drive_amplitude", "stiffness_stderr", "phase_stderr"):
+        np.testing.assert_allclose(alt[name].values, sensor[name].values, rtol=1e-12)
+    assert alt.attrs["phase_reference_mode"] == "sensor"
+    assert sensor_phase_data(sensor) is None  # referred to the sensor already: no alternative

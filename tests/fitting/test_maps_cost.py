@@ -96,12 +96,12 @@ def test_the_startup_comes_from_the_start_method_and_the_first_cluster():
     assert cluster_startup(2, "unknown") == cluster_startup(2, "spawn")
     assert cluster_startup(2, "fork", warm=False) == pytest.approx(
         cluster_startup(2, "fork") + map_cost.FIRST_CLUSTER)
-    # 512 pixels of 3 ms: forked workers pay off once a cluster has run in this process;
+    # 400 pixels of 3 ms: forked workers pay off once a cluster has run in this process;
     # fresh interpreters never
-    assert plan_execution(512, 3e-3, cores=2, method="fork", warm=True).workers == 2
-    assert plan_execution(512, 3e-3, cores=2, method="fork", warm=False).workers == 0
-    assert plan_execution(512, 3e-3, cores=2, method="fork").workers == 0  # cold by default
-    assert plan_execution(512, 3e-3, cores=2, method="spawn", warm=True).workers == 0
+    assert plan_execution(400, 3e-3, cores=2, method="fork", warm=True).workers == 2
+    assert plan_execution(400, 3e-3, cores=2, method="fork", warm=False).workers == 0
+    assert plan_execution(400, 3e-3, cores=2, method="fork").workers == 0  # cold by default
+    assert plan_execution(400, 3e-3, cores=2, method="spawn", warm=True).workers == 0
 
 
 def test_fit_map_tells_the_cost_model_whether_a_cluster_ran_here(monkeypatch, rng):

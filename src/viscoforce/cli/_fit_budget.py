@@ -248,11 +248,13 @@ def phase_reference_alternative(args: argparse.Namespace, ds, kind: str, result,
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
-            alt_ds = read(args.data, args.format, phase_reference="sensor")
-            if args.curve is not None and "curve" in alt_ds.dims:
-                from viscoforce.cli._fit_inputs import _select_curve
+            alt_ds = sensor_phase_data(ds)
+            if alt_ds is None:  # a spectrum without the sensor's phase: made again
+                alt_ds = read(args.data, args.format, phase_reference="sensor")
+                if args.curve is not None and "curve" in alt_ds.dims:
+                    from viscoforce.cli._fit_inputs import _select_curve
 
-                alt_ds = _select_curve(alt_ds, kind, args.curve)
+                    alt_ds = _select_curve(alt_ds, kind, args.curve)
             alt = fit(args, alt_ds, kind)
     except (UsageError, ViscoforceError, OSError, ValueError):  # no sensor spectrum: no source
         return None, ""
@@ -265,6 +267,27 @@ def phase_reference_alternative(args: argparse.Namespace, ds, kind: str, result,
     if b > SETTLED_RATIO * a:
         return None, why + " (the data settle the choice: not in the error budget)"
     return alt, why + " (the sensor-phase fit's values are in the error budget)"
+
+
+def sensor_phase_data(ds):
+    """The spectrum against the sensor's own phase, from the variables it carries, or None.
+
+    A spectrum referred to the piezo or a fitted delay keeps the same points against the
+    sensor (``stiffness_sensor``, ``phase_sensor`` and their stderr): the phase reference's
+    alternative without reading and demodulating the file again.
+    """
+    names = ("stiffness", "phase", "drive_amplitude")
+    if not all(f"{n}_sensor" in ds for n in names):
+        return None
+    out = ds.copy()
+    for n in names:
+        out[n] = ds[f"{n}_sensor"].assign_attrs(ds[n].attrs)
+        if f"{n}_stderr" in ds and f"{n}_sensor_stderr" in ds:
+            out[f"{n}_stderr"] = ds[f"{n}_sensor_stderr"].assign_attrs(ds[f"{n}_stderr"].attrs)
+    for n in ("stiffness", "phase", "drive_amplitude"):
+        out = out.drop_vars([f"{n}_sensor", f"{n}_sensor_stderr"], errors="ignore")
+    return out.assign_attrs(phase_reference_mode="sensor",
+                            phase_reference="sensor (the budget's alternative)")
 
 
 def _label(channel: str) -> str:
@@ -400,7 +423,9 @@ def _map_record_or_phase(args: argparse.Namespace, ds, kind: str, result,
         try:
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore")
-                alt_ds = read(args.data, args.format, phase_reference="sensor")
+                alt_ds = sensor_phase_data(ds)
+                if alt_ds is None:
+                    alt_ds = read(args.data, args.format, phase_reference="sensor")
         except (UsageError, ViscoforceError, OSError, ValueError):
             return result, {}, {}
         alt = _quiet(fit, alt_ds)

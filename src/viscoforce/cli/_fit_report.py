@@ -91,6 +91,13 @@ def _map_json(result) -> dict[str, Any]:
 
     info = {"model": result.attrs["model"], **map_summary(result),
             "n_failed": int(result.attrs["n_failed"])}
+    # where the pixels were fitted and why: the cost model's decision and its numbers
+    info["execution"] = {
+        "where": str(result.attrs.get("execution", "")),
+        "reason": str(result.attrs.get("execution_reason", "")),
+        **{key: (value if np.isfinite(value) else None) for key, value in (
+            (k, float(result.attrs.get(k, np.nan))) for k in (
+                "parallel_capacity", "expected_time_s", "execution_time_s"))}}
     if "budget_source" in result.coords:  # the calibration budget per pixel, summarised
         budget = {}
         for var in result.data_vars:

@@ -244,6 +244,9 @@ def run_fit(args: argparse.Namespace) -> int:
                            poisson=args.poisson, reports=args.reports, **options, **fixed)
 
         result, texts = _fit_recording(fit_all, ds)
+        if progress:  # the map's schedule: where it was fitted, and the cost model's numbers
+            print(f"map fitted {result.attrs.get('execution', '')}: "
+                  f"{result.attrs.get('execution_reason', '')}", file=sys.stderr)
         result, alternatives, described = map_alternatives(
             args, ds, kind, result, lambda data: fit_all(data, False), read)
         result = with_map_budget(args, result, fixed, alternatives, described)

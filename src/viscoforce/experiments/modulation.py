@@ -465,6 +465,7 @@ def _spectrum(dem: _Demodulated, options: dict[str, Any]) -> xr.Dataset:
                                  fit=fit)
     k_raw, eta, eta_se, eta_se_white = a["F"] / a["d"], a["eta"], a["eta_se"], a["eta_se_white"]
     rho, rho_white = a["rho"], a["rho_white"]
+    k_sensor, rho_sensor = k_raw, rho  # kept: the sensor's own phase, the budget's alternative
     if mode != "sensor":
         band, white = (referred(mode, a["F"], a["d"], a["h"], a["hp"], a[cov], omega, fit)
                        for cov in ("cov_band", "cov_white"))
@@ -539,6 +540,23 @@ def _spectrum(dem: _Demodulated, options: dict[str, Any]) -> xr.Dataset:
     if keep_indent:
         spec = spec.assign(contact_position=("curve", dem.z_contact, {
             "units": "m", "long_name": "tip position at the approach contact point"}))
+    if mode != "sensor":  # the same points against the sensor's own phase (same corrections)
+        k_s = _corrected(k_sensor, omega, lags, drag)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            phase_s_se = np.degrees(rho_sensor * np.abs(k_sensor) / np.abs(k_s))
+        what = ("against the height sensor's own phase (phase_reference 'sensor'): the "
+                "alternative the error budget refits")
+        spec = spec.assign(
+            stiffness_sensor=(w, np.abs(k_s), {"units": "N/m",
+                                               "long_name": "dynamic stiffness " + what}),
+            stiffness_sensor_stderr=(w, rho_sensor * np.abs(k_sensor), {
+                "units": "N/m", "long_name": "standard error of stiffness_sensor"}),
+            phase_sensor=(w, np.degrees(np.angle(k_s)), {"units": "degree",
+                                                         "long_name": "phase " + what}),
+            phase_sensor_stderr=(w, phase_s_se, {
+                "units": "degree", "long_name": "standard error of phase_sensor"}),
+            drive_amplitude_sensor=(w, a["eta"], {
+                "units": "m", "long_name": "drive amplitude |delta| " + what}))
     if "hp" in a:
         difference, difference_se = phase_difference(a["h"], a["hp"], a["cov_band"])
         long_name = "phase of the height sensor minus that of the piezo height record"

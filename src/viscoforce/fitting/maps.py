@@ -10,7 +10,10 @@ Where the pixels are fitted (``attrs["execution"]`` of the result says where, an
   decides. A few pixels spread over the map are fitted in this process first (their results
   are kept) to measure the per-pixel cost; the rest is fitted here, or on a local cluster of
   2 … cores workers when that is expected to finish sooner (per-pixel cost × pixels against
-  the cluster's start-up). The first local cluster of a process costs more than later ones
+  the cluster's start-up, at the host's parallel capacity: measured by a ≈ 0.1 s probe
+  where a cluster on free cores would save more than twice that, and the plan made again
+  with it; :func:`~viscoforce.fitting.map_cost.settle_plan`). The first local cluster of a
+  process costs more than later ones
   (:data:`~viscoforce.fitting.map_cost.FIRST_CLUSTER`), so the same map may be fitted here
   in a fresh process and on a cluster once one has run (this module counts them).
 - ``workers=N``: a local cluster of N worker processes × 1 thread, as asked.
@@ -57,8 +60,10 @@ from viscoforce.fitting.map_cost import (
     PROBE_MIN_PIXELS,
     PROBE_SECONDS,
     ExecutionPlan,
+    measure_capacity,
     plan_execution,
     probe_indices,
+    settle_plan,
     start_method,
 )
 from viscoforce.fitting.moduli import add_derived_moduli
@@ -222,7 +227,10 @@ def fit_map(ds: xr.Dataset, model: str, *, modes: int | str = 1, criterion: str 
         ``pixel_cost_estimated_s`` [s] (the probe's per-pixel cost; NaN without a probe),
         ``pixel_cost_measured_s`` [s] (the fits' wall time per pixel, here and in the
         workers), ``pixels_in_process`` (pixels fitted in this process) and
-        ``cluster_startup_s`` [s] (a local cluster's start-up plus shut-down; NaN without one).
+        ``cluster_startup_s`` [s] (a local cluster's start-up plus shut-down; NaN without one)
+        and ``parallel_capacity`` [cores] (the host's capacity the cost model measured, NaN
+        where it did not need it). The fitted values do not depend on where the pixels were
+        fitted.
 
     Raises
     ------
@@ -326,7 +334,7 @@ def _execute(run: _Run, scheduler: str | None, workers: int | None) -> dict[str,
     """Fit every pixel of ``run`` where the module docstring says; the ``execution`` attrs."""
     n = len(run.items)
     t0 = time.perf_counter()
-    estimate = math.nan
+    estimate = capacity = math.nan
     if scheduler == "synchronous":
         run.fit_here(range(n))
         label, plan = "in-process", ExecutionPlan(0, math.nan, {}, "scheduler='synchronous'")
@@ -340,6 +348,7 @@ def _execute(run: _Run, scheduler: str | None, workers: int | None) -> dict[str,
             estimate = _probe(run)
             plan = plan_execution(len(run.left()), estimate, cores=max_workers(),
                                   warm=_local_clusters > 0)
+            plan, capacity = settle_plan(plan, measure_capacity)  # on this host, now
         else:  # a worker per pixel at most: the rest would idle
             plan = ExecutionPlan(min(workers, max(1, n)), math.nan, {}, f"workers={workers}")
         left = run.left()
@@ -353,7 +362,8 @@ def _execute(run: _Run, scheduler: str | None, workers: int | None) -> dict[str,
             "expected_time_s": plan.expected.get(plan.label, math.nan),
             "pixel_cost_estimated_s": estimate,
             "pixel_cost_measured_s": run.fit_seconds / n if n else math.nan,
-            "pixels_in_process": run.here, "cluster_startup_s": run.cluster_seconds}
+            "pixels_in_process": run.here, "cluster_startup_s": run.cluster_seconds,
+            "parallel_capacity": capacity}
 
 
 def _probe(run: _Run) -> float:
