@@ -108,6 +108,9 @@ SUITES: dict[str, Suite] = {s.name: s for s in (
     Suite("phase_lag_real", _S, "studies/phase_lag_real/phase_lag_real.py",
           "phase_lag_real.json"),
     Suite("ting_real", _S, "studies/ting_real/ting_real.py", "ting_real.json", data=_PYFMRHEO),
+    Suite("adhesion_pulloff", _S, "studies/adhesion_pulloff/adhesion_pulloff.py",
+          "adhesion_pulloff.json", ("adhesion_pulloff.csv", "adhesion_static_path.csv",
+                                    "adhesion_pulloff.png", "adhesion_static_path.png")),
 )}
 
 

@@ -37,7 +37,7 @@ SUITES = RUNNER.SUITES
 #: processes (the rest time child processes, dask workers or the interpreter's start-up).
 IN_PROCESS = frozenset({"bench_dynamics", "bench_spectrum", "bench_step", "speed_accuracy",
                         "validity_maps", "real_data", "split_half", "phase_lag_real",
-                        "ting_real"})
+                        "ting_real", "adhesion_pulloff"})
 
 
 @dataclass(frozen=True)

@@ -66,6 +66,8 @@ TOP_KEYS = {
                        "sensor_vs_piezo_lag_deg", "runs", "conclusion"},
     "ting_real": {"schema", "created", "viscoforce", "file", "settings", "pyfmrheo", "curve0",
                   "curves", "speed", "differences"},
+    "adhesion_pulloff": {"schema", "created", "quick", "machine", "settings", "rows",
+                         "maugis_dugdale", "fold_onset", "path", "summary", "files"},
 }
 #: The real JPK modulation map real_data.py needs (the bundled copy, else the shared one).
 REAL_MAPS = (REPO / "data_examples" / "real" / "modulation-map.jpk-force-map",

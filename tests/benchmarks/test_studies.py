@@ -347,3 +347,54 @@ def test_a_quick_run_never_replaces_the_committed_json(name, tmp_path):
     assert study.json_path(None, True) == STUDIES / name / "out" / f"{name}.json"
     assert study.json_path(tmp_path, True) == tmp_path / f"{name}.json"  # --out FOLDER
     assert study.json_path(tmp_path / "x.json", False) == tmp_path / "x.json"  # --out FILE
+
+
+# ── adhesion_pulloff.py ──────────────────────────────────────────────────────────────────────────
+# the quick run (μ = 0.01, 0.1, 0.3, 1, 2 and the μ = 1 path): the Bradley limit, the stored
+# transition values, Maugis–Dugdale within its documented deviation, where the folds are, the
+# files (studies/adhesion_pulloff/README.md)
+
+@pytest.fixture(scope="module")
+def adhesion(quick_run):
+    return passed(quick_run("adhesion_pulloff"))
+
+
+def test_adhesion_pulloff_limits_transition_and_folds(adhesion):
+    report = adhesion.report
+    assert report["schema"] == "viscoforce.adhesion_pulloff/1" and report["quick"] is True
+    rows = {r["mu"]: r for r in report["rows"]}
+    assert set(rows) == {0.01, 0.1, 0.3, 1.0, 2.0}
+    assert rows[0.01]["pull_off_ratio"] == pytest.approx(2.0, rel=0.01)  # Bradley (0.05 %)
+    # the committed full run's values (the same grids), guarded at 1e-3
+    for mu, stored in ((0.3, 1.87019), (1.0, 1.67039), (2.0, 1.58380)):
+        assert rows[mu]["pull_off_ratio"] == pytest.approx(stored, rel=1e-3), mu
+    ratios = [r["pull_off_ratio"] for r in report["rows"]]
+    assert all(a > b for a, b in zip(ratios, ratios[1:], strict=False))
+    for r in report["rows"]:
+        assert 0 <= r["deviation_md"] < 0.08, r  # LJ above MD, at most 6 % (README)
+        assert (r["jump_in_position_z0"] is None) == (r["mu"] < 0.7), r
+        if r["mu"] >= 1:
+            assert r["jump_out_position_z0"] > r["jump_in_position_z0"] > 1.0, r
+    onset = report["fold_onset"]
+    assert onset["status"] == "ok" and 0.69 < onset["mu_low"] < onset["mu_high"] < 0.72
+    path = report["path"]
+    assert path["n_folds"] == 2 and path["unstable_points"] > 0
+    assert path["pull_off_ratio"] == pytest.approx(rows[1.0]["pull_off_ratio"], rel=2e-3)
+    assert path["jump_in"]["position_z0"] == pytest.approx(rows[1.0]["jump_in_position_z0"],
+                                                          abs=1e-3)
+
+
+def test_adhesion_pulloff_files_and_where_they_go(adhesion, tmp_path):
+    out = adhesion.out
+    for name in ("adhesion_pulloff.png", "adhesion_static_path.png"):
+        assert (out / name).stat().st_size > 10_000, name
+    with (out / "adhesion_pulloff.csv").open(newline="") as fh:
+        assert len(list(csv.DictReader(fh))) == len(adhesion.report["rows"])
+    study = benchmark_module("adhesion_pulloff.py")
+    quick = study.output_paths(None, True)
+    assert {p.parent for p in quick.values()} == {STUDIES / "adhesion_pulloff" / "out"}
+    full = study.output_paths(None, False)  # a full run: the committed files and docs/
+    assert full["json"] == STUDIES / "adhesion_pulloff" / "adhesion_pulloff.json"
+    assert full["pull_off_png"] == REPO / "docs" / "adhesion_pulloff.png"
+    assert all(p.is_file() for p in full.values())
+    assert {p.parent for p in study.output_paths(tmp_path, False).values()} == {tmp_path}

@@ -31,7 +31,7 @@ import viscoforce as vf
 from viscoforce import PAPER
 from viscoforce.data import example_path
 from viscoforce.exceptions import ParameterError
-from viscoforce.experiments._modal import decompose, direct_stiffness, refined_stiffness
+from viscoforce.experiments._modal import decompose, direct_stiffness
 from viscoforce.experiments.linear_response import (
     LinearizedState,
     ModulusStates,
@@ -103,19 +103,13 @@ def synthetic(h0: float, noise: float, seed: int):
 
 # ── 1. the parts ─────────────────────────────────────────────────────────────────────────────────
 
-def test_direct_and_refined_stiffness_equal_the_modal_sum(deep):
+def test_direct_stiffness_equals_the_modal_sum(deep):
     c = 2.0 * np.asarray(deep.material.complex_compliance(OMEGA), dtype=complex)
-    base = decompose(deep, equilibrium_gap(deep, -5e-9, 1e9))
     for factor in (1.0, 1 + 5.4e-5, 1.004):  # the state itself, a difference step, a trial step
         sol = equilibrium_gap(deep, -5e-9, 1e9 * factor)
         modal = LinearizedState._from_decomposition(deep, -5e-9, 1e9 * factor,
                                                     decompose(deep, sol)).stiffness(c)
         np.testing.assert_allclose(direct_stiffness(deep, sol, c), modal, rtol=1e-12, atol=0)
-        inverse = np.linalg.inv(base.vec)
-        np.testing.assert_allclose(refined_stiffness(deep, sol, base, inverse, c), modal,
-                                   rtol=1e-12, atol=0)
-    far = equilibrium_gap(deep, -5e-9, 2e9)  # too far for 8 steps: the caller decomposes
-    assert refined_stiffness(deep, far, base, np.linalg.inv(base.vec), c) is None
 
 
 def test_warm_started_states_equal_cold_ones(deep):
@@ -136,6 +130,110 @@ def test_warm_started_states_equal_cold_ones(deep):
     np.testing.assert_allclose(modal, reference, rtol=1e-9, atol=0)
     linearized_state.cache_clear()
     assert modulus_states(deep, -5e-9) is not states  # emptied with linearized_state's cache
+
+
+def test_sensitivities_equal_central_differences(deep):
+    """k*, dk*/dc and ∂k*/∂E_inf (the adjoint sum) against differences of cold states."""
+    states = ModulusStates(deep, -5e-9)  # not the cached family: fresh states
+    e = 1.3e9
+    c = 2.0 * np.asarray(StandardLinearSolid(1e10, e, 1e-3).complex_compliance(OMEGA),
+                         dtype=complex)
+    k, dk_dc, dk_de = states.sensitivities(e, c)
+    cold = lambda m, cc: LinearizedState.at(deep, -5e-9, m).stiffness(cc)  # noqa: E731
+    np.testing.assert_allclose(k, cold(e, c), rtol=1e-12, atol=0)
+    dc = 1e-6 * c
+    np.testing.assert_allclose(dk_dc, (cold(e, c + dc) - cold(e, c - dc)) / (2 * dc), rtol=1e-7)
+    de = 1e-5 * e
+    central = (cold(e + de, c) - cold(e - de, c)) / (2 * de)
+    assert np.max(np.abs(dk_de - central)) <= 1e-7 * np.max(np.abs(central))
+    # the direct branch (a few values, no decomposition) equals the modal one
+    fresh = ModulusStates(deep, -5e-9)
+    for got, want in zip(fresh.sensitivities(e, c[:3]), (k[:3], dk_dc[:3], dk_de[:3]),
+                         strict=True):
+        np.testing.assert_allclose(got, want, rtol=1e-12, atol=0)
+    # the relaxed level's logarithmic slope
+    value, slope = fresh.relaxed(e)
+    relaxed = lambda m: float(cold(m, np.array([2.0 / m + 0j]))[0].real)  # noqa: E731
+    assert value == pytest.approx(relaxed(e), rel=1e-12)
+    assert slope == pytest.approx(math.log(relaxed(e * 1.0001) / relaxed(e / 1.0001))
+                                  / (2 * math.log(1.0001)), rel=1e-6)
+
+
+def test_taylor_steps_stay_within_their_bound(deep):
+    """A step from a decomposed state to first order in ΔE, only where its estimate allows."""
+    states = ModulusStates(deep, -5e-9)
+    c = 2.0 * np.asarray(deep.material.complex_compliance(OMEGA), dtype=complex)
+    states.state(1e9)
+    assert states._taylor(1e9 * (1 + 1e-6), c) is None  # one decomposed state: no estimate
+    states.state(0.99e9)
+    for step in (1e-7, 1e-5):
+        e = 1e9 * (1 + step)
+        near = states._taylor(e, c)
+        assert near is not None
+        exact = LinearizedState.at(deep, -5e-9, e).stiffness(c)
+        assert np.max(np.abs(near[0] / exact - 1)) <= ModulusStates.TAYLOR_RTOL
+        np.testing.assert_array_equal(states.stiffness(e, c), near[0])  # what the fit gets
+    assert states._taylor(1e9 * (1 + 1e-3), c) is None  # estimate 8e-7: a static solve
+    assert 1e9 * (1 + 1e-3) not in states._solved
+
+
+@pytest.mark.parametrize("modes", [1, 2])
+def test_exact_model_jacobian_equals_differences(deep, modes):
+    """The model's analytic Jacobian (modes, dh/dE, dC*/dθ) against central differences.
+
+    Steps of 1e-3: a static state is exact to Newton's tolerance (≈ 1e-9 relative in k*), which
+    a smaller step would amplify; the differences' truncation is then ≈ 1e-6 relative.
+    """
+    from viscoforce.fitting.models import make_model
+
+    model = make_model("exact", modes, problem=deep, position=-5e-9)
+    values = ({"E0": 1e10, "E_inf": 1.1e9, "tau": 1e-3} if modes == 1 else
+              {"E0": 1e10, "E_1": 3e9, "E_inf": 1.1e9, "tau_1": 1e-4, "tau_2": 1e-2})
+    jac = model.model_jacobian(OMEGA, values)
+    assert jac.shape == (OMEGA.size, len(model.names))
+    for j, name in enumerate(model.names):
+        step = 1e-3 * values[name]
+        up, down = dict(values), dict(values)
+        up[name] += step
+        down[name] -= step
+        central = (model.raw(OMEGA, up) - model.raw(OMEGA, down)) / (2 * step)
+        assert np.max(np.abs(jac[:, j] - central)) <= 1e-5 * np.max(np.abs(central)), name
+
+
+def test_engine_with_a_jacobian_finds_the_difference_fit():
+    """The engine's ``jacobian`` path (lmder) against its difference path (lmdif)."""
+    from viscoforce.fitting import _engine
+    from viscoforce.fitting._params import InternalParameters
+
+    t = np.linspace(0.0, 3.0, 25)
+    rng = np.random.default_rng(7)
+    y = 2.0 * np.exp(-t / 0.7) + 0.5 + 0.01 * rng.standard_normal(t.size)
+
+    def residual(x):
+        return y - (x[0] * np.exp(-t / x[1]) + x[2])
+
+    def jacobian(x):
+        e = np.exp(-t / x[1])
+        return -np.column_stack([e, x[0] * e * t / x[1] ** 2, np.ones_like(t)])
+
+    def start():
+        params = InternalParameters()
+        for name, value, low, high in (("a", 1.0, 0.0, 10.0), ("tau", 1.0, 0.01, 10.0),
+                                       ("b", 0.0, -5.0, 5.0)):
+            params.add(name, value=value, min=low, max=high)
+        return params
+
+    plain = _engine.leastsq(residual, start())
+    points: list[np.ndarray] = []
+    analytic = _engine.leastsq(residual, start(),
+                               jacobian=lambda x: points.append(x.copy()) or jacobian(x))
+    assert analytic.success and plain.success
+    for name in ("a", "tau", "b"):
+        assert analytic.params[name].value == pytest.approx(plain.params[name].value, rel=1e-6)
+        assert analytic.params[name].stderr == pytest.approx(plain.params[name].stderr, rel=1e-3)
+    assert 1 <= len(points) <= analytic.nfev
+    # scipy's shape check and MINPACK's first call share the start: answered from memory
+    assert not any(np.array_equal(a, b) for a, b in zip(points, points[1:], strict=False))
 
 
 def test_modulus_slope_is_the_derivative_of_the_gaps(deep):

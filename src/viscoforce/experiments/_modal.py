@@ -97,62 +97,106 @@ def direct_stiffness(problem: ContactProblem, sol: NewtonResult,
     return 2.0 * np.pi * (x @ d)
 
 
-def refined_stiffness(problem: ContactProblem, sol: NewtonResult, base: Decomposition,
-                      inverse_vec: np.ndarray, compliance: np.ndarray, *, rtol: float = 1e-14,
-                      max_iter: int = 8) -> np.ndarray | None:
-    """k*(c) [N/m] of the state ``sol`` by iteration preconditioned with a nearby state's modes.
+def log_slope(problem: ContactProblem, sol: NewtonResult, slope: FloatArray) -> FloatArray | None:
+    """(ds/dE)/s on the ``active`` nodes: how the state's s = −p′(h) moves with E_inf [1/Pa].
 
-    In balanced form k*(c) = 2π lᵀ x with (I + cM′) x = q, l = sign(D) q, M′ = q (A W⁻¹) q
-    sign(D). The iteration x ← x + P(q − (I + cM′)x), P = V (I + cΛ)⁻¹ V⁻¹ of ``base`` (another
-    modulus at the same position), contracts by about twice the relative change of q per step
-    (1e-4 for a finite-difference step in E_inf): it stops when the residual's max-norm is below
-    ``rtol`` of q's (k* then equals the modal sum to ≈ 1e-13), or returns None after
-    ``max_iter`` steps, or when the active nodes or signs of D differ from ``base``'s (the
-    caller decomposes instead). ``inverse_vec`` is V⁻¹ of ``base`` (formed once by the caller:
-    two products per step instead of a triangular solve); ``compliance`` is 1-D and checked by
-    the caller.
+    ds/dE = −p″(h) dh/dE along ``slope`` = dh/dE (:func:`~viscoforce.solvers.static.
+    modulus_slope`), by a central difference of p′ along it with gap changes of 1e-5 of the
+    smaller of the decay length and the least gap (the laws have no p″: truncation ≈ 1e-10
+    relative). None when a node where s = 0 would start to carry a force derivative (a law
+    with a cut-off: the modal form leaves those nodes out, so the caller differences k*). The
+    active nodes are those of :func:`_active` (s ≠ 0).
     """
-    _, active, area, d, kernel = _active(problem, sol)
-    if active.size != base.active.size or np.any(np.signbit(d) != np.signbit(base.d)):
+    law = problem.surface_force
+    h = sol.gap
+    s = -law.pressure_derivative(h)
+    active = s != 0.0
+    scale = float(np.abs(slope).max())
+    if not scale > 0.0:
+        return np.zeros(int(active.sum()))
+    step = 1e-5 * min(float(law.decay_length), float(h.min())) / scale  # [Pa]
+    ds = (law.pressure_derivative(h - step * slope)
+          - law.pressure_derivative(h + step * slope)) / (2.0 * step)
+    if np.any(ds[~active] != 0.0):
         return None
-    q = np.sqrt(np.abs(d))
-    left = np.copysign(q, d)
-    coupling = kernel / area[None, :]  # A W⁻¹
-    inverse = 1.0 / (1.0 + compliance[None, :] * base.lam[:, None])  # (modes, values)
-
-    def precondition(r: np.ndarray) -> np.ndarray:
-        return times(base.vec, times(inverse_vec, r) * inverse)
-
-    rhs = np.broadcast_to(q[:, None], (q.size, compliance.size)).astype(complex)
-    x = precondition(rhs)
-    limit = rtol * float(q.max())
-    for _ in range(max_iter):
-        residual = rhs - x - compliance[None, :] * (q[:, None] * times(coupling,
-                                                                       left[:, None] * x))
-        if float(np.abs(residual).max()) <= limit:
-            return 2.0 * np.pi * (left @ x)
-        x += precondition(residual)
-    return None
+    return ds[active] / s[active]
 
 
-def refine_near(problem: ContactProblem, static: Callable[[], NewtonResult], modulus: float,
-                compliance: np.ndarray, decomposed: dict[float, Decomposition],
-                inverses: dict[float, np.ndarray], span: float) -> np.ndarray | None:
-    """:func:`refined_stiffness` from the decomposed state nearest ``modulus`` within ``span``.
+def adjoint_matrix(dec: Decomposition, ratio: FloatArray) -> np.ndarray:
+    """H with ∂k*/∂E_inf(c) = gᵀ H g, g = 1/(1 + cλ) (:func:`modal_sensitivities`).
 
-    ``static()`` gives the state at ``modulus``; ``decomposed`` maps E_inf to decompositions at
-    the same position, ``inverses`` keeps their V⁻¹ (formed here once). None: no state within
-    ``span`` (relative), or the iteration did not converge.
+    With x = (I + cM′)⁻¹ q = V (g ⊙ u), u = V⁻¹q, and y = (I + cM′)⁻ᵀ 2πl = V⁻ᵀ (g ⊙ v),
+    v = 2πVᵀl, in the balanced form (M′ = q (A W⁻¹) q sign(D) = VΛV⁻¹, l = sign(D) q,
+    :class:`Decomposition`; M′ = Q M Q⁻¹, so x_n y_n is the same product in M's coordinates),
+    Σ_n r_n x_n y_n = Σ_ij g_i g_j u_i v_j (V⁻¹ diag(r) V)_ji: H_ij = u_i v_j (V⁻¹ r V)_ji,
+    formed once per state (``ratio`` = r, :func:`log_slope`'s). Real when V is.
     """
-    near = [e for e in decomposed if abs(modulus - e) <= span * e]
-    if not near:
-        return None
-    base = min(near, key=lambda e: abs(modulus - e))
-    dec = decomposed[base]
-    if base not in inverses:
-        inverses[base] = scipy.linalg.lu_solve(dec.lu, np.eye(dec.lu[0].shape[0]),
-                                               check_finite=False)
-    return refined_stiffness(problem, static(), dec, inverses[base], compliance)
+    inverse = lu_solve(dec.lu, np.eye(dec.vec.shape[0]))
+    toward = 2.0 * np.pi * (np.copysign(dec.q, dec.d) @ dec.vec)  # v = 2π Vᵀ l
+    return dec.unit_modes[:, None] * (inverse @ (ratio[:, None] * dec.vec)).T * toward[None, :]
+
+
+def modal_slope(dec: Decomposition, compliance: np.ndarray, adjoint: np.ndarray) -> np.ndarray:
+    """∂k*/∂E_inf at fixed c [N/m/Pa] alone (:func:`modal_sensitivities`' third part)."""
+    g = 1.0 / (1.0 + compliance[None, :] * dec.lam[:, None])
+    return (g * times(adjoint, g)).sum(axis=0)
+
+
+def modal_sensitivities(dec: Decomposition, compliance: np.ndarray,
+                        adjoint: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """k*(c) [N/m], dk*/dc [N/m · Pa] and ∂k*/∂E_inf at fixed c [N/m/Pa] from a decomposition.
+
+    k* = Σ β_j g_j and dk*/dc = −Σ β_j λ_j g_j² (g = 1/(1 + cλ), β the modal weights); since
+    only s = −p′(h) on the nodes moves with E_inf (M = A diag(s), w = 2π W s), the adjoint
+    y = (I + cM)⁻ᵀ w turns dwᵀx − c yᵀ dM x (x = (I + cM)⁻¹ 1) into ∂k*/∂E =
+    Σ_n (ds_n/dE / s_n) x_n y_n = gᵀ H g with ``adjoint`` = H (:func:`adjoint_matrix`): one
+    N × N product with the values' columns. ``compliance`` is 1-D, checked by the caller.
+    """
+    beta = 2.0 * np.pi * (np.copysign(dec.q, dec.d) @ dec.vec) * dec.unit_modes
+    g = 1.0 / (1.0 + compliance[None, :] * dec.lam[:, None])  # (modes, values)
+    return beta @ g, -((beta * dec.lam) @ (g * g)), (g * times(adjoint, g)).sum(axis=0)
+
+
+def direct_sensitivities(problem: ContactProblem, sol: NewtonResult, compliance: np.ndarray,
+                         ratio: FloatArray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """:func:`modal_sensitivities` by direct solves (a few values, no decomposition).
+
+    x = (I + cM)⁻¹ 1 and y = (I + cM)⁻ᵀ w per value: k* = wᵀx, dk*/dc = −yᵀ M x and
+    ∂k*/∂E = Σ_n (ds_n/dE / s_n) x_n y_n.
+    """
+    _, _, area, d, kernel = _active(problem, sol)
+    matrix = kernel * (d / area)[None, :]  # A·diag(s)
+    n = matrix.shape[0]
+    if not compliance.imag.any():  # an elastic c (the relaxed level): real solves, same sums
+        k, dk_dc, dk_de = direct_sensitivities_real(matrix, d, compliance.real, ratio)
+        return k.astype(complex), dk_dc.astype(complex), dk_de.astype(complex)
+    systems = compliance[:, None, None] * matrix[None, :, :]
+    systems[:, np.arange(n), np.arange(n)] += 1.0
+    w = 2.0 * np.pi * d
+    x = np.linalg.solve(systems, np.ones((compliance.size, n, 1), dtype=complex))[..., 0]
+    y = np.linalg.solve(np.swapaxes(systems, 1, 2),
+                        np.broadcast_to(w[None, :, None], (compliance.size, n, 1)))[..., 0]
+    return x @ w, -np.einsum("vi,ij,vj->v", y, matrix, x), (x * y) @ ratio
+
+
+def direct_sensitivities_real(matrix: FloatArray, d: FloatArray, compliance: FloatArray,
+                              ratio: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
+    """:func:`direct_sensitivities` for real c: M = ``matrix`` and D = ``d`` on the active nodes.
+
+    One real LU per value, x and y from its two solves (plain and transposed).
+    """
+    n, w = matrix.shape[0], 2.0 * np.pi * d
+    out = np.empty((3, compliance.size))
+    for i, c in enumerate(compliance.tolist()):
+        system = c * matrix
+        system[np.arange(n), np.arange(n)] += 1.0
+        lu, piv, info = DGETRF(system, overwrite_a=True)
+        if info != 0:  # pragma: no cover - I + cM of a passive material is nonsingular
+            raise np.linalg.LinAlgError(f"LAPACK dgetrf reported {info}")
+        x, _ = DGETRS(lu, piv, np.ones(n))
+        y, _ = DGETRS(lu, piv, w, trans=1)
+        out[:, i] = x @ w, -(y @ (matrix @ x)), (x * y) @ ratio
+    return out[0], out[1], out[2]
 
 
 def decompose(problem: ContactProblem, sol: NewtonResult) -> Decomposition:
@@ -207,8 +251,8 @@ def lu_solve(lu: tuple[np.ndarray, np.ndarray], b: np.ndarray) -> np.ndarray:
     return from_pairs(out, b.shape[0], b.shape[1:]) if paired else out
 
 
-#: LAPACK's real LU solve (what scipy.linalg.lu_solve calls for float64 factors).
-DGETRS = scipy.linalg.lapack.get_lapack_funcs("getrs", (np.empty((1, 1)),))
+#: LAPACK's real LU factorisation and solve (what scipy.linalg.lu_factor/lu_solve call).
+DGETRF, DGETRS = scipy.linalg.lapack.get_lapack_funcs(("getrf", "getrs"), (np.empty((1, 1)),))
 
 
 # ── the bounded cache of static states ───────────────────────────────────────────────────────────

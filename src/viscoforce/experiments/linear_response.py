@@ -36,9 +36,6 @@ finite-amplitude check (:mod:`viscoforce.experiments.finite_amplitude`) that
 
 from __future__ import annotations
 
-import math
-import threading
-from collections import OrderedDict
 from dataclasses import dataclass
 from typing import Any
 
@@ -54,7 +51,7 @@ from viscoforce._validation import (
     require_plausible,
     require_positive,
 )
-from viscoforce.exceptions import ConvergenceError, ParameterError
+from viscoforce.exceptions import ParameterError
 from viscoforce.experiments._checks import require_frequencies, require_number, require_problem
 from viscoforce.experiments._modal import (
     STATE_CACHE_SIZE,
@@ -62,15 +59,19 @@ from viscoforce.experiments._modal import (
     StateCache,
     decompose,
     decomposition,
-    direct_stiffness,
-    refine_near,
+)
+from viscoforce.experiments._modulus_states import (
+    _COUNTS,
+    _FAMILIES,
+    ModulusStates,
+    _require_compliance,
+    modulus_states,
 )
 from viscoforce.experiments.finite_amplitude import warn_large_eta
 from viscoforce.physics.materials import ViscoelasticMaterial
 from viscoforce.problem import ContactProblem
 from viscoforce.schema import make_spectrum
-from viscoforce.solvers.newton import NewtonResult
-from viscoforce.solvers.static import equilibrium_at_load, equilibrium_gap, modulus_slope
+from viscoforce.solvers.static import equilibrium_at_load, equilibrium_gap
 
 __all__ = ["LinearizedState", "ModulusStates", "linearized_state", "modulus_states",
            "linear_stiffness", "linear_response"]
@@ -279,22 +280,6 @@ def _relaxed_modulus(problem: ContactProblem, relaxed_modulus: Any) -> float:
                           "> 0 [Pa] (finite; E_inf of the static state)")
 
 
-def _require_compliance(compliance: Any) -> NDArray[np.complex128]:
-    """``compliance`` as a finite complex array with Re > 0, else ParameterError."""
-    allowed = "finite complex values 2C*(ω) [1/Pa] with real part > 0"
-    try:
-        c = np.asarray(compliance, dtype=complex)
-    except (TypeError, ValueError):
-        raise ParameterError(f"compliance must be {allowed}, got {compliance!r:.80}") from None
-    if c.size == 0:
-        raise ParameterError(f"compliance must be {allowed} (at least one), got an empty array")
-    bad = ~(np.isfinite(c) & (c.real > 0))
-    if np.any(bad):
-        i = int(np.flatnonzero(bad.ravel())[0])
-        raise ParameterError(f"compliance must be {allowed}; entry {i} is {c.ravel()[i]!r}")
-    return c
-
-
 #: The static states of :func:`linearized_state` (at most ``STATE_CACHE_SIZE``).
 _STATES = StateCache(STATE_CACHE_SIZE)
 
@@ -306,6 +291,9 @@ def _mean_force(load: Any) -> float:
     """
     value = require_number("load", load, require_positive, "> 0 [N] (finite; the mean force)")
     return require_plausible("load", value, MEAN_FORCE_RANGE, "N")
+
+
+ModulusStates.state_type = LinearizedState  # the form its states are kept as (no import cycle)
 
 
 def linearized_state(problem: ContactProblem, position: float | None = None,
@@ -360,133 +348,6 @@ def linearized_state(problem: ContactProblem, position: float | None = None,
     load = _mean_force(load)
     return _STATES.get((*base, "load", load),
                        lambda: LinearizedState.at_load(problem, load, modulus))
-
-
-class ModulusStates:
-    """The static states of one system at one position over E_inf: what a fit of E_inf reuses.
-
-    Every trial E_inf of a fit is a new static state; this keeps those solved and (issue 41)
-
-    - starts each new Newton solve from the nearest solved E_inf: its gaps moved by the first
-      order dh/dE (:func:`~viscoforce.solvers.static.modulus_slope`, one back-substitution)
-      within ``PREDICT_SPAN`` (2 Newton iterations instead of 7 for a finite-difference step,
-      3 for a 1 % step), its gaps unmoved farther away (a factor 2: 7 either way);
-    - evaluates at most ``DIRECT_MAX`` compliances by direct solves
-      (:func:`~viscoforce.experiments._modal.direct_stiffness`), more within ``REFINE_SPAN``
-      of a decomposed state by :func:`~viscoforce.experiments._modal.refined_stiffness`, else
-      by the modal form (one eigen-decomposition per state, kept).
-
-    Newton converges to a cold solve's tolerance (1e-9 decay lengths; measured: 1e-24 m apart).
-    Holds the problem; thread-safe; at most ``maxsize`` states of each kind.
-    """
-
-    #: Largest |ΔE/E| from the nearest solved state at which its gaps are moved by dh/dE.
-    PREDICT_SPAN = 0.2
-    #: Most compliance values evaluated by direct solves instead of the modal form.
-    DIRECT_MAX = 4
-    #: Largest |ΔE/E| from a decomposed state at which its modes precondition an iteration.
-    REFINE_SPAN = 0.005
-
-    def __init__(self, problem: ContactProblem, position: float, maxsize: int = 32):
-        self.problem, self.position, self.maxsize = problem, float(position), maxsize
-        self._solved: OrderedDict[float, NewtonResult] = OrderedDict()
-        self._slopes: dict[float, np.ndarray] = {}
-        self._states: OrderedDict[float, LinearizedState] = OrderedDict()
-        self._decomposed: dict[float, Decomposition] = {}
-        self._inverses: dict[float, np.ndarray] = {}
-        self._lock = threading.RLock()
-
-    def static(self, modulus: float) -> NewtonResult:
-        """The static E_inf = ``modulus`` [Pa] state, solved from the nearest one if new."""
-        with self._lock:
-            hit = modulus in self._solved
-            _COUNTS["hits" if hit else "misses"] += 1
-            if hit:
-                self._solved.move_to_end(modulus)
-                return self._solved[modulus]
-            initial = None
-            if self._solved:
-                near = min(self._solved, key=lambda e: abs(math.log(e / modulus)))
-                base = self._solved[near]
-                initial = base.gap
-                if abs(modulus - near) <= self.PREDICT_SPAN * near:
-                    if near not in self._slopes:
-                        self._slopes[near] = modulus_slope(self.problem, self.position, near,
-                                                           base)
-                    moved = base.gap + self._slopes[near] * (modulus - near)
-                    initial = np.maximum(moved, 0.5 * base.gap)  # kept open: Newton needs > 0
-            try:
-                sol = equilibrium_gap(self.problem, self.position, modulus, initial=initial)
-            except ConvergenceError:
-                if initial is None:
-                    raise
-                sol = equilibrium_gap(self.problem, self.position, modulus)  # the cold start
-            self._solved[modulus] = sol
-            while len(self._solved) > self.maxsize:
-                self._slopes.pop(self._solved.popitem(last=False)[0], None)
-            return sol
-
-    def state(self, modulus: float) -> LinearizedState:
-        """The :class:`LinearizedState` (modal form) at E_inf = ``modulus`` [Pa], kept."""
-        with self._lock:
-            if modulus not in self._states:
-                dec = decompose(self.problem, self.static(modulus))
-                self._decomposed[modulus] = dec
-                self._states[modulus] = LinearizedState._from_decomposition(
-                    self.problem, self.position, modulus, dec)
-                while len(self._states) > self.maxsize:
-                    old = self._states.popitem(last=False)[0]
-                    self._decomposed.pop(old, None), self._inverses.pop(old, None)
-            self._states.move_to_end(modulus)
-            return self._states[modulus]
-
-    def stiffness(self, modulus: float, compliance: ArrayLike) -> np.ndarray:
-        """k*(c) [N/m] at E_inf = ``modulus`` [Pa] for c = 2C*(ω) (as :meth:`LinearizedState.stiffness`).
-
-        Raises ParameterError (``compliance`` not finite with a positive real part, or
-        ``modulus`` ≤ 0) or EffortError (more than ``MAX_SAMPLES`` values).
-        """
-        modulus = require_number("modulus", modulus, require_positive, "> 0 [Pa] (E_inf)")
-        c = _require_compliance(compliance)
-        check_effort(f"compliance values of ModulusStates.stiffness ({c.size} given)", c.size,
-                     MAX_SAMPLES, hint="give fewer values")
-        flat = c.ravel()
-        with self._lock:
-            if c.size > self.DIRECT_MAX and modulus not in self._states:
-                k = refine_near(self.problem, lambda: self.static(modulus), modulus, flat,
-                                self._decomposed, self._inverses, self.REFINE_SPAN)
-                if k is not None:
-                    return k.reshape(c.shape)
-            if c.size > self.DIRECT_MAX or modulus in self._states:
-                return self.state(modulus)._stiffness_checked(flat).reshape(c.shape)
-            return direct_stiffness(self.problem, self.static(modulus), flat).reshape(c.shape)
-
-
-#: The :class:`ModulusStates` of :func:`modulus_states`, by system, grid and position.
-_FAMILIES = StateCache(8)
-
-
-def modulus_states(problem: ContactProblem, position: float) -> ModulusStates:
-    """The cached :class:`ModulusStates` of ``problem`` at ``position`` [m] (a fit's E_inf).
-
-    Keyed on (sphere, surface force, grid, position); ``linearized_state.cache_clear()``
-    empties it too.
-
-    Raises
-    ------
-    ParameterError
-        A non-problem, a position that is not finite or that the grid does not cover.
-    """
-    problem = require_problem(problem)
-    position = require_number("position", position, require_finite,
-                              "finite [m] (h0, the undeformed apex separation)")
-    problem.check_covers(position)
-    return _FAMILIES.get((problem.sphere, problem.surface_force, problem.grid, position),
-                         lambda: ModulusStates(problem, position))
-
-
-#: Static states looked up in (hits) and solved by (misses) every :class:`ModulusStates`.
-_COUNTS = {"hits": 0, "misses": 0}
 
 
 def _clear_states() -> None:

@@ -19,7 +19,8 @@ The result has the attributes of :class:`lmfit.minimizer.MinimizerResult` that t
 reads, and its ``params`` are the given Parameters, set to the best values with their stderr
 and correlations. ``tests/fitting/test_fit_engine.py`` checks it against ``lmfit.minimize`` (values,
 covariance, statistics) on every closed-form model. Where a model needs lmfit itself
-(expressions, an analytic Jacobian), the callers use lmfit.
+(expressions), the callers use lmfit; an analytic Jacobian is passed as ``jacobian``
+(MINPACK's ``lmder``: the exact model's, issue 41 item 3).
 """
 
 from __future__ import annotations
@@ -134,7 +135,8 @@ class _Bounds:
 
 
 def leastsq(residual: Callable[[np.ndarray], np.ndarray], params: ParameterSet, *,
-            scale_covar: bool = True) -> LeastSquares:
+            scale_covar: bool = True,
+            jacobian: Callable[[np.ndarray], np.ndarray] | None = None) -> LeastSquares:
     """Minimise Σ residual² over the varied ``params`` as ``lmfit.minimize(method="leastsq")``.
 
     Parameters
@@ -147,6 +149,13 @@ def leastsq(residual: Callable[[np.ndarray], np.ndarray], params: ParameterSet, 
         stderr, correlations): they are the result's ``params``.
     scale_covar : bool
         Scale the covariance by the reduced χ² (unknown stderr), as lmfit does.
+    jacobian : callable, optional
+        ``jacobian(x)``: d residual/dx at the varied values ``x`` (rows: residuals, columns:
+        the varied parameters in order). Given, MINPACK's ``lmder`` uses it (times the bound
+        transforms' dx/du) instead of forward differences (``lmdif``), with the same settings;
+        the covariance is then the analytic Jacobian's. Repeated calls at the same point (scipy
+        checks the shapes at the start) are answered from the last one. None: lmfit's path,
+        unchanged.
 
     Returns
     -------
@@ -173,9 +182,15 @@ def leastsq(residual: Callable[[np.ndarray], np.ndarray], params: ParameterSet, 
     def internal_residual(u: np.ndarray) -> np.ndarray:
         return residual(bounds.external(u))
 
-    best, cov, info, _, ier = minpack_leastsq(
-        internal_residual, bounds.internal(start), full_output=True,
-        maxfev=2000 * (len(names) + 1), **SETTINGS)
+    if jacobian is None:
+        best, cov, info, _, ier = minpack_leastsq(
+            internal_residual, bounds.internal(start), full_output=True,
+            maxfev=2000 * (len(names) + 1), **SETTINGS)
+    else:
+        best, cov, info, _, ier = minpack_leastsq(
+            _last(internal_residual), bounds.internal(start), full_output=True,
+            Dfun=_last(lambda u: jacobian(bounds.external(u)) * bounds.gradient(u)[None, :]),
+            maxfev=2000 * (len(names) + 1), **SETTINGS)
     best = np.atleast_1d(best)
     fvec = np.asarray(info["fvec"], dtype=float)
     message = "Fit succeeded." if ier in (1, 2, 3) else MESSAGES.get(
@@ -199,3 +214,17 @@ def leastsq(residual: Callable[[np.ndarray], np.ndarray], params: ParameterSet, 
                                for j, other in enumerate(names)
                                if j != i and sd[i] > 0 and sd[j] > 0}
     return replace(result, covar=cov)
+
+
+def _last(function: Callable[[np.ndarray], np.ndarray]) -> Callable[[np.ndarray], np.ndarray]:
+    """``function`` answering a call at the previous call's point from its result (a copy)."""
+    memo: list[tuple[np.ndarray, np.ndarray]] = []
+
+    def call(u: np.ndarray) -> np.ndarray:
+        if memo and np.array_equal(memo[0][0], u):
+            return memo[0][1].copy()
+        out = np.asarray(function(u), dtype=float)
+        memo[:] = [(np.array(u, dtype=float), out.copy())]
+        return out
+
+    return call

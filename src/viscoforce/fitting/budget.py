@@ -216,11 +216,11 @@ def _undetermined(name: str, value: Any, lo: Any, hi: Any) -> Any:
     if name in EXPONENTS:
         return (hi - lo) > EXPONENT_SPAN
     if name in NUISANCE:
-        return value != value  # False everywhere (NaN-safe shape)
+        return np.zeros(np.shape(value), dtype=bool)
     return (value > 0) & ((lo <= 0) | (hi > FACTOR * lo))
 
 
-def _unidentified(ds: xr.Dataset, name: str, value: xr.DataArray) -> Any:
+def _unidentified(ds: xr.Dataset, name: str, value: xr.DataArray) -> np.ndarray:
     """Where the fit's own identifiability test says ``name`` is not determined (code ≠ 0).
 
     A one-sided or flat profile (or a local stderr > |value|) is never "determined" by the
@@ -231,12 +231,14 @@ def _unidentified(ds: xr.Dataset, name: str, value: xr.DataArray) -> Any:
     base = name.removesuffix("_young").removesuffix("_shear")
     if base == "ting_E0":
         base = "E0"
+    none = np.zeros(value.shape, dtype=bool)
     if "identifiability" not in ds or base in NUISANCE or "param_i" not in ds[
             "identifiability"].dims or base not in [str(n) for n in ds["param_i"].values]:
-        return value != value  # False everywhere (NaN-safe shape)
+        return none
     code = ds["identifiability"].sel(param_i=base, drop=True)
-    code = code.drop_vars([c for c in code.coords if c not in value.dims])
-    return (code != 0) & value.notnull()
+    if set(code.dims) != set(value.dims):
+        return none
+    return (code.transpose(*value.dims).values != 0) & np.isfinite(value.values)
 
 
 def _merged(ds: xr.Dataset, shifts: Mapping[str, Mapping[str, Any]],
@@ -264,15 +266,14 @@ def _label(source: str) -> str:
     return LABELS.get(source, source.replace("_", " "))
 
 
-def _scalar_notes(name: str, sources: list[str], row: xr.DataArray, stderr: xr.DataArray,
+def _scalar_notes(name: str, sources: list[str], row: np.ndarray, stderr: float,
                   determined: bool, lo: float, hi: float, unbounded: bool = False
                   ) -> list[str]:
     """One sentence per choice moving a single fit's parameter > 2 stderr, and if undetermined."""
     notes = []
-    err = float(stderr)
-    for s, shift in zip(sources, row.values, strict=True):
-        if math.isfinite(err) and err > 0 and abs(shift) > SAY_Z * err:
-            notes.append(f"{name} moves by {shift:+.3g} ({shift / err:+.1f} stderr) with "
+    for s, shift in zip(sources, row, strict=True):
+        if math.isfinite(stderr) and stderr > 0 and abs(shift) > SAY_Z * stderr:
+            notes.append(f"{name} moves by {shift:+.3g} ({shift / stderr:+.1f} stderr) with "
                          f"the {_label(s)}")
     if unbounded:
         notes.append(f"{name} is not determined by these data: the fit's identifiability test "
@@ -284,16 +285,17 @@ def _scalar_notes(name: str, sources: list[str], row: xr.DataArray, stderr: xr.D
     return notes
 
 
-def _map_notes(name: str, sources: list[str], row: xr.DataArray, stderr: xr.DataArray,
-               bad: xr.DataArray, fitted: xr.DataArray, what: str) -> list[str]:
+def _map_notes(name: str, sources: list[str], row: np.ndarray, stderr: np.ndarray,
+               bad: np.ndarray, fitted: np.ndarray, what: str) -> list[str]:
     """A map's counts: pixels a choice moves by > 2 stderr, pixels not determined."""
     n = int(fitted.sum())
     notes = []
-    for s in sources:
-        moved = (abs(row.sel(budget_source=s)) > SAY_Z * stderr) & (stderr > 0) & fitted
-        if int(moved.sum()):
-            notes.append(f"{name} moves by more than {SAY_Z:g} stderr with the {_label(s)} on "
-                         f"{int(moved.sum())} of {n} pixels")
+    with np.errstate(invalid="ignore"):
+        for i, s in enumerate(sources):
+            moved = (np.abs(row[i]) > SAY_Z * stderr) & (stderr > 0) & fitted
+            if int(moved.sum()):
+                notes.append(f"{name} moves by more than {SAY_Z:g} stderr with the {_label(s)} "
+                             f"on {int(moved.sum())} of {n} pixels")
     n_bad = int((bad & fitted).sum())
     if n_bad:
         notes.append(f"{name} is not determined by these data on {n_bad} of {n} pixels "
@@ -301,9 +303,20 @@ def _map_notes(name: str, sources: list[str], row: xr.DataArray, stderr: xr.Data
     return notes
 
 
+def _values(x: Any, value: xr.DataArray) -> np.ndarray:
+    """``x`` (a float, or a DataArray over ``value``'s dims) as an array of ``value``'s shape."""
+    if isinstance(x, xr.DataArray):
+        x = x.transpose(*value.dims).values if set(x.dims) == set(value.dims) else x.values
+    return np.broadcast_to(np.asarray(x, dtype=float), value.shape)
+
+
 def _with_budget(ds: xr.Dataset, shifts: Mapping[str, Mapping[str, Any]],
                  descriptions: Mapping[str, str], *, per_pixel: bool, what: str) -> xr.Dataset:
-    """The one rule set of :func:`add_budget` (a single fit) and :func:`add_map_budget` (a map)."""
+    """The one rule set of :func:`add_budget` (a single fit) and :func:`add_map_budget` (a map).
+
+    Computed on arrays and assigned at once (a fit result is large: one xarray assignment per
+    variable cost far more than the budget's arithmetic).
+    """
     sources = [s for s in shifts if shifts[s]]
     out = ds.drop_vars([v for v in ds.variables if str(v).endswith(
         ("_systematic", "_budget_lower", "_budget_upper", "_budget_determined"))
@@ -311,62 +324,53 @@ def _with_budget(ds: xr.Dataset, shifts: Mapping[str, Mapping[str, Any]],
     if not sources:
         return out
     notes: list[str] = []
-    mirrored = [s for s in sources if s in _MIRRORED]  # ± to first order
+    mirrored = [i for i, s in enumerate(sources) if s in _MIRRORED]  # ± to first order
+    new: dict[str, xr.DataArray] = {}
     for name in _reading_order(ds):
-        value = ds[name]
-        if not per_pixel and value.size != 1:
+        value_da = ds[name]
+        if not per_pixel and value_da.size != 1:
             continue
-        value = value.drop_vars([c for c in value.coords if c not in value.dims])
-        stderr = (ds[f"{name}_stderr"].drop_vars(
-            [c for c in ds[f"{name}_stderr"].coords if c not in value.dims])
-            if f"{name}_stderr" in ds else xr.full_like(value, np.nan, dtype=float))
+        dims = value_da.dims
+        value = value_da.values.astype(float)
+        stderr = (_values(ds[f"{name}_stderr"], value_da) if f"{name}_stderr" in ds
+                  else np.full(value.shape, np.nan))
         unit = _unit(ds, name)
-        row = xr.concat([xr.zeros_like(value, dtype=float) + _shift_of(shifts[s], name, value)
-                         for s in sources], dim="budget_source").assign_coords(
-            budget_source=("budget_source", np.asarray(sources, dtype=str)))
-        out[f"{name}_systematic"] = row.assign_attrs(
-            units=unit, long_name=f"shift of {name} when each source's choice is made otherwise")
-        width = 2.0 * stderr.where(np.isfinite(stderr), 0.0)
-        estimates = xr.concat([value.astype(float).expand_dims(budget_source=["value"]),
-                               value + row, *([(value - row.sel(budget_source=mirrored))
-                                               .assign_coords(budget_source=[f"-{m}" for m in
-                                                                             mirrored])]
-                                              if mirrored else [])], dim="budget_source")
-        lo = estimates.min("budget_source") - width
-        hi = estimates.max("budget_source") + width
-        out[f"{name}_budget_lower"] = lo.assign_attrs(
-            units=unit, long_name=f"lower end of {name}'s total interval")
-        out[f"{name}_budget_upper"] = hi.assign_attrs(
-            units=unit, long_name=f"upper end of {name}'s total interval")
-        unbounded = _unidentified(ds, name, value)
-        bad = _undetermined(name, value, lo, hi) | unbounded
-        fitted = value.notnull()
-        determined = (~bad).astype(int)
-        out[f"{name}_budget_determined"] = (determined.where(fitted) if per_pixel
-                                            else determined).assign_attrs(
-            units="1", long_name=f"1: {name} determined by these data within its budget")
+        row = np.stack([np.nan_to_num(_values(shifts[s].get(name, 0.0), value_da), nan=0.0,
+                                      posinf=0.0, neginf=0.0) for s in sources])
+        width = 2.0 * np.where(np.isfinite(stderr), stderr, 0.0)
+        estimates = np.concatenate([value[None], value + row, value - row[mirrored]])
+        lo = estimates.min(axis=0) - width
+        hi = estimates.max(axis=0) + width
+        unbounded = np.asarray(_unidentified(ds, name, value_da), dtype=bool)
+        with np.errstate(invalid="ignore"):
+            bad = np.asarray(_undetermined(name, value, lo, hi), dtype=bool) | unbounded
+        fitted = np.isfinite(value)
+        determined = (~bad).astype(float if per_pixel else int)
+        if per_pixel:
+            determined = np.where(fitted, determined, np.nan)
+        new[f"{name}_systematic"] = xr.DataArray(row, dims=("budget_source", *dims), attrs={
+            "units": unit,
+            "long_name": f"shift of {name} when each source's choice is made otherwise"})
+        new[f"{name}_budget_lower"] = xr.DataArray(lo, dims=dims, attrs={
+            "units": unit, "long_name": f"lower end of {name}'s total interval"})
+        new[f"{name}_budget_upper"] = xr.DataArray(hi, dims=dims, attrs={
+            "units": unit, "long_name": f"upper end of {name}'s total interval"})
+        new[f"{name}_budget_determined"] = xr.DataArray(determined, dims=dims, attrs={
+            "units": "1", "long_name": f"1: {name} determined by these data within its budget"})
         if name in NUISANCE:  # in the budget, not in the sentences
             continue
         if per_pixel:
             notes += _map_notes(name, sources, row, stderr, bad, fitted, what)
         else:
-            notes += _scalar_notes(name, sources, row, stderr, not bool(bad), float(lo),
-                                   float(hi), bool(unbounded))
-    out = out.assign_coords(budget_source=("budget_source", np.asarray(sources, dtype=str)))
+            notes += _scalar_notes(name, sources, row[:, ...].reshape(len(sources)),
+                                   float(stderr), not bool(bad), float(lo), float(hi),
+                                   bool(unbounded))
+    out = out.assign(new).assign_coords(
+        budget_source=("budget_source", np.asarray(sources, dtype=str)))
     out.attrs["budget_sources"] = "; ".join(
         f"{s}: {descriptions.get(s, CALIBRATION_DEFAULTS.get(s, ('', s))[1])}" for s in sources)
     out.attrs["budget_notes"] = " | ".join(notes) if notes else "none"
     return out
-
-
-def _shift_of(row: Mapping[str, Any], name: str, value: xr.DataArray) -> Any:
-    """A source's shift of ``name``: 0 where it has none, NaN (a failed refit) as 0."""
-    shift = row.get(name, 0.0)
-    if isinstance(shift, xr.DataArray):
-        shift = shift.drop_vars([c for c in shift.coords if c not in value.dims])
-        return shift.fillna(0.0)
-    shift = float(shift)
-    return shift if math.isfinite(shift) else 0.0
 
 
 def add_budget(ds: xr.Dataset, shifts: Mapping[str, Mapping[str, float]],

@@ -150,6 +150,40 @@ def _vector_residual(model: FitModel, data: FitData, params: _params.ParameterSe
     return _values_residual(model, data, lambda x: decode(x.tolist()))
 
 
+def _vector_jacobian(model: FitModel, data: FitData, params: _params.ParameterSet):
+    """d(weighted residual)/d(varied internal values) from the model's own derivative, or None.
+
+    A model may carry ``model_jacobian(x, values)``: d model/d(SPEC parameter) over ``x`` as an
+    array (points × ``model.names``; complex for a complex model). The internal values' chain
+    rule (:func:`viscoforce.fitting._params.to_reported`) and the weights follow here; the
+    engine adds its bound transforms. Models without one (all but ``exact``) get None: their
+    fits run MINPACK's forward differences exactly as before.
+    """
+    derivative = getattr(model, "model_jacobian", None)
+    if derivative is None:
+        return None
+    layout, names, x = model.layout, model.names, data.x
+    varied = [n for n, p in params.items() if p.vary]
+    fixed = {n: p.value for n, p in params.items() if not p.vary}
+    weights = None if data.weights is None else (
+        data.weights.view(float) if np.iscomplexobj(data.weights) else data.weights)
+
+    def jacobian(argument: np.ndarray) -> np.ndarray:
+        values, grads = _params.to_reported(layout, {**fixed, **dict(zip(
+            varied, argument.tolist(), strict=True))})
+        chain = np.array([[grads[n].get(v, 0.0) for v in varied] for n in names])
+        d = -(np.asarray(derivative(x, values)) @ chain)  # residual = y − model
+        if np.iscomplexobj(d):  # rows as the residual's (re, im) pairs
+            d = np.stack([d.real, d.imag], axis=1).reshape(-1, len(varied))
+        if weights is not None:
+            d = d * weights[:, None]
+        if not np.isfinite(d).all():
+            raise ArithmeticError("the model's Jacobian gave NaN or inf at these parameters")
+        return d
+
+    return jacobian
+
+
 def _values_residual(model: FitModel, data: FitData,
                      values: Callable[[Any], Mapping[str, float]]):
     """The weighted residual (real) at the SPEC values that ``values(argument)`` gives."""
@@ -218,6 +252,7 @@ def fit_once(model: FitModel, data: FitData, *, starts: int = 2, settle: bool = 
             f"parameters but the data give only {data.n_values} values "
             f"({data.y.size} points): fit fewer modes or measure more points")
     residual = _vector_residual(model, data, first)
+    jacobian = _vector_jacobian(model, data, first)
     best: Outcome | None = None
     errors: list[str] = []
     # a model that searched its other starts itself (the exponential sums, by variable
@@ -229,7 +264,8 @@ def fit_once(model: FitModel, data: FitData, *, starts: int = 2, settle: bool = 
         try:
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore", RuntimeWarning)
-                res = _engine.leastsq(residual, params, scale_covar=not data.sigma_known)
+                res = _engine.leastsq(residual, params, scale_covar=not data.sigma_known,
+                                      jacobian=jacobian)
         except (ValueError, ArithmeticError, ParameterError, ConvergenceError) as exc:
             errors.append(str(exc).splitlines()[0])
             continue

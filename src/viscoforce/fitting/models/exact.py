@@ -2,8 +2,9 @@
 
 The fitting grid (issue 41). At a position the model is evaluated on a grid with half the
 problem's Gauss–Legendre panels (same order and outer radius) when that grid is accurate
-enough: its k* is compared, at the first E_inf a fit evaluates (and again at any E_inf beyond
-a factor ``CHECK_SPAN`` of those checked), with a grid of the same panels two orders lower at four
+enough: its k* is compared, at the guess's E_inf (and again at any E_inf beyond a factor
+``CHECK_SPAN`` of those checked; the check grid's Newton solve starts from the fitting grid's
+gaps interpolated onto its nodes), with a grid of the same panels two orders lower at four
 compliances spanning the relaxed to the glassy plateau (c = 2/E_inf × 1, 0.1, 0.01,
 0.55 − 0.45i). The panel quadrature converges spectrally, so that difference bounds the fitting
 grid's own error from above (on the paper's system at h̄0 = −5 nm: difference 4.5e-7, the
@@ -11,6 +12,15 @@ fitting grid's error against a twice finer one 8.8e-9, the problem's 2.9e-11). I
 ``FIT_GRID_RTOL`` (1e-6 relative: a thousandth of a 0.1 % noise, where a parameter moves by
 well under 0.01 of its stderr) the problem's own grid is used from then on. At a load, and for
 a problem of one panel or order < 4, the problem's grid is used.
+
+The fit (issue 41 item 3, part 2). At a position the model carries its analytic Jacobian
+(``model_jacobian``, which :func:`viscoforce.fitting.outcome.fit_once` hands to MINPACK's
+``lmder``): dk*/dθ = dk*/dc · 2 dC*/dθ (:func:`compliance_derivatives`) plus ∂k*/∂E_inf at
+fixed c from the state's modes, dh/dE and p″ along it
+(:meth:`~viscoforce.experiments.linear_response.ModulusStates.sensitivities`), so that a fit
+solves one static state per accepted step instead of one more per difference step; steps
+within the Taylor bound of a decomposed state (≤ 1e-9 relative, estimated) solve none. The
+guess finds the levels on the fitting grid's states directly (:func:`_levels`).
 """
 
 from __future__ import annotations
@@ -22,20 +32,25 @@ from collections.abc import Mapping
 import numpy as np
 
 from viscoforce.experiments._modal import StateCache
+from viscoforce.fitting._params import reported_names
 from viscoforce.fitting.base import (
     MAX_MODES,
+    MODULUS_BOUNDS,
     FitModel,
     ModelSpec,
     material_from,
     material_layout,
     material_names,
+    moduli_names,
     need,
+    tau_names,
 )
 from viscoforce.fitting.guesses import (
     SpectrumFeatures,
     material_guess,
     moduli_from_levels,
     omega_window,
+    solve_modulus,
 )
 from viscoforce.fitting.models._inputs import MEAN_FORCE, POSITION, PROBLEM
 from viscoforce.fitting.registry import ModelEntry, register
@@ -45,7 +60,7 @@ from viscoforce.fitting.spectrum_models import (
     exact_stiffness,
 )
 from viscoforce.problem import ContactProblem
-from viscoforce.radial_grid import RadialGrid
+from viscoforce.radial_grid import RadialGrid, gauss_legendre_unit, lagrange_matrix
 
 #: Largest relative k* error the fitting grid may add, as estimated (module docstring).
 FIT_GRID_RTOL = 1e-6
@@ -61,14 +76,25 @@ def _coarser(problem: ContactProblem, panels: int, order: int) -> ContactProblem
                           RadialGrid(grid.outer_radius, panels, order))
 
 
-def _grids(problem: ContactProblem) -> tuple[ContactProblem, ContactProblem] | None:
-    """The fitting grid's problem and its check's (kernels kept), or None if too coarse."""
+def _grids(problem: ContactProblem) -> tuple[ContactProblem, ContactProblem, np.ndarray] | None:
+    """The fitting grid's problem, its check's (kernels kept) and the map between their nodes.
+
+    The map interpolates panel by panel from the fitting grid's nodes onto the check grid's
+    (the check's Newton start). None if the problem's grid is too coarse to halve.
+    """
     grid = problem.grid
     if grid.n_panels < 2 or grid.order < 4:
         return None
     panels = (grid.n_panels + 1) // 2
-    return _COARSE.get((problem.sphere, problem.surface_force, grid), lambda: (
-        _coarser(problem, panels, grid.order), _coarser(problem, panels, grid.order - 2)))
+
+    def build() -> tuple[ContactProblem, ContactProblem, np.ndarray]:
+        fit, check = _coarser(problem, panels, grid.order), _coarser(problem, panels,
+                                                                     grid.order - 2)
+        local = lagrange_matrix(gauss_legendre_unit(grid.order)[0],
+                                gauss_legendre_unit(grid.order - 2)[0])
+        return fit, check, np.kron(np.eye(panels), local)
+
+    return _COARSE.get((problem.sphere, problem.surface_force, grid), build)
 
 
 class FitGrid:
@@ -81,15 +107,26 @@ class FitGrid:
     def __init__(self, problem: ContactProblem, position: float):
         self.given, self.position = problem, position
         grids = _grids(problem)
-        self.problem, self._check = grids if grids is not None else (problem, None)
+        self.problem, self._check, self._onto_check = (
+            grids if grids is not None else (problem, None, None))
         self.error: dict[float, float] = {}
         self._states = None
         self._lock = threading.Lock()
 
+    def unchecked(self):
+        """The states of the current ``problem``, without a check (the guess's level search)."""
+        from viscoforce.experiments.linear_response import modulus_states
+
+        with self._lock:
+            if self._states is None or self._states.problem is not self.problem:
+                self._states = modulus_states(self.problem, self.position)
+            return self._states
+
     def states(self, e_inf: float):
         """The states (:class:`~viscoforce.experiments.linear_response.ModulusStates`) of E_inf.
 
-        The fitting grid is checked first at ``e_inf`` [Pa] if no check was near it.
+        The fitting grid is checked first at ``e_inf`` [Pa] if no check was near it: the check
+        grid's Newton solve starts from the fitting grid's gaps interpolated onto its nodes.
         """
         from viscoforce.experiments.linear_response import modulus_states
 
@@ -97,14 +134,17 @@ class FitGrid:
             if self.problem is not self.given and not any(
                     abs(math.log(e / e_inf)) <= math.log(CHECK_SPAN) for e in self.error):
                 c = _CHECK_C * (2.0 / e_inf)
-                fine = modulus_states(self.problem, self.position).stiffness(e_inf, c)
-                rough = modulus_states(self._check, self.position).stiffness(e_inf, c)
+                fitting = modulus_states(self.problem, self.position)
+                fine = fitting.stiffness(e_inf, c)
+                check = modulus_states(self._check, self.position)
+                check.static(e_inf, initial=np.maximum(
+                    self._onto_check @ fitting.static(e_inf).gap,
+                    0.5 * float(fitting.static(e_inf).gap.min())))
+                rough = check.stiffness(e_inf, c)
                 self.error[e_inf] = float(np.max(np.abs(fine - rough) / np.abs(fine)))
                 if self.error[e_inf] > FIT_GRID_RTOL:
                     self.problem = self.given
-            if self._states is None or self._states.problem is not self.problem:
-                self._states = modulus_states(self.problem, self.position)
-            return self._states
+        return self.unchecked()
 
 
 #: The fitting and check problems (their kernels) by system and given grid.
@@ -116,6 +156,8 @@ def _exact_model(spec: ModelSpec) -> FitModel:
     position, mean_force = _position_choice(spec)
     modes = spec.modes
     grid = FitGrid(problem, position) if position is not None else None
+    layout = material_layout(modes)
+    names = reported_names(layout)  # the Jacobian's columns: FitModel.names' order
 
     def function(omega: np.ndarray, v: Mapping[str, float]) -> np.ndarray:
         full = dict(v)
@@ -125,12 +167,97 @@ def _exact_model(spec: ModelSpec) -> FitModel:
         states = None if grid is None else grid.states(material.relaxed_modulus)
         return exact_stiffness(problem, position, mean_force, material, omega, states=states)
 
+    def jacobian(omega: np.ndarray, v: Mapping[str, float]) -> np.ndarray:
+        # the fit evaluated ``function`` here first (its material checked): the closed form
+        # of C* and its derivatives from the values directly
+        e_inf = float(v["E_inf"])
+        dc, c = compliance_derivatives(v, modes, omega, names)
+        _, dk_dc, dk_de = grid.states(e_inf).sensitivities(e_inf, 2.0 * c)  # type: ignore[union-attr]
+        out = (2.0 * dk_dc)[:, None] * dc
+        out[:, names.index("E_inf")] += dk_de
+        return out
+
     def guesser(k: np.ndarray, omega: np.ndarray) -> dict[str, float]:
         feats = SpectrumFeatures.of(k, omega)
-        e_inf, e0 = moduli_from_levels(function, feats, problem.material.relaxed_modulus)
+        start = problem.material.relaxed_modulus
+        e_inf, e0 = (moduli_from_levels(function, feats, start) if grid is None
+                     else _levels(grid, feats, start))
         return material_guess(e0, e_inf, feats.sls_tau(), modes, omega_window(omega))
 
-    return FitModel(spec, function, material_layout(modes), "omega", guesser, omega_window)
+    model = FitModel(spec, function, layout, "omega", guesser, omega_window)
+    if grid is not None:  # at a load the position moves with E_inf: differences, as before
+        model.model_jacobian = jacobian  # type: ignore[attr-defined]
+    return model
+
+
+def compliance_derivatives(values: Mapping[str, float], modes: int, omega: np.ndarray,
+                           names: list[str]) -> tuple[np.ndarray, np.ndarray]:
+    """dC*(ω)/dθ [1/Pa per unit of θ] of the n-mode Prony material (one column per name), C*.
+
+    C* = 1/E_0 + Σ_i (1/E_{i+1} − 1/E_i) g_i with g_i = 1/(1 + iωτ_i) (E_0 = E0 … E_n =
+    E_inf, :meth:`~viscoforce.physics.materials.PronySeries.from_moduli`), so dC*/dE_k =
+    −(δ_k0 + g_{k−1} − g_k)/E_k² (the terms that exist) and dC*/dτ_i = −iω ΔJ_i g_i².
+    """
+    moduli = np.array([values[n] for n in moduli_names(modes)])
+    taus = np.array([values[n] for n in tau_names(modes)])
+    g = 1.0 / (1.0 + 1j * omega[:, None] * taus[None, :])  # (ω, modes)
+    delta = 1.0 / moduli[1:] - 1.0 / moduli[:-1]
+    per_modulus = np.zeros((omega.size, modes + 1), dtype=complex)
+    per_modulus[:, 0] = 1.0
+    per_modulus[:, 1:] += g
+    per_modulus[:, :-1] -= g
+    per_modulus /= -(moduli**2)[None, :]
+    per_tau = (-1j * omega[:, None]) * delta[None, :] * g * g
+    columns = dict(zip(moduli_names(modes), per_modulus.T, strict=True))
+    columns.update(zip(tau_names(modes), per_tau.T, strict=True))
+    return np.stack([columns[n] for n in names], axis=1), 1.0 / moduli[0] + g @ delta
+
+
+def _levels(grid: FitGrid, feats: SpectrumFeatures, start: float) -> tuple[float, float]:
+    """E_inf and E0 whose relaxed and glassy |k*| match the spectrum's low and high levels.
+
+    The levels of :func:`~viscoforce.fitting.guesses.moduli_from_levels`, found on the fitting
+    grid's states: E_inf by :func:`_relaxed_level`, the grid checked there (again on the
+    problem's grid if the check fails); then E0 by the secant on that state's modal sum
+    (decomposed once; the fit starts there).
+    """
+    fitting = grid.unchecked()
+    e_inf = _relaxed_level(fitting, feats.k_low, start)
+    if grid.states(e_inf) is not fitting:  # the check failed: the problem's own grid
+        e_inf = _relaxed_level(grid.unchecked(), feats.k_low, e_inf)
+    state = grid.states(e_inf).state(e_inf)
+    # the glassy level: a material relaxing far slower than the top frequency's period
+    drive = 1j * feats.omega_high * 1e4 / feats.omega_low
+
+    def glassy(e: float) -> float:
+        e0 = max(e, 1.0001 * e_inf)
+        c = 2.0 * (1.0 / e0 + (1.0 / e_inf - 1.0 / e0) / (1.0 + drive))
+        return float(abs(state._stiffness_checked(np.array([c]))[0]))
+
+    e0 = solve_modulus(glassy, max(feats.k_high, feats.k_low * 1.01), 2 * e_inf)
+    return e_inf, max(e0, 1.05 * e_inf)
+
+
+def _relaxed_level(states, target: float, start: float) -> float:
+    """E_inf whose relaxed stiffness is ``target`` [N/m], from ``start`` [Pa].
+
+    Newton's method in log–log on the relaxed stiffness with its exact slope
+    (:meth:`~viscoforce.experiments.linear_response.ModulusStates.relaxed`; the secant it
+    replaces took five states where this takes two or three), to 1e-3 in ln k as before,
+    within the guess window (a decade inside the modulus bounds). A step of less than 5 %
+    decomposes its state (likely the last: the fit starts there).
+    """
+    lo, hi = MODULUS_BOUNDS[0] * 10, MODULUS_BOUNDS[1] / 10
+    e_inf = start
+    for _ in range(12):
+        k, slope = states.relaxed(e_inf)
+        if abs(math.log(abs(k) / target)) < 1e-3:
+            break
+        factor = (target / abs(k)) ** (1.0 / min(max(slope, 0.05), 2.0))
+        e_inf = min(max(e_inf * factor, lo), hi)
+        if abs(math.log(factor)) < 0.05:
+            states.state(e_inf)
+    return e_inf
 
 
 ENTRY = register(ModelEntry(
@@ -139,5 +266,6 @@ ENTRY = register(ModelEntry(
     build=_exact_model, inputs=(POSITION, MEAN_FORCE, PROBLEM), parameters=material_names,
     max_modes=MAX_MODES,
     validity="the exact small-amplitude model: its error is the fitting grid's (<= 1e-6 "
-             "relative, checked; else the problem's grid, ~1e-9 on the default grid) and the "
-             "finite-amplitude bias of the measurement"))
+             "relative, checked; else the problem's grid, ~1e-9 on the default grid; plus <= "
+             "1e-9 where a step is taken to first order in E_inf) and the finite-amplitude bias "
+             "of the measurement"))
