@@ -3,9 +3,14 @@
 
 Issue 41 item 4: a Hertz fit took 4.85x nanite's time per curve (51 ms against 10.6 ms), 87 % of
 it in the contact-point scan (85 linear least squares over the whole approach, four scans per
-curve with the checks' refit). The scan is now solved in closed form for all candidates at once,
-coarse then local (``viscoforce.fitting._hertz_scan``), and the depth check refits with one
-``fit_once``; the target is viscoforce's time per curve <= nanite's, measured in one run.
+curve with the checks' refit). Part 1: the scan solved in closed form for all candidates at
+once, coarse then local (``viscoforce.fitting._hertz_scan``), the depth check refitting by the
+same scan and a 1-D search. Part 2: the fit starts at that least-squares minimum (variable
+projection: MINPACK stops after 6 evaluations instead of 20-45), the checks' sum of squares
+reuses the start's scan and the direction check its costs mirrored (three scans per curve),
+the tips' law runs unchecked inside (checked once), one curve is sliced from the map instead of
+selected, and the scan's blocks live in scratch arrays. The target is viscoforce's time per
+curve <= nanite's, measured in one run.
 
 What it measures, per case of :data:`CASES` (``--quick``: :data:`QUICK_CASES`):
 

@@ -18,6 +18,14 @@ check refits by variable projection instead of a second fit. Three layers:
 3. **The depth check's refit** against the fitting engine on the same shallow samples: the same
    E within 0.01 of the engine's stderr, and a sum of squares no larger (1e-7 relative slack).
 
+4. **Part 2's shortcuts** (issue 41 item 4, to nanite's time per curve): the tips' unchecked
+   law (``_shape``) equals ``force_shape`` bit for bit; the direction check's costs mirrored
+   from the start's equal those computed afresh; the 1-D search from the refinement grid's
+   points finds scipy's bounded minimum; one curve read by slicing equals ``select_curve``'s;
+   ``validate_curves(curve=)`` checks that curve's samples; a Hertz fit scans three times
+   (start, direction, depth: the checks' sum of squares reuses the start's scan) and its
+   Levenberg–Marquardt starts at the least-squares minimum.
+
 Synthetic approaches are made with the tips' own ``force_shape`` (the paths are compared with
 each other here; the physics is tested in test_force_curves.py and test_hertz_noise.py).
 """
@@ -30,14 +38,22 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from viscoforce.exceptions import ParameterError
-from viscoforce.fitting._hertz_scan import hertz_least_squares, hertz_scan, scan_costs
+from viscoforce.exceptions import ParameterError, SchemaError
+from viscoforce.fitting import _hertz_scan
+from viscoforce.fitting._hertz_scan import (
+    _brent,
+    _Costs,
+    hertz_least_squares,
+    hertz_scan,
+    scan_costs,
+    unchecked_shape,
+)
 from viscoforce.fitting.curve_models import HERTZ_GUESS_POINTS, contact_window, hertz_linear
 from viscoforce.fitting.curves import curve_data, fit_curve
 from viscoforce.fitting.data import FitData
 from viscoforce.fitting.fit import fit_data
 from viscoforce.physics.tips import tip_from
-from viscoforce.schema import make_curves
+from viscoforce.schema import make_curves, select_curve, validate_curves
 
 REAL = Path(__file__).resolve().parents[3] / "shared" / "data" / "real"
 FILES = {"map": REAL / "PyFMRheo" / "map-data-2022.10.29-12.27.34.564.jpk-force-map",
@@ -313,3 +329,106 @@ def _model(z, v, tip):
     delta = np.maximum(z - v["contact_point"], 0.0)
     return (v["baseline"] + v["baseline_slope"] * (z - v["contact_point"])
             + v["E"] * tip.force_shape(delta))
+
+
+# ── 4. part 2's shortcuts ─────────────────────────────────────────────────────────────────────
+
+@pytest.mark.parametrize("name", ["paraboloid:5um", "cone:20", "pyramid:20", "flat:2um",
+                                  "sphere:5um"])
+def test_unchecked_law_is_force_shape_bit_for_bit(name):
+    tip = tip_from(name)
+    depth = np.linspace(0.0, 2e-6, 1001)
+    kept = depth.copy()
+    law = unchecked_shape(tip)
+    np.testing.assert_array_equal(law(depth.copy(), np.empty_like(depth)), tip.force_shape(depth))
+    np.testing.assert_array_equal(law(depth.copy()), tip.force_shape(depth))
+    np.testing.assert_array_equal(depth, kept)  # force_shape leaves its input alone
+    assert tip.force_shape(1e-7) == pytest.approx(float(tip.force_shape(np.array([1e-7]))[0]),
+                                                  rel=0, abs=0)
+
+
+def test_mirrored_costs_equal_the_costs_of_the_reversed_approach():
+    tip = tip_from("paraboloid:5um")
+    z, f = _synthetic("paraboloid:5um", 3e-11, 3000, 4)
+    z = z + np.random.default_rng(1).normal(0.0, 2e-10, z.size)  # not ascending everywhere
+    costs = _Costs(tip, z, f)
+    costs.subsample(6)
+    mirrored, direct = costs.mirrored(), _Costs(tip, -z, f)
+    contacts = np.linspace(-2.5e-6, 0.9e-6, 40)
+    for ours, theirs in ((mirrored, direct),
+                         (mirrored.subsample(6), _Costs(tip, (-z)[::6], f[::6]))):
+        sse, e = ours(contacts)
+        sse_ref, e_ref = theirs(contacts)
+        np.testing.assert_allclose(sse, sse_ref, rtol=1e-9)
+        np.testing.assert_allclose(e, e_ref, rtol=1e-8, atol=1e-9 * np.abs(e_ref).max())
+
+
+def test_brent_from_known_points_finds_the_bounded_minimum():
+    from scipy.optimize import minimize_scalar
+
+    def cost(x):
+        return (x - 0.3) ** 2 * (1.0 + 2.0 * abs(x - 0.3)) + 0.1 * (x - 0.3) ** 4
+
+    for lo, hi, x0 in ((0.0, 1.0, 0.35), (0.25, 0.45, 0.3), (0.29, 0.5, 0.4)):
+        known = [(lo, cost(lo)), (hi, cost(hi))]
+        x, fx = _brent(cost, lo, hi, x0, cost(x0), known, 1e-9)
+        ref = minimize_scalar(cost, bounds=(lo, hi), method="bounded",
+                              options={"xatol": 1e-9})
+        assert x == pytest.approx(ref.x, abs=1e-7)
+        assert fx <= ref.fun + 1e-15
+        assert _brent(cost, lo, hi, x0, cost(x0), [], 1e-9)[0] == pytest.approx(ref.x, abs=1e-7)
+
+
+def test_a_curve_read_by_slicing_is_the_selected_curve(real_curves):
+    from viscoforce.fitting import segments
+
+    for name in ("map", "uff"):
+        curves = real_curves[name]
+        for curve in range(0, curves.sizes["curve"], 5):
+            data = segments.approach_data(curves, curve=curve)
+            one = select_curve(curves, curve)
+            run = segments._chosen_run(one, None, "hertz")
+            z, f = segments._segment_arrays(one, run, "tip_position", "force", "approach")
+            np.testing.assert_array_equal(data.x, z)
+            np.testing.assert_array_equal(data.y, f)
+            assert data.source == segments._source(curves, one, run, z.size, curve)
+
+
+def test_validate_curves_checks_one_curves_samples():
+    n = 50
+    t = np.tile(np.linspace(0, 1, n), 2)
+    two = make_curves(t, np.zeros(2 * n), np.zeros(2 * n), np.zeros(2 * n),
+                      tip_position=np.zeros(2 * n), segment=0, segment_names=("approach",),
+                      sample_count=[n, n], source="synthetic")
+    stalled = t.copy()
+    stalled[n + 10] = stalled[n + 9]  # curve 1's clock stalls
+    two["time"] = two["time"].copy(data=stalled)
+    with pytest.raises(SchemaError, match="strictly increasing"):
+        validate_curves(two)
+    with pytest.raises(SchemaError, match="strictly increasing"):
+        validate_curves(two, curve=1)
+    assert validate_curves(two, curve=0) is two
+
+
+def test_a_fit_scans_three_times_and_starts_at_the_least_squares(monkeypatch):
+    calls = []
+    afresh = _hertz_scan._scan_afresh
+
+    def counted(tip, z, *args, **kwargs):
+        calls.append(float(np.mean(z)))
+        return afresh(tip, z, *args, **kwargs)
+
+    monkeypatch.setattr(_hertz_scan, "_scan_afresh", counted)
+    mirrored = []
+    mirror = _Costs.mirrored
+    monkeypatch.setattr(_Costs, "mirrored", lambda self: mirrored.append(1) or mirror(self))
+    case = ("paraboloid:5um", 3e-11, 4000, 2)
+    curves = _synthetic_curves(*case)
+    for _ in range(2):  # the second fit of the same curve scans afresh too
+        calls.clear()
+        ds = _fit(curves, 0, case[0])
+        assert len(calls) == 3  # start, direction (-z), depth; hertz_sse reuses the start's
+        assert calls[1] < 0 < calls[0]
+    # the direction check's costs are the start's mirrored, with its coarse subsample's: 2 a fit
+    assert len(mirrored) == 4
+    assert ds.attrs["nfev"] <= 11  # from the least-squares minimum: MINPACK's own evaluations

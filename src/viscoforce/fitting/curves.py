@@ -260,7 +260,7 @@ def fit_curve(curves: xr.Dataset, model: str, *, curve: int = 0, segment: int | 
             ds.attrs["bottom_effect_factor"] = float(
                 law.force_shape(deepest) / fixed["tip"].force_shape(deepest)) if deepest > 0 \
                 else 1.0
-        ds = hertz_checks(ds, data, law)
+        ds = hertz_checks(ds, data, law, copy=False)  # ds is this call's own
     warn_fit(ds)
     if model == "hertz":
         ds = add_derived_moduli(ds, poisson)

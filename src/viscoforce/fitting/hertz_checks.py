@@ -25,10 +25,9 @@ from viscoforce.exceptions import (
     ParameterError,
     ViscoforceError,
 )
-from viscoforce.fitting._hertz_scan import hertz_least_squares
+from viscoforce.fitting._hertz_scan import hertz_least_squares, unchecked_shape
 from viscoforce.fitting.curve_models import HERTZ_GUESS_POINTS, contact_window, hertz_grid
 from viscoforce.fitting.data import FitData
-from viscoforce.fitting.outcome import residual_lag1
 from viscoforce.fitting.report import carry
 from viscoforce.fitting.verdict import CHECKED_ATTR, listed_names
 
@@ -59,11 +58,22 @@ SIGNAL_BASELINE_POINTS = 10
 FLIP_DELTA_CHI2 = SIGNAL_SIGMA**2
 
 
+def _law(tip: Any, delta: np.ndarray) -> np.ndarray:
+    """``tip.force_shape`` of ``delta`` = max(z − c, 0), which it overwrites.
+
+    Unchecked (:func:`~viscoforce.fitting._hertz_scan.unchecked_shape`) where ``delta`` is
+    finite (a maximum with 0 is ≥ 0); checked, raising the tip's error, otherwise.
+    """
+    if np.isfinite(delta).all():
+        return unchecked_shape(tip)(delta)
+    return np.asarray(tip.force_shape(delta), dtype=float)
+
+
 def _hertz_force(z: np.ndarray, values: dict[str, float], tip: Any) -> np.ndarray:
     """The Hertz model's force [N] (:func:`viscoforce.fitting.curve_models._hertz_model`)."""
     c = values["contact_point"]
     return (values["baseline"] + values["baseline_slope"] * (z - c)
-            + values["E"] * tip.force_shape(np.maximum(z - c, 0.0)))
+            + values["E"] * _law(tip, np.maximum(z - c, 0.0)))
 
 
 def _hertz_residual(z: np.ndarray, f: np.ndarray, values: dict[str, float], tip: Any
@@ -78,9 +88,44 @@ def _noise_variance(residual: np.ndarray, z: np.ndarray, n_free: int) -> float:
     The variance of a sum of AR(1) residuals over a stretch, per sample: what a Δχ² between two
     fits of the same samples is measured in (as the fits' stderr correction).
     """
-    rho = residual_lag1(residual, z)
+    rho = _lag1(residual, z)
     factor = (1.0 + rho) / (1.0 - rho) if 0.0 < rho < 1.0 else 1.0
     return float(residual @ residual) / max(residual.size - n_free, 1) * factor
+
+
+def _lag1(residual: np.ndarray, z: np.ndarray) -> float:
+    """:func:`~viscoforce.fitting.outcome.residual_lag1`, its sort of z made once per approach.
+
+    The checks take the lag-1 autocorrelation of several residuals over the same z: the order
+    of the last z (``numpy.argsort``, as ``residual_lag1``; none where z ascends strictly) is
+    kept, and reused while the same z comes again.
+    """
+    kept_z, order = _LAST_ORDER[0]
+    if not (kept_z.shape == z.shape and np.array_equal(kept_z, z)):
+        order = None if z.size < 2 or bool(np.all(z[1:] > z[:-1])) else np.argsort(z)
+        _LAST_ORDER[0] = (z.copy(), order)  # one assignment: threads see a pair or the other
+    return _lag1_sorted(residual if order is None else residual[order])
+
+
+#: The last z of :func:`_lag1` and its order (None: ascending).
+_LAST_ORDER: list[tuple[np.ndarray, np.ndarray | None]] = [(np.empty(0), None)]
+
+
+def _lag1_sorted(r: np.ndarray) -> float:
+    """Lag-1 autocorrelation of residuals already in order (as ``residual_lag1``)."""
+    if r.size < 3:
+        return 0.0
+    r = r - r.mean()
+    denom = float(r @ r)
+    return float(r[:-1] @ r[1:]) / denom if denom > 0 else 0.0
+
+
+def _line_sse(z: np.ndarray, f: np.ndarray) -> float:
+    """Sum of squares [N²] of the straight line through (z, F) by least squares."""
+    zc, fc = z - z.mean(), f - f.mean()
+    szz = float(zc @ zc)
+    rest = fc - zc * (float(zc @ fc) / szz) if szz > 0 else fc
+    return float(rest @ rest)
 
 
 def hertz_sse(z: np.ndarray, f: np.ndarray, residual: np.ndarray, tip: Any) -> float:
@@ -98,7 +143,7 @@ def hertz_sse(z: np.ndarray, f: np.ndarray, residual: np.ndarray, tip: Any) -> f
 
 
 def indentation_signal(z: np.ndarray, f: np.ndarray, values: dict[str, float], tip: Any,
-                       sse: float) -> dict[str, float]:
+                       sse: float, *, residual: np.ndarray | None = None) -> dict[str, float]:
     """How clearly an approach (z [m], F [N]) holds the indentation of its Hertz fit ``values``.
 
     ``signal`` [σ]: √Δχ², Δχ² the drop of the sum of squares from the straight baseline alone
@@ -113,17 +158,18 @@ def indentation_signal(z: np.ndarray, f: np.ndarray, values: dict[str, float], t
     of the residuals before the contact point (of all residuals where fewer than
     :data:`SIGNAL_BASELINE_POINTS` lie before it), as
     :func:`viscoforce.experiments.modulation.find_contact_point` measures it.
+    ``residual``: the Hertz residuals at ``values``, where the caller has them.
     """
     c = values["contact_point"]
     rise = values["E"] * float(np.asarray(tip.force_shape(
         np.array([max(float(np.max(z)) - c, 0.0)]))).reshape(-1)[0])
-    residual = _hertz_residual(z, f, values, tip)
+    if residual is None:
+        residual = _hertz_residual(z, f, values, tip)
     base = residual[z <= c]
     if base.size < SIGNAL_BASELINE_POINTS:
         base = residual
     noise = 1.4826 * float(np.median(np.abs(base - np.median(base))))
-    line = np.polyval(np.polyfit(z - c, f, 1), z - c)
-    drop = max(float((f - line) @ (f - line)) - sse, 0.0)
+    drop = max(_line_sse(z, f) - sse, 0.0)
     variance = _noise_variance(residual, z, 4)
     signal = math.sqrt(drop / variance) if variance > 0 else (math.inf if drop > 0 else 0.0)
     return {"rise": rise, "noise": noise, "signal": signal}
@@ -157,8 +203,8 @@ def approach_direction(z: np.ndarray, f: np.ndarray, sse: float, tip: Any
     if flipped is None:
         return -math.inf, None
     c, sse_flipped, coef = flipped
-    residual = f - (coef[0] * tip.force_shape(np.maximum(-z - c, 0.0)) + coef[1]
-                    + coef[2] * (-z - c))
+    residual = _hertz_residual(-z, f, {"E": coef[0], "contact_point": c, "baseline": coef[1],
+                                       "baseline_slope": coef[2]}, tip)
     variance = _noise_variance(residual, z, 4)
     delta = (sse - sse_flipped) / variance if variance > 0 else math.inf
     deepest = max(-float(np.min(z)) - c, 0.0)
@@ -221,9 +267,10 @@ def hertz_verdict(z: np.ndarray, f: np.ndarray, values: dict[str, float], tip: A
         ``approach_direction`` (text), ``flipped`` (why the tip position's sign looks flipped,
         :func:`_flipped_reason`, or None) and ``no_signal`` (True below :data:`SIGNAL_SIGMA`).
     """
-    sse = hertz_sse(z, f, _hertz_residual(z, f, values, tip), tip)
+    residual = _hertz_residual(z, f, values, tip)
+    sse = hertz_sse(z, f, residual, tip)
     delta, mirrored = approach_direction(z, f, sse, tip)
-    found = indentation_signal(z, f, values, tip, sse)
+    found = indentation_signal(z, f, values, tip, sse, residual=residual)
     flipped = _flipped_reason(z, values, tip, delta, mirrored, found)
     direction = (f"reversed? {flipped}" if flipped is not None else
                  "as recorded (the approach along -z is not described better by more than "
@@ -235,7 +282,7 @@ def hertz_verdict(z: np.ndarray, f: np.ndarray, values: dict[str, float], tip: A
             "no_signal": not found["signal"] >= SIGNAL_SIGMA}
 
 
-def hertz_checks(ds: xr.Dataset, data: FitData, tip: Any) -> xr.Dataset:
+def hertz_checks(ds: xr.Dataset, data: FitData, tip: Any, *, copy: bool = True) -> xr.Dataset:
     """Check a Hertz fit against its own data: an indentation at all, its direction, E over depth.
 
     * **Direction**: where the force rises toward negative indentation
@@ -251,11 +298,13 @@ def hertz_checks(ds: xr.Dataset, data: FitData, tip: Any) -> xr.Dataset:
       determined.
     * **Depth** (where there is an indentation the right way): :func:`_depth_checks`.
 
-    The first two are :func:`hertz_verdict`'s.
+    The first two are :func:`hertz_verdict`'s. The checks are written on a copy of ``ds``
+    (``copy=False``: on ``ds`` itself, for a caller that made it and keeps no other).
     """
     z, f = np.asarray(data.x, dtype=float), np.asarray(data.y, dtype=float)
-    values = {n: float(ds[n]) for n in ("E", "contact_point", "baseline", "baseline_slope")}
-    out = carry(ds, ds.copy())
+    values = {n: float(ds.variables[n].values) for n in ("E", "contact_point", "baseline",
+                                                          "baseline_slope")}
+    out = carry(ds, ds.copy()) if copy else ds
     verdict = hertz_verdict(z, f, values, tip)
     flipped = verdict.pop("flipped")
     no_signal = verdict.pop("no_signal")
@@ -289,14 +338,15 @@ def _e_variance_factor(jacobian: np.ndarray) -> float:
     """((JᵀJ)⁻¹)_EE [Pa²/N²]: E's variance per unit noise variance (E is column 0 of J).
 
     The columns are scaled to unit norm first (E, a contact point, a force and a slope differ
-    by many orders of magnitude). NaN where JᵀJ is singular.
+    by many orders of magnitude): JᵀJ over the outer product of the column norms (their
+    squares are its diagonal). NaN where JᵀJ is singular.
     """
-    norm = np.linalg.norm(jacobian, axis=0)
+    gram = jacobian.T @ jacobian
+    norm = np.sqrt(np.diag(gram))
     if not np.all(norm > 0):
         return math.nan
-    scaled = jacobian / norm
     try:
-        inverse = np.linalg.inv(scaled.T @ scaled)
+        inverse = np.linalg.inv(gram / np.outer(norm, norm))
     except np.linalg.LinAlgError:
         return math.nan
     return float(inverse[0, 0]) / float(norm[0]) ** 2
@@ -311,7 +361,7 @@ def _hertz_jacobian(z: np.ndarray, values: dict[str, float], tip: Any) -> np.nda
     delta = np.maximum(z - values["contact_point"], 0.0)
     stiffness = np.asarray(tip.contact_stiffness_factor(delta), dtype=float).reshape(z.shape)
     return np.column_stack([
-        np.asarray(tip.force_shape(delta), dtype=float).reshape(z.shape),
+        _law(tip, delta).reshape(z.shape),  # after the stiffness: it overwrites delta
         -values["E"] * stiffness - values["baseline_slope"],
         np.ones_like(z),
         z - values["contact_point"]])
@@ -364,8 +414,9 @@ def depth_check(z: np.ndarray, f: np.ndarray, values: dict[str, float], e_err: f
     if peak <= 0 or int(np.sum(contact & keep)) < 8 or not math.isfinite(e_err) or e_err <= 0:
         return {"made": False,
                 "text": "not made (too few contact points, or E without stderr)"}
+    zk, fk = z[keep], f[keep]
     try:
-        shallow = hertz_least_squares(tip, z[keep], f[keep], contact_window(tip, z[keep]),
+        shallow = hertz_least_squares(tip, zk, fk, contact_window(tip, zk),
                                       points=HERTZ_GUESS_POINTS)
     except (ViscoforceError, ValueError, ArithmeticError) as exc:
         return {"made": False, "text": f"not made: the shallow refit failed ({exc})"}
@@ -378,7 +429,7 @@ def depth_check(z: np.ndarray, f: np.ndarray, values: dict[str, float], e_err: f
     e_half = own["E"]
     jacobian = _hertz_jacobian(z, values, tip)
     excess_factor = _e_variance_factor(jacobian[keep]) - _e_variance_factor(jacobian)
-    noise = _noise_variance(_hertz_residual(z[keep], f[keep], own, tip), z[keep], 4)
+    noise = _noise_variance(_hertz_residual(zk, fk, own, tip), zk, 4)
     statistical = noise * max(excess_factor, 0.0) if math.isfinite(excess_factor) else 0.0
     spread = math.sqrt(statistical + (DEPTH_CHECK_RESOLUTION * e) ** 2)
     shift = (e_half - e) / spread
@@ -420,7 +471,7 @@ def _depth_checks(out: xr.Dataset, z: np.ndarray, f: np.ndarray, values: dict[st
                 "long-range repulsion, a soft layer, or contact from the start of the "
                 "approach), so the contact point and E rest on the tilted baseline",
                 DataWarning, stacklevel=4)
-    found = depth_check(z, f, values, float(out["E_stderr"]), tip)
+    found = depth_check(z, f, values, float(out.variables["E_stderr"].values), tip)
     out.attrs["depth_check"] = found["text"]
     if not found["made"]:
         return out

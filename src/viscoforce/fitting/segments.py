@@ -17,9 +17,48 @@ import xarray as xr
 
 from viscoforce.exceptions import ParameterError
 from viscoforce.fitting.data import FitData
-from viscoforce.schema import select_curve, validate_curves
+from viscoforce.schema import validate_curves
+from viscoforce.schema.curves import curve_samples
 
 __all__ = ["approach_data", "creep_data", "hold_data", "segment_runs"]
+
+
+class _Curve:
+    """One curve of a curves dataset, as :func:`~viscoforce.schema.select_curve` cuts it.
+
+    ``one[name].values`` is a variable's values over the curve's samples (its entry, for a
+    per-curve variable; whole otherwise), sliced from the dataset on first use: no selection of
+    the whole dataset (which indexes every variable and costs more than a Hertz fit's scan).
+    ``variables`` and ``attrs`` are the dataset's. The dataset is validated once, here: its
+    structure, and the samples of this curve (:func:`~viscoforce.schema.validate_curves`).
+    """
+
+    def __init__(self, curves: xr.Dataset, curve: int):
+        validate_curves(curves, curve=curve)  # the structure, and this curve's samples
+        start, stop, index = curve_samples(curves, curve)
+        self._cut = {"sample": slice(start, stop), "curve": slice(index, index + 1)}
+        self.variables, self.attrs = curves.variables, curves.attrs
+        self._read: dict[str, Any] = {}
+
+    def __getitem__(self, name: str) -> Any:
+        if name not in self._read:
+            var = self.variables[name]
+            key = {d: self._cut[d] for d in var.dims if d in self._cut}
+            held = getattr(var, "_data", None)  # in memory: numpy's slice (a view, no copy)
+            if isinstance(held, np.ndarray) and held.ndim == len(var.dims):
+                self._read[name] = held[tuple(key.get(d, slice(None)) for d in var.dims)]
+            else:  # lazily read: xarray reads the slice only
+                self._read[name] = (var[key] if key else var).values
+        return _Values(self._read[name])
+
+
+class _Values:
+    """``.values`` of one variable of a :class:`_Curve`."""
+
+    __slots__ = ("values",)
+
+    def __init__(self, values: np.ndarray):
+        self.values = values
 
 
 def segment_runs(curve: xr.Dataset) -> list[tuple[int, int, str]]:
@@ -34,13 +73,13 @@ def segment_runs(curve: xr.Dataset) -> list[tuple[int, int, str]]:
     return [(int(a), int(b), str(names[seg[a]])) for a, b in zip(starts, stops, strict=True)]
 
 
-def _segment_types(one: xr.Dataset) -> np.ndarray | None:
+def _segment_types(one: Any) -> np.ndarray | None:
     if "segment_type" not in one.variables:
         return None
     return np.asarray(one["segment_type"].values).astype(str)
 
 
-def _chosen_run(one: xr.Dataset, segment: int | None, model: str
+def _chosen_run(one: Any, segment: int | None, model: str
                 ) -> tuple[int, int, str]:
     """The (start, stop, name) run a curve model fits: ``segment`` or the model's default.
 
@@ -88,7 +127,7 @@ def _chosen_run(one: xr.Dataset, segment: int | None, model: str
     return wanted[0]
 
 
-def _segment_arrays(one: xr.Dataset, run: tuple[int, int, str], x_name: str, y_name: str,
+def _segment_arrays(one: Any, run: tuple[int, int, str], x_name: str, y_name: str,
                     what: str) -> tuple[np.ndarray, np.ndarray]:
     start, stop, _ = run
     x = np.asarray(one[x_name].values[start:stop], dtype=float)
@@ -104,7 +143,7 @@ def _segment_arrays(one: xr.Dataset, run: tuple[int, int, str], x_name: str, y_n
     return x[ok], y[ok]
 
 
-def _source(curves: xr.Dataset, one: xr.Dataset, run: tuple[int, int, str], n: int,
+def _source(curves: xr.Dataset, one: Any, run: tuple[int, int, str], n: int,
             curve: int) -> dict[str, Any]:
     source: dict[str, Any] = {"data_kind": "curves", "data_points": int(n), "curve": int(curve),
                               "segment_start": float(one["time"].values[run[0]])}
@@ -124,7 +163,7 @@ def hold_data(curves: xr.Dataset, *, curve: int = 0, segment: int | None = None)
     ParameterError
         No pause after an approach (or ``segment`` out of range), or too few finite samples.
     """
-    one = select_curve(validate_curves(curves), curve)
+    one = _Curve(curves, curve)
     chosen = _chosen_run(one, segment, "relaxation")
     t, f = _segment_arrays(one, chosen, "time", "force", "hold")
     source = _source(curves, one, chosen, t.size, curve)
@@ -153,7 +192,7 @@ def creep_data(curves: xr.Dataset, *, curve: int = 0, segment: int | None = None
         No constant-force pause after the approach (or ``segment`` out of range), or too few
         finite samples.
     """
-    one = select_curve(validate_curves(curves), curve)
+    one = _Curve(curves, curve)
     chosen = _chosen_run(one, segment, "creep")
     t, z = _segment_arrays(one, chosen, "time", "tip_position", "creep")
     source = _source(curves, one, chosen, t.size, curve)
@@ -177,14 +216,14 @@ def approach_data(curves: xr.Dataset, *, curve: int = 0, segment: int | None = N
         No approach segment (or ``segment`` out of range), or too few finite samples (files
         without a height channel have no tip position).
     """
-    one = select_curve(validate_curves(curves), curve)
+    one = _Curve(curves, curve)
     chosen = _chosen_run(one, segment, "hertz")
     z, f = _segment_arrays(one, chosen, "tip_position", "force", "approach")
     source = _source(curves, one, chosen, z.size, curve)
     return FitData(z, f, None, source)
 
 
-def _free_baseline(one: xr.Dataset, row: int) -> float | None:
+def _free_baseline(one: Any, row: int) -> float | None:
     """The file's free-cantilever force baseline [N] of segment-table row ``row``, if any."""
     if "segment_baseline" not in one.variables:
         return None

@@ -145,6 +145,11 @@ class Tip(ABC):
             ``{"tip_shape": str, "tip_half_angle": float}``; :meth:`from_attrs` reads it back.
         """
 
+    def _shape(self, depth: FloatArray, work: FloatArray | None = None) -> FloatArray:
+        """The law over ``depth`` (float64, ≥ 0, unchecked; ``work``: scratch), in place: fast path."""
+        depth[...] = self.force_shape(depth)
+        return depth
+
     def force(self, delta: ArrayLike, E: float) -> FloatArray:  # noqa: N803
         """Load F(δ) [N] of an elastic sample of paper modulus ``E`` at indentation ``delta``.
 
@@ -377,8 +382,12 @@ class Paraboloid(_RadiusTip):
 
     def force_shape(self, delta: ArrayLike) -> FloatArray:
         """F/E = (2/3)·√R·δ^{3/2} [m²]."""
-        d = _as_depth(delta)
-        return _out((2.0 / 3.0) * np.sqrt(self.radius) * d * np.sqrt(d))
+        return _out(self._shape(_as_depth(delta).copy()))
+
+    def _shape(self, depth: FloatArray, work: FloatArray | None = None) -> FloatArray:
+        root = np.sqrt(depth, out=work)
+        return np.multiply(np.multiply(depth, (2.0 / 3.0) * np.sqrt(self.radius), out=depth),
+                           root, out=depth)
 
     def contact_stiffness_factor(self, delta: ArrayLike) -> FloatArray:
         """S = a = √(Rδ) [m]."""
@@ -414,7 +423,10 @@ class Flat(_RadiusTip):
 
     def force_shape(self, delta: ArrayLike) -> FloatArray:
         """F/E = a·δ [m²]."""
-        return _out(self.radius * _as_depth(delta))
+        return _out(self._shape(_as_depth(delta).copy()))
+
+    def _shape(self, depth: FloatArray, work: FloatArray | None = None) -> FloatArray:
+        return np.multiply(depth, self.radius, out=depth)
 
     def contact_stiffness_factor(self, delta: ArrayLike) -> FloatArray:
         """S = a [m] at every δ ≥ 0."""
@@ -517,8 +529,11 @@ class Cone(_AngledTip):
 
     def force_shape(self, delta: ArrayLike) -> FloatArray:
         """F/E = tanθ·δ²/π [m²]."""
-        d = _as_depth(delta)
-        return _out(math.tan(self.half_angle) / math.pi * d * d)
+        return _out(self._shape(_as_depth(delta).copy()))
+
+    def _shape(self, depth: FloatArray, work: FloatArray | None = None) -> FloatArray:
+        return np.multiply(depth, np.multiply(depth, math.tan(self.half_angle) / math.pi,
+                                              out=work), out=depth)
 
     def contact_stiffness_factor(self, delta: ArrayLike) -> FloatArray:
         """S = a = (2/π)·tanθ·δ [m]."""
@@ -565,8 +580,11 @@ class Pyramid(_AngledTip):
 
     def force_shape(self, delta: ArrayLike) -> FloatArray:
         """F/E = (0.7453/2)·tanθ·δ² [m²]."""
-        d = _as_depth(delta)
-        return _out(0.5 * BILODEAU_COEFFICIENT * math.tan(self.half_angle) * d * d)
+        return _out(self._shape(_as_depth(delta).copy()))
+
+    def _shape(self, depth: FloatArray, work: FloatArray | None = None) -> FloatArray:
+        factor = 0.5 * BILODEAU_COEFFICIENT * math.tan(self.half_angle)
+        return np.multiply(depth, np.multiply(depth, factor, out=work), out=depth)
 
     def contact_stiffness_factor(self, delta: ArrayLike) -> FloatArray:
         """S = 0.7453·tanθ·δ [m] (Bilodeau's dF/dδ over the paper's E)."""

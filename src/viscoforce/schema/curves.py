@@ -157,7 +157,8 @@ def make_curves(time: ArrayLike, force: ArrayLike, height: ArrayLike, deflection
     return validate_curves(xr.Dataset(data, coords=coords, attrs=meta))
 
 
-def validate_curves(ds: xr.Dataset, *, require: Iterable[str] | None = None) -> xr.Dataset:
+def validate_curves(ds: xr.Dataset, *, require: Iterable[str] | None = None,
+                    curve: int | None = None) -> xr.Dataset:
     """Return ``ds`` if it is a curves dataset, else raise :class:`SchemaError`.
 
     Parameters
@@ -169,30 +170,39 @@ def validate_curves(ds: xr.Dataset, *, require: Iterable[str] | None = None) -> 
         ``segment_name``). Also checked: units, dtype, dims; the sample counts add up; segment
         indices lie in the table; names are among :data:`SEGMENT_NAMES`; time increases
         strictly within each curve.
+    curve : int, optional
+        Check the per-sample values (time, segment indices) of this curve only
+        (:func:`curve_samples`), the rest of the structure whole: what a fit of one curve of a
+        map reads.
     """
     require_dataset(ds, "curves")
     check_present(ds, "curves", CURVES_VARIABLES, require)
     check_variables(ds, "curves", CURVES_VARIABLES)
-    if "sample_count" in ds.variables:
-        counts = np.asarray(ds["sample_count"].values)
+    variables = ds.variables  # their values without a DataArray each (a curve fit reads this)
+    cut = slice(None)
+    if curve is not None and "sample_count" in variables:
+        cut = slice(*curve_samples(ds, curve)[:2])
+    if "sample_count" in variables:
+        counts = np.asarray(variables["sample_count"].values)
         if np.any(counts < 1) or counts.sum() != ds.sizes.get("sample", 0):
             raise SchemaError(f"curves: 'sample_count' {counts.tolist()} must be >= 1 and add up "
                               f"to the {ds.sizes.get('sample', 0)} samples")
-        if "time" in ds.variables:
-            time = np.asarray(ds["time"].values, dtype=float)
-            steps = np.diff(time)
-            steps[np.cumsum(counts)[:-1] - 1] = 1.0  # curve boundaries restart the clock
-            if not np.all(np.isfinite(time)) or np.any(steps <= 0):
+        if "time" in variables:
+            time = np.asarray(variables["time"].values[cut], dtype=float)
+            back = time[1:] <= time[:-1]  # a step that does not increase (NaN: the next test)
+            if cut == slice(None):
+                back[np.cumsum(counts)[:-1] - 1] = False  # curve boundaries restart the clock
+            if not np.isfinite(time).all() or back.any():
                 raise SchemaError("curves: 'time' must be finite and strictly increasing within "
                                   "each curve")
-    if "segment_name" in ds.variables:
-        names = [str(v) for v in np.asarray(ds["segment_name"].values).ravel()]
+    if "segment_name" in variables:
+        names = [str(v) for v in np.asarray(variables["segment_name"].values).ravel()]
         unknown = sorted(set(names) - set(SEGMENT_NAMES))
         if unknown:
             raise SchemaError(f"curves: segment names {unknown} are not among {SEGMENT_NAMES} "
                               "(keep the file's own label in 'segment_type')")
-        if "segment" in ds.variables:
-            seg = np.asarray(ds["segment"].values)
+        if "segment" in variables:
+            seg = np.asarray(variables["segment"].values[cut])
             if seg.size and (seg.min() < 0 or seg.max() >= len(names)):
                 raise SchemaError(f"curves: 'segment' indices must lie in [0, {len(names)}) "
                                   f"(the segment_table), got {seg.min()}..{seg.max()}")
@@ -206,11 +216,28 @@ def select_curve(ds: xr.Dataset, index: int) -> xr.Dataset:
     The segment table is kept whole, so ``segment`` indices stay valid.
     """
     validate_curves(ds)
-    counts = np.asarray(ds["sample_count"].values)
+    start, stop, index = curve_samples(ds, index)
+    return ds.isel(sample=slice(start, stop), curve=[index])
+
+
+def curve_samples(ds: xr.Dataset, index: int) -> tuple[int, int, int]:
+    """(start, stop, index ≥ 0): curve ``index``'s samples are ``sample`` start:stop.
+
+    Of a curves dataset already validated (:func:`validate_curves`); what :func:`select_curve`
+    cuts, for a reader that slices the arrays it needs itself.
+
+    Raises
+    ------
+    ParameterError
+        ``index`` is not an integer.
+    SchemaError
+        ``index`` is out of range (negative counts from the end).
+    """
+    counts = np.asarray(ds.variables["sample_count"].values)
     if isinstance(index, bool) or not isinstance(index, int | np.integer):
         raise ParameterError(f"curve index must be an integer, got {index!r}")
     if not -counts.size <= index < counts.size:
         raise SchemaError(f"curve index {index} out of range for {counts.size} curves")
-    index %= counts.size
+    index = int(index) % counts.size
     start = int(counts[:index].sum())
-    return ds.isel(sample=slice(start, start + int(counts[index])), curve=[index])
+    return start, start + int(counts[index]), index

@@ -7,6 +7,7 @@ from collections.abc import Mapping
 import numpy as np
 
 from viscoforce.fitting import _params as P
+from viscoforce.fitting._hertz_scan import unchecked_shape
 from viscoforce.fitting._layer import layer_window, layered, require_layer_depth
 from viscoforce.fitting.base import (
     FitModel,
@@ -43,12 +44,18 @@ def _hertz_model(spec: ModelSpec) -> FitModel:
     (tip,) = need(spec, "tip")
     law = layered(tip, spec.fixed)
     window = spec.fixed.get("contact_window")
+    shape = unchecked_shape(law)  # the law without its checks: max(z − c, 0) is >= 0
 
     def function(z: np.ndarray, v: Mapping[str, float]) -> np.ndarray:
         z = np.asarray(z, dtype=float)
-        delta = np.maximum(z - v["contact_point"], 0.0)
-        return (v["baseline"] + v["baseline_slope"] * (z - v["contact_point"])
-                + v["E"] * law.force_shape(delta))
+        delta = z - v["contact_point"]
+        out = delta * v["baseline_slope"]  # in place from here: b + s·(z − c) + E·shape
+        out += v["baseline"]
+        np.maximum(delta, 0.0, out=delta)
+        if not np.isfinite(delta).all():
+            law.force_shape(delta)  # raises the law's ParameterError, naming the entry
+        out += np.multiply(shape(delta), v["E"], out=delta)
+        return out
 
     def guesser(f: np.ndarray, z: np.ndarray) -> dict[str, float]:
         z, f = np.asarray(z, dtype=float), np.asarray(f, dtype=float)
