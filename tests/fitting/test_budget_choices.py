@@ -145,6 +145,11 @@ def test_hertz_on_the_real_map_carries_its_depth_range_and_says_calibration_only
     assert shift == pytest.approx(info["depth_check_E"] - e["value"], rel=1e-9)
     assert abs(shift) > 2 * e["stderr"] and not e["determined"]
     assert any("with the fit window" in n for n in info["budget_notes"])
+    # the contact point held where the approach rises 5 sigma above its noise, refitted
+    c = info["params"]["contact_point"]
+    assert 0 < abs(c["systematic"]["contact_point"]) < 1e-7  # within 100 nm of the fitted one
+    assert "contact_point: held at" in info["budget_sources"]
+    assert info["budget_refits"] == 2  # the height record and the contact point
     young = info["derived"]["E_young"]
     assert young["value"] > 0
     assert main([*args[:-1], "--budget", "calibration", "--json"]) == 0

@@ -25,6 +25,8 @@ from viscoforce.exceptions import ViscoforceError
 #: A record whose fit leaves a residual more than this many times the other's is settled by the
 #: data (it does not describe them): it is not a systematic of the result.
 SETTLED_RATIO = 2.0
+#: Half-width [m] of the window a contact point is held in where its model has no fixed input.
+HELD = 1e-12
 #: ``--height-channel`` → the reader's height_channel (None: the first calibrated sensor).
 HEIGHT_RECORDS = {"sensor": None, "piezo": "height"}
 
@@ -203,11 +205,14 @@ def choice_alternatives(args: argparse.Namespace, kept: Kept, kind: str,
         if alt is not None:
             alts["fit_window"], text["fit_window"] = alt, narrowed[1]
     if kind == "curves" and getattr(args, "contact_point", None) is None and args.model in (
-            "ting",):
+            "ting", "hertz"):
         other = other_contact_point(data, result)
         if other is not None:
             held = copy.copy(base)
-            held.contact_point = other[0]
+            if args.model == "hertz":  # held in a window a picometre wide
+                held.contact_window = (other[0] - HELD, other[0] + HELD)
+            else:
+                held.contact_point = other[0]
             alt = _quiet(fit, held, data, kind)
             a, b = _residual_rms(result), _residual_rms(alt) if alt is not None else math.nan
             if alt is not None and math.isfinite(b) and b <= SETTLED_RATIO * a:

@@ -368,5 +368,7 @@ def fit_one(args: argparse.Namespace, ds, kind: str):
                          criterion=args.criterion, tip=fixed.get("tip"),
                          poisson=args.poisson if args.model == "hertz" else None,
                          sample_height=fixed.get("sample_height"),
-                         sample_base=fixed.get("sample_base"))
+                         sample_base=fixed.get("sample_base"),
+                         # the budget's contact point method holds it (not a flag)
+                         contact_window=getattr(args, "contact_window", None))
     return fit_step(ds, problem=fixed["problem"], poisson=args.poisson)

@@ -174,7 +174,8 @@ def required_tip(curves: xr.Dataset, tip: Any, model: str):
 def fit_curve(curves: xr.Dataset, model: str, *, curve: int = 0, segment: int | None = None,
               modes: int | str = 1, criterion: str = "bic", tip: Any = None,
               poisson: float | None = None, sample_height: float | None = None,
-              sample_base: str | None = None) -> xr.Dataset:
+              sample_base: str | None = None,
+              contact_window: tuple[float, float] | None = None) -> xr.Dataset:
     """Fit one segment of one measured force curve: ``relaxation``, ``hertz`` or ``creep``.
 
     * ``relaxation`` — F(t) = F_inf + Σ dF_i e^{−t/τ_i} on a constant-height hold (τ_i are
@@ -214,6 +215,10 @@ def fit_curve(curves: xr.Dataset, model: str, *, curve: int = 0, segment: int | 
         force factor at the deepest fitted indentation.
     sample_base : {"bonded", "sliding"}, optional
         Hertz, with ``sample_height``: the layer bonded to (default) or sliding on its support.
+    contact_window : (float, float), optional
+        Hertz: the window [m] the contact point is fitted in (default the tip's own,
+        :func:`~viscoforce.fitting.curve_models.contact_window`); a window a picometre wide holds
+        it where another method put it (the error budget's ``contact_point`` source).
 
     Returns
     -------
@@ -245,7 +250,10 @@ def fit_curve(curves: xr.Dataset, model: str, *, curve: int = 0, segment: int | 
 
         fixed["tip"] = tip_from(required_tip(curves, tip, "hertz"))
         fixed.update({k: v for k, v in (("sample_height", sample_height),
-                                        ("sample_base", sample_base)) if v is not None})
+                                        ("sample_base", sample_base),
+                                        ("contact_window", contact_window)) if v is not None})
+    elif contact_window is not None:
+        raise ParameterError(f"contact_window applies to the hertz model, not {model!r}")
     elif sample_height is not None or sample_base is not None:
         raise ParameterError(f"sample_height and sample_base correct a contact law (hertz); "
                              f"model {model!r} has none")
