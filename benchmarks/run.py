@@ -111,6 +111,8 @@ SUITES: dict[str, Suite] = {s.name: s for s in (
     Suite("adhesion_pulloff", _S, "studies/adhesion_pulloff/adhesion_pulloff.py",
           "adhesion_pulloff.json", ("adhesion_pulloff.csv", "adhesion_static_path.csv",
                                     "adhesion_pulloff.png", "adhesion_static_path.png")),
+    Suite("adhesion_loops", _S, "studies/adhesion_loops/adhesion_loops.py",
+          "adhesion_loops.json"),
 )}
 
 

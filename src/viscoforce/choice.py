@@ -53,7 +53,7 @@ from scipy.special import i1e
 
 from viscoforce._validation import require_instance, require_positive
 from viscoforce.exceptions import ParameterError
-from viscoforce.physics.surface_forces import DoubleLayer, SumOfLaws
+from viscoforce.physics.surface_forces import DoubleLayer, LennardJones, SumOfLaws
 from viscoforce.problem import ContactProblem
 from viscoforce.svda import SVDA_ERROR_COEFFICIENT, svda_static_deformation
 
@@ -226,6 +226,11 @@ def stepper_tol_factor(accuracy: float) -> tuple[float, float]:
     return factor, SAFETY * STEPPER_ERROR * factor ** STEPPER_EXPONENT
 
 
+#: Local tolerance of the adhesive march, in decay lengths (z0)
+#: (:data:`viscoforce.solvers.adhesive_dynamics.ADHESIVE_TOL`).
+ADHESIVE_STEPPER_TOL = 1e-4
+
+
 def choose_simulation(problem: ContactProblem, drive: Any, *,
                       accuracy: float = DEFAULT_ACCURACY) -> Choice:
     """The stepper and tolerance of :func:`~viscoforce.solvers.simulate.simulate` for ``accuracy``.
@@ -244,7 +249,18 @@ def choose_simulation(problem: ContactProblem, drive: Any, *,
     require_instance("problem", problem, ContactProblem)
     accuracy = require_accuracy(accuracy)
     factor, error = stepper_tol_factor(accuracy)
-    default_tol = DEFAULT_STEPPER_TOL * problem.surface_force.decay_length
+    law = problem.surface_force
+    terms = law.terms if isinstance(law, SumOfLaws) else (law,)
+    if any(isinstance(t, LennardJones) for t in terms):
+        # adhesive regime (issue 39): jumps are fast transients (or instantaneous glassy jumps)
+        # that only an adaptive implicit stepper resolves; euler and fixed steps are refused
+        tol = ADHESIVE_STEPPER_TOL * law.decay_length
+        return Choice("exponential", {"tol": tol}, error + GRID_ERROR, accuracy,
+                      f"adhesive (Lennard-Jones) law: exponential, adaptive (tol = {tol:.3g} m), "
+                      "shrinking its step through jump-in/jump-out, instantaneous glassy jumps "
+                      "where the E0 equilibrium folds; euler and fixed steps cannot resolve a "
+                      "jump", ())
+    default_tol = DEFAULT_STEPPER_TOL * law.decay_length
     deepest = float(drive.extent()[0])
     svda, svda_note = svda_error(problem, deepest)
     candidates = [

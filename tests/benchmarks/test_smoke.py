@@ -66,6 +66,8 @@ TOP_KEYS = {
                        "sensor_vs_piezo_lag_deg", "runs", "conclusion"},
     "ting_real": {"schema", "created", "viscoforce", "file", "settings", "pyfmrheo", "curve0",
                   "curves", "speed", "differences"},
+    "adhesion_loops": {"schema", "created", "quick", "settings", "loops", "limits",
+                       "speed_series"},
     "adhesion_pulloff": {"schema", "created", "quick", "machine", "settings", "rows",
                          "maugis_dugdale", "fold_onset", "path", "summary", "files"},
 }

@@ -123,12 +123,23 @@ def _range_type(text: str) -> tuple[float, float]:
 
 
 def problem_from_args(args: argparse.Namespace, material: ViscoelasticMaterial,
-                      deepest: float) -> ContactProblem:
-    """The contact problem of the system and numerics flags, sized for ``deepest`` [m]."""
+                      deepest: float, *, adhesive_grid: bool = False) -> ContactProblem:
+    """The contact problem of the system and numerics flags, sized for ``deepest`` [m].
+
+    ``adhesive_grid``: with a Lennard-Jones law and neither --grid-spacing nor --outer-radius,
+    the compact grid of :func:`~viscoforce.solvers.continuation.adhesion_grid` (E = E_inf; the
+    slowly decaying attraction beyond it is the rigid tail the adhesive solvers add).
+    """
     from viscoforce.physics.particle import Particle
     from viscoforce.problem import ContactProblem
 
     law = law_from_args(args)
+    if adhesive_grid and args.grid_spacing is None and args.outer_radius is None:
+        from viscoforce.solvers.continuation import adhesion_grid, lennard_jones_term
+
+        if lennard_jones_term(law) is not None:
+            grid = adhesion_grid(Particle(args.R), law, material.relaxed_modulus, deepest)
+            return ContactProblem(Particle(args.R), law, material, grid)
     return ContactProblem.create(sphere=Particle(args.R), surface_force=law, material=material,
                                  deepest_position=deepest, grid_spacing=args.grid_spacing,
                                  outer_radius=args.outer_radius)
@@ -187,7 +198,7 @@ def _run_static_path(args: argparse.Namespace) -> int:
     from viscoforce.solvers.continuation import equilibrium_path
 
     start, stop = args.h0_range
-    problem = problem_from_args(args, Elastic(args.E), min(start, stop))
+    problem = problem_from_args(args, Elastic(args.E), min(start, stop), adhesive_grid=True)
     path = equilibrium_path(problem, start, stop, contact_threshold=args.contact_threshold)
     if args.out:
         write_netcdf(path.to_dataset(), args.out, engine="scipy")
@@ -210,13 +221,17 @@ def _run_static_path(args: argparse.Namespace) -> int:
     return 0
 
 
+def _check_force_law(args: argparse.Namespace) -> None:
+    if args.force_law not in ("double-layer", "lennard-jones", "both"):
+        raise UsageError(f"--force-law must be double-layer, lennard-jones or both, got "
+                         f"{args.force_law!r}")
+
+
 def run_static(args: argparse.Namespace) -> int:
     """Static elastic equilibrium at ``--h0``; prints the loads, deformation, contact radius."""
     from viscoforce.solvers.static import static_equilibrium
 
-    if args.force_law not in ("double-layer", "lennard-jones", "both"):
-        raise UsageError(f"--force-law must be double-layer, lennard-jones or both, got "
-                         f"{args.force_law!r}")
+    _check_force_law(args)
     if (args.h0 is None) == (args.h0_range is None):
         raise UsageError("give either --h0 H or --h0-range START:STOP")
     if args.h0_range is not None:
@@ -310,6 +325,7 @@ def add_simulate(parser: argparse.ArgumentParser) -> None:
         Output("--plot", FIGURE, "FILE.png", "write the force-position (hysteresis) plot"),
     ])
     _add_run_flags(parser, DRIVE_FLAGS)
+    add_flags(parser, FORCE_LAW_FLAGS)
 
 
 def drive_from_args(args: argparse.Namespace) -> SeparationHistory:
@@ -359,7 +375,8 @@ def run_simulate(args: argparse.Namespace) -> int:
 
     drive = drive_from_args(args)
     material = material_from_args(args)
-    problem = problem_from_args(args, material, float(drive.extent()[0]))
+    _check_force_law(args)
+    problem = problem_from_args(args, material, float(drive.extent()[0]), adhesive_grid=True)
     t_end = default_end_time(problem, drive) if args.t_end is None else args.t_end
     t_eval = np.linspace(0.0, t_end, args.samples)
     if args.accuracy is not None and args.method != "auto":
@@ -380,10 +397,11 @@ def run_simulate(args: argparse.Namespace) -> int:
         _save_figure(handle, args.plot)
     settings = dict(ds.attrs)
     chosen = {"explanation": settings["explanation"]} if "explanation" in settings else {}
+    adhesion = _adhesion_result(settings)
     if args.json:
         print_json({name: ds[name].values for name in ("time", "position", "force", "u_center",
                                                         "contact_radius")}
-                   | {"settings": settings} | chosen)
+                   | {"settings": settings} | chosen | adhesion)
         return 0
     if chosen:
         print(f"stepper {settings['stepper']}: {chosen['explanation']}")
@@ -398,8 +416,32 @@ def run_simulate(args: argparse.Namespace) -> int:
         ("final u(0)", float(ds.u_center[-1]), "length"),
         ("max contact radius", float(ds.contact_radius.max()), "length"),
     ])
+    if adhesion:
+        rows = [("pull-off force", adhesion["pull_off"], "force")]
+        for kind in ("jump_in", "jump_out"):
+            if adhesion[kind] is not None:
+                rows += [(f"{kind} at h0", adhesion[kind]["position"], "length"),
+                         (f"{kind} force", adhesion[kind]["force"], "force")]
+        print_table(rows)
+        print(f"hysteresis energy -∮F dh0 = {adhesion['hysteresis_energy']:.4g} J")
     print_written(args.out, args.plot)
     return 0
+
+
+def _adhesion_result(settings: dict) -> dict:
+    """The adhesion keys of an adhesive run's ``--json`` (empty for a repulsive law).
+
+    ``jump_in``, ``jump_out`` ({position, time, force, end_*} or None), ``pull_off`` [N],
+    ``hysteresis_energy`` [J] and ``effective_work_of_adhesion`` [J/m²].
+    """
+    if "pull_off" not in settings:
+        return {}
+    from viscoforce.solvers.adhesive_dynamics import jumps_from_attrs
+
+    return jumps_from_attrs(settings) | {
+        "hysteresis_energy": float(settings["hysteresis_energy"]),
+        "hysteresis_quadrature_error": float(settings["hysteresis_quadrature_error"]),
+        "effective_work_of_adhesion": float(settings["effective_work_of_adhesion"])}
 
 
 # ── spectrum ─────────────────────────────────────────────────────────────────────────────────────

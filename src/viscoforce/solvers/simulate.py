@@ -8,7 +8,6 @@ every drive kink and output time, controls the step size for adaptive steppers, 
 
 from __future__ import annotations
 
-import math
 import sys
 import warnings
 from dataclasses import dataclass
@@ -28,34 +27,25 @@ from viscoforce._validation import (
 from viscoforce.choice import DEFAULT_ACCURACY, choose_simulation
 from viscoforce.exceptions import (
     AccuracyWarning,
-    ConvergenceError,
-    GapClosureError,
     ParameterError,
-    StabilityError,
 )
 from viscoforce.problem import ContactProblem, check_half_space, contact_radius
 from viscoforce.schema import make_trajectory
+from viscoforce.solvers.adhesive_dynamics import is_adhesive, simulate_adhesive_route
 from viscoforce.solvers.base import State, TimeStepper
 from viscoforce.solvers.steppers import DEFAULT_METHOD, METHODS
+from viscoforce.solvers.time_loop import (
+    DEFAULT_TOL,
+    EULER_DEFAULT_FRACTION,
+    MIN_STEP_FRACTION,
+    _Counters,
+    _march,
+    _step_control,
+    _StepControl,
+)
 
-#: Default local error tolerance of adaptive steppers, in decay lengths of the surface force.
-DEFAULT_TOL = 1e-5
 #: Default output samples when ``t_eval`` is not given.
 DEFAULT_OUTPUTS = 801
-#: Default fixed step of explicit Euler, as a fraction of τ_min·E_inf/E0 (the limit is 2).
-EULER_DEFAULT_FRACTION = 0.1
-#: Smallest dt or max_step accepted, as a fraction of t_end.
-MIN_STEP_FRACTION = 1e-12
-
-
-@dataclass(frozen=True)
-class _Counters:
-    steps: int
-    rejected: int
-    newton: int
-    error_bound: float = 0.0  # max of the decaying sum of local error estimates [m] (fixed steps)
-
-
 def _resolve_stepper(stepper: str | type[TimeStepper]) -> type[TimeStepper]:
     if isinstance(stepper, str):
         if stepper not in METHODS:
@@ -129,6 +119,11 @@ def simulate(problem: ContactProblem, drive: SeparationHistory, *, t_end: float 
         ``position``, ``force``, ``u_center``, ``h_center``, ``contact_radius`` over ``time``
         (and profiles over ``profile_time``, ``r``); attrs hold all parameters and counters.
 
+    An attractive (Lennard-Jones) law goes to
+    :func:`~viscoforce.solvers.adhesive_dynamics.simulate_adhesive` (adaptive steps through the
+    jumps; attrs add the jumps, pull-off and hysteresis energy; ``dt``, ``profiles``,
+    ``initial_state`` refused there).
+
     Raises
     ------
     StabilityError
@@ -145,6 +140,15 @@ def simulate(problem: ContactProblem, drive: SeparationHistory, *, t_end: float 
     for name, flag in (("output_kinks", output_kinks), ("progress", progress)):
         if not (isinstance(flag, bool | np.bool_) or (name == "progress" and flag is None)):
             raise ParameterError(f"{name} must be True or False, got {flag!r}")
+    if is_adhesive(problem):
+        t_end = (default_end_time(problem, drive) if t_end is None
+                 else require_positive("t_end", t_end))
+        t_eval = np.linspace(0.0, t_end, DEFAULT_OUTPUTS) if t_eval is None else t_eval
+        return simulate_adhesive_route(problem, drive, t_end=t_end, t_eval=t_eval, stepper=stepper,
+                                  dt=dt, tol=tol, max_step=max_step, profiles=profiles,
+                                  initial_state=initial_state,
+                                  contact_threshold=contact_threshold,
+                                  output_kinks=output_kinks, accuracy=accuracy)
     choice = None
     if isinstance(stepper, str) and stepper == "auto":
         if dt is not None or tol is not None:
@@ -382,37 +386,6 @@ def _check_effort(problem: ContactProblem, drive: SeparationHistory, stepper: Ti
                  hint="request fewer output samples or profiles")
 
 
-@dataclass(frozen=True)
-class _StepControl:
-    fixed: bool
-    dt: float
-    tol: float
-    max_step: float
-    first_step: float
-
-
-def _step_control(problem: ContactProblem, stepper: TimeStepper, t_end: float, dt: float | None,
-                  tol: float | None, max_step: float | None) -> _StepControl:
-    """Resolve the step-size settings (fixed dt or adaptive tolerance) with their defaults."""
-    tau_min = min(problem.material.prony().taus, default=np.inf)
-    fixed = dt is not None or not stepper.adaptive
-    if dt is None and not stepper.adaptive:
-        ratio = problem.material.relaxed_modulus / problem.material.instantaneous_modulus
-        dt = EULER_DEFAULT_FRACTION * tau_min * ratio if np.isfinite(tau_min) else t_end / 1000
-    smallest = MIN_STEP_FRACTION * t_end
-    if dt is not None:
-        dt = require_positive("dt", dt)
-        if dt < smallest:
-            raise ParameterError(f"dt must be >= {smallest:.3g} s (1e-12 t_end), got {dt!r}")
-    tol = DEFAULT_TOL * problem.surface_force.decay_length if tol is None else require_positive(
-        "tol", tol)
-    max_step = t_end / 50 if max_step is None else require_positive("max_step", max_step)
-    if max_step < smallest:
-        raise ParameterError(f"max_step must be >= {smallest:.3g} s (1e-12 t_end), got {max_step!r}")
-    first = dt if fixed else min(1e-3 * (tau_min if np.isfinite(tau_min) else t_end), max_step)
-    return _StepControl(fixed, float(dt or 0.0), tol, max_step, float(first))
-
-
 def _checked_initial_state(problem: ContactProblem, stepper: TimeStepper,
                            drive: SeparationHistory, state: State) -> State:
     """Reject a given start state that does not belong to this problem and drive."""
@@ -430,83 +403,6 @@ def _checked_initial_state(problem: ContactProblem, stepper: TimeStepper,
         raise ParameterError(
             f"initial_state.position {state.position!r} m differs from the drive's start {start!r} m")
     return state
-
-
-def _march(stepper: TimeStepper, drive: SeparationHistory, state: State, t_eval: FloatArray,
-           t_end: float, control: _StepControl, bar, *, grid: FloatArray | None = None,
-           every_step: list[tuple[float, State]] | None = None
-           ) -> tuple[list[tuple[float, State]], _Counters]:
-    """The time loop: land on every kink and output, control the step, record the outputs.
-
-    ``grid``: more times to land on (with a fixed control of step t_end: the steps of a given
-    grid); ``every_step``: a list that receives (t, state) after every accepted step.
-    """
-    kinks = {float(b) for b in np.asarray(drive.breakpoints(), dtype=float) if 0 < b < t_end}
-    extra = [] if grid is None else [grid[(grid > 0) & (grid < t_end)]]
-    stops = np.unique(np.concatenate([t_eval, sorted(kinks), [t_end], *extra]))
-    outputs = set(t_eval.tolist())
-    records: list[tuple[float, State]] = [(0.0, state)] if 0.0 in outputs else []
-    t, step = 0.0, control.first_step
-    steps = rejected = newton = 0
-    error_bound = error_max = 0.0
-    tau_max = float(np.max(stepper.taus)) if stepper.taus.size else math.inf
-
-    def decay(h: float) -> float:
-        return math.exp(-h / tau_max)
-
-    try:
-        for target in stops[stops > 0]:
-            while t < target:
-                remaining = target - t
-                h = min(step, remaining)
-                if remaining - h < 1e-9 * remaining:
-                    h = remaining
-                elif remaining < 1.2 * h:
-                    h = 0.5 * remaining
-                if t + h <= t:
-                    raise ConvergenceError(
-                        f"step size underflow at t = {t:.6g} s (dt = {h:.3g} s): the step control "
-                        "cannot meet the tolerance; loosen tol or check the drive", time=t)
-                try:
-                    outcome = stepper.step(state, drive, h)
-                except StabilityError as exc:
-                    raise StabilityError(f"step {steps + 1}: {exc}") from None
-                except (ConvergenceError, GapClosureError) as exc:
-                    if control.fixed or h < 1e-9 * control.max_step:
-                        raise type(exc)(
-                            f"step {steps + 1} at t = {t:.6g} s (dt = {h:.3g} s) failed: {exc}",
-                            time=t, iterations=exc.iterations,
-                            residual_norm=exc.residual_norm) from None
-                    step, rejected = 0.25 * h, rejected + 1
-                    continue
-                newton += outcome.iterations
-                if control.fixed:  # errors of the past decay with the creep memory
-                    error_bound = error_bound * decay(h) + outcome.error
-                    error_max = max(error_max, error_bound)
-                else:
-                    ratio = outcome.error / control.tol
-                    factor = 5.0 if ratio == 0 else 0.9 * ratio ** (-1.0 / (stepper.order + 1))
-                    if ratio > 1.0:
-                        step, rejected = h * max(0.2, factor), rejected + 1
-                        continue
-                    if state.tangent is not None and outcome.state.tangent is None:
-                        raise RuntimeError("internal: an accepted step lost its sensitivities "
-                                           "(the stepper's tangent_tol is not the march's tol)")
-                    step = min(h * min(5.0, max(0.2, factor)), control.max_step)
-                state, steps = outcome.state, steps + 1
-                t = target if h == remaining else t + h
-                if every_step is not None:
-                    every_step.append((t, state))
-                if bar is not None:
-                    bar.update(h)
-            if target in outputs:
-                records.append((target, state))
-            if target in kinks:
-                state = state.without_history()
-    finally:
-        if bar is not None:
-            bar.close()
-    return records, _Counters(steps, rejected, newton, error_max)
 
 
 def _progress(progress: bool | None, total: float):
@@ -553,4 +449,5 @@ def _describe(drive: SeparationHistory) -> str:
     return describe() if callable(describe) else type(drive).__name__
 
 
-__all__ = ["simulate", "simulate_force", "ForceResponse", "default_end_time", "DEFAULT_TOL"]
+__all__ = ["simulate", "simulate_force", "ForceResponse", "default_end_time", "DEFAULT_TOL",
+           "EULER_DEFAULT_FRACTION", "MIN_STEP_FRACTION"]
