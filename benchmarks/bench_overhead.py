@@ -40,7 +40,9 @@ Targets: closed-form fits (svda, contact, prony, relaxation) ≤ 1.5× the floor
 2); the exact fit ≤ 8× the closed-form SLS floor (issue 41 item 3; the issue's bar: 18×). The
 summary lines end in PASS/FAIL. Before every exact run ``linearized_state.cache_clear()``
 empties the static states (also those of ``modulus_states``, a new spectrum); the fitting
-grid's kernels stay built, as the problem's own kernel does.
+grid's kernels stay built, as the problem's own kernel does. The exact fit's grid follows the data's
+stderr (1 % here: ``fitting.models.exact.noise_tolerance``) where ``fit_once`` hands the model
+its data (``prepare``); otherwise its fixed 1e-6.
 
 Run ``python benchmarks/bench_overhead.py [--quick] [--repeats N] [--out DIR]``. Outputs (in
 ``--out``, default benchmarks/out/): ``overhead.json`` (keys :data:`JSON_KEYS`),

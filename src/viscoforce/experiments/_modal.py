@@ -142,6 +142,17 @@ def modal_slope(dec: Decomposition, compliance: np.ndarray, adjoint: np.ndarray)
     return (g * times(adjoint, g)).sum(axis=0)
 
 
+def modal_value(dec: Decomposition, compliance: np.ndarray,
+                adjoint: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """k*(c) [N/m] and ∂k*/∂E_inf at fixed c [N/m/Pa]: :func:`modal_sensitivities` without dk*/dc.
+
+    What a first-order step in E_inf needs for k* alone (a fit's best-fit curve).
+    """
+    beta = 2.0 * np.pi * (np.copysign(dec.q, dec.d) @ dec.vec) * dec.unit_modes
+    g = 1.0 / (1.0 + compliance[None, :] * dec.lam[:, None])  # (modes, values)
+    return beta @ g, (g * times(adjoint, g)).sum(axis=0)
+
+
 def modal_sensitivities(dec: Decomposition, compliance: np.ndarray,
                         adjoint: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """k*(c) [N/m], dk*/dc [N/m · Pa] and ∂k*/∂E_inf at fixed c [N/m/Pa] from a decomposition.

@@ -34,6 +34,7 @@ from viscoforce.experiments._modal import (
     log_slope,
     modal_sensitivities,
     modal_slope,
+    modal_value,
 )
 from viscoforce.problem import ContactProblem
 from viscoforce.solvers.newton import NewtonResult
@@ -91,8 +92,9 @@ class ModulusStates:
     DIRECT_MAX = 4
     #: Largest |ΔE/E| from a decomposed state evaluated to first order in ΔE (:meth:`_taylor`).
     TAYLOR_SPAN = 1e-3
-    #: Largest estimated relative second-order term of :meth:`_taylor` (a thousandth of the
-    #: fitting grid's 1e-6).
+    #: Largest estimated relative second-order term of :meth:`_taylor` by default (a thousandth
+    #: of the fitting grid's 1e-6); a caller passes its own (``taylor_rtol``: the exact model's
+    #: share of its noise's tolerance).
     TAYLOR_RTOL = 1e-9
 
     def __init__(self, problem: ContactProblem, position: float, maxsize: int = 32):
@@ -103,7 +105,7 @@ class ModulusStates:
         self._states: OrderedDict[float, Any] = OrderedDict()
         self._decomposed: dict[float, Decomposition] = {}
         self._adjoints: dict[float, np.ndarray] = {}
-        self._last: tuple[float, np.ndarray, tuple] | None = None  # the last Taylor answer
+        self._last: tuple[float, np.ndarray, float, tuple] | None = None  # the last Taylor answer
         self._lock = threading.RLock()
 
     def _key(self, modulus: float) -> float:
@@ -178,25 +180,29 @@ class ModulusStates:
             self._states.move_to_end(modulus)
             return self._states[modulus]
 
-    def stiffness(self, modulus: float, compliance: ArrayLike) -> np.ndarray:
+    def stiffness(self, modulus: float, compliance: ArrayLike, *,
+                  taylor_rtol: float | None = None) -> np.ndarray:
         """k*(c) [N/m] at E_inf = ``modulus`` [Pa] for c = 2C*(ω) (as :meth:`LinearizedState.stiffness`).
 
-        Raises ParameterError (``compliance`` not finite with a positive real part, or
-        ``modulus`` ≤ 0) or EffortError (more than ``MAX_SAMPLES`` values).
+        ``taylor_rtol``: the largest estimated relative error of a first-order step from a
+        decomposed state (:meth:`_taylor`; default ``TAYLOR_RTOL``). Raises ParameterError
+        (``compliance`` not finite with a positive real part, or ``modulus`` ≤ 0) or
+        EffortError (more than ``MAX_SAMPLES`` values).
         """
         modulus, c = self._checked(modulus, compliance, "stiffness")
         flat = c.ravel()
         with self._lock:
             modulus = self._key(modulus)
             if modulus not in self._states:
-                near = self._taylor(modulus, flat)
+                near = self._taylor(modulus, flat, taylor_rtol, slope_only=True)
                 if near is not None:
                     return near[0].reshape(c.shape)
             if c.size > self.DIRECT_MAX or modulus in self._states:
                 return self.state(modulus)._stiffness_checked(flat).reshape(c.shape)
             return direct_stiffness(self.problem, self.static(modulus), flat).reshape(c.shape)
 
-    def sensitivities(self, modulus: float, compliance: ArrayLike) -> tuple[
+    def sensitivities(self, modulus: float, compliance: ArrayLike, *,
+                      taylor_rtol: float | None = None) -> tuple[
             np.ndarray, np.ndarray, np.ndarray]:
         """k*(c) [N/m], dk*/dc [N/m · Pa] and ∂k*/∂E_inf at fixed c [N/m/Pa] at ``modulus``.
 
@@ -207,13 +213,15 @@ class ModulusStates:
         dh/dE (:meth:`slope`) and p″ along it; where a node without a force derivative would
         gain one (a law with a cut-off) it is the central difference of k* over ±1e-4 E_inf
         instead. The derivative of k*(ω) in a material parameter θ is then
-        dk*/dc · 2 dC*/dθ, plus ∂k*/∂E_inf for θ = E_inf. Raises as :meth:`stiffness`.
+        dk*/dc · 2 dC*/dθ, plus ∂k*/∂E_inf for θ = E_inf. ``taylor_rtol`` and raises as
+        :meth:`stiffness`.
         """
         modulus, c = self._checked(modulus, compliance, "sensitivities")
         flat = c.ravel()
         with self._lock:
             modulus = self._key(modulus)
-            near = None if modulus in self._states else self._taylor(modulus, flat)
+            near = (None if modulus in self._states
+                    else self._taylor(modulus, flat, taylor_rtol))
             if near is not None:
                 return tuple(a.reshape(c.shape) for a in near)  # type: ignore[return-value]
             ratio = self._ratio(modulus)
@@ -231,21 +239,26 @@ class ModulusStates:
                          - self.stiffness(modulus - step, flat)) / (2.0 * step)
             return tuple(a.reshape(c.shape) for a in (k, dk_dc, dk_de))  # type: ignore[return-value]
 
-    def _taylor(self, modulus: float, flat: np.ndarray) -> tuple[
-            np.ndarray, np.ndarray, np.ndarray] | None:
+    def _taylor(self, modulus: float, flat: np.ndarray, rtol: float | None = None, *,
+                slope_only: bool = False) -> tuple[np.ndarray, np.ndarray | None,
+                                                   np.ndarray] | None:
         """k*, dk*/dc, ∂k*/∂E at ``modulus`` to first order from the nearest decomposed state.
 
         k*(c; E) = k*(c; E_b) + ∂k*/∂E(c; E_b) (E − E_b), with no static solve, where the
         second-order term, estimated as ½|k*_EE| (E − E_b)² with k*_EE the difference quotient
         of ∂k*/∂E between the two decomposed states nearest E_b, is at most ``TAYLOR_RTOL`` of
-        |k*| at every value (and |E − E_b| ≤ ``TAYLOR_SPAN`` E_b): a fit's last steps (ΔE/E of
-        1e-5 and less: estimates of 1e-12). The derivatives are E_b's (first order in the
-        step, as a finite-difference Jacobian is). None: no such state (fewer than two
-        decomposed, a cut-off law, or the estimate too large).
+        |k*| at every value, ``rtol`` (default ``TAYLOR_RTOL``), and |E − E_b| ≤
+        ``TAYLOR_SPAN`` E_b: a fit's last steps (ΔE/E of 1e-5 and less: estimates of 1e-12; the
+        paper's system at −5 nm: ≈ 0.75 (ΔE/E)²). The derivatives are E_b's (first order in
+        the step, as a finite-difference Jacobian is). ``slope_only``: dk*/dc is not formed
+        (None; k* alone is asked for). None: no such state (fewer than two decomposed, a
+        cut-off law, or the estimate too large).
         """
+        rtol = self.TAYLOR_RTOL if rtol is None else rtol
         last = self._last
-        if last is not None and last[0] == modulus and np.array_equal(last[1], flat):
-            return last[2]  # a fit asks for the Jacobian where it just evaluated
+        if (last is not None and last[0] == modulus and last[2] == rtol
+                and (slope_only or last[3][1] is not None) and np.array_equal(last[1], flat)):
+            return last[3]  # a fit asks for the Jacobian where it just evaluated
         near = [e for e in self._decomposed if abs(modulus - e) <= self.TAYLOR_SPAN * e]
         if not near or len(self._decomposed) < 2:
             return None
@@ -254,15 +267,19 @@ class ModulusStates:
         ratios = self._ratio(base), self._ratio(other)
         if ratios[0] is None or ratios[1] is None:
             return None
-        k, dk_dc, dk_de = modal_sensitivities(self._decomposed[base], flat,
-                                              self._adjoint(base, ratios[0]))
+        adjoint = self._adjoint(base, ratios[0])
+        dk_dc: np.ndarray | None = None
+        if slope_only:
+            k, dk_de = modal_value(self._decomposed[base], flat, adjoint)
+        else:
+            k, dk_dc, dk_de = modal_sensitivities(self._decomposed[base], flat, adjoint)
         second = (dk_de - modal_slope(self._decomposed[other], flat,
                                       self._adjoint(other, ratios[1]))) / (base - other)
         step = modulus - base
-        if not float(np.max(0.5 * np.abs(second) * step * step / np.abs(k))) <= self.TAYLOR_RTOL:
+        if not float(np.max(0.5 * np.abs(second) * step * step / np.abs(k))) <= rtol:
             return None
         out = (k + dk_de * step, dk_dc, dk_de)
-        self._last = (modulus, flat.copy(), out)
+        self._last = (modulus, flat.copy(), rtol, out)
         return out
 
     def relaxed(self, modulus: float) -> tuple[float, float]:

@@ -244,6 +244,9 @@ def fit_once(model: FitModel, data: FitData, *, starts: int = 2, settle: bool = 
     ConvergenceError
         No start gave a finite fit.
     """
+    prepare = getattr(model, "prepare", None)
+    if prepare is not None:  # a model whose numerical accuracy follows the data (exact: the
+        prepare(data)        # fitting grid's tolerance from the data's stderr)
     first = model.internal_guess(data.y, data.x)
     n_free = sum(1 for p in first.values() if p.vary)
     if data.n_values <= n_free:

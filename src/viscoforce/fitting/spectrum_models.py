@@ -123,21 +123,24 @@ def _expand_one_mode(v: Mapping[str, float], modes: int) -> dict[str, float]:
 
 def exact_stiffness(problem: ContactProblem, position: float | None, mean_force: float | None,
                     material: ViscoelasticMaterial, omega: np.ndarray, *,
-                    states: Any = None) -> np.ndarray:
+                    states: Any = None, taylor_rtol: float | None = None) -> np.ndarray:
     """Exact small-amplitude k*(ω) [N/m] of ``material`` at h̄0 = ``position`` or at the load.
 
     ``states``: the :class:`~viscoforce.experiments.linear_response.ModulusStates` to evaluate
     on (the exact model's fitting grid: Newton warm-started from the nearest solved E_inf,
     direct solves for a few frequencies; ``problem`` is then not used); else at a position
     those of :func:`~viscoforce.experiments.linear_response.modulus_states` on ``problem``, at
-    a load :func:`~viscoforce.experiments.linear_response.linearized_state`.
+    a load :func:`~viscoforce.experiments.linear_response.linearized_state`. ``taylor_rtol``:
+    the largest estimated relative error of a first-order step in E_inf from a decomposed state
+    (:meth:`~viscoforce.experiments.linear_response.ModulusStates.stiffness`; default its
+    ``TAYLOR_RTOL``).
     """
     from viscoforce.experiments.linear_response import linearized_state, modulus_states
 
     e_inf = material.relaxed_modulus
     compliance = 2.0 * _compliance(material, omega)
     if states is not None:
-        return states.stiffness(e_inf, compliance)
+        return states.stiffness(e_inf, compliance, taylor_rtol=taylor_rtol)
     if position is not None:
         return modulus_states(problem, position).stiffness(e_inf, compliance)
     return linearized_state(problem, None, e_inf, load=mean_force).stiffness(compliance)

@@ -1,17 +1,29 @@
 """``exact``: the exact small-amplitude response at any position, an n-mode Prony material.
 
-The fitting grid (issue 41). At a position the model is evaluated on a grid with half the
-problem's Gauss–Legendre panels (same order and outer radius) when that grid is accurate
-enough: its k* is compared, at the guess's E_inf (and again at any E_inf beyond a factor
+The fitting grid (issue 41). At a position the model is evaluated on a grid with fewer
+Gauss–Legendre panels than the problem's (same order and outer radius) when that grid is
+accurate enough: its k* is compared, at the guess's E_inf (and again at any E_inf beyond a factor
 ``CHECK_SPAN`` of those checked; the check grid's Newton solve starts from the fitting grid's
 gaps interpolated onto its nodes), with a grid of the same panels two orders lower at four
 compliances spanning the relaxed to the glassy plateau (c = 2/E_inf × 1, 0.1, 0.01,
 0.55 − 0.45i). The panel quadrature converges spectrally, so that difference bounds the fitting
-grid's own error from above (on the paper's system at h̄0 = −5 nm: difference 4.5e-7, the
-fitting grid's error against a twice finer one 8.8e-9, the problem's 2.9e-11). If it exceeds
-``FIT_GRID_RTOL`` (1e-6 relative: a thousandth of a 0.1 % noise, where a parameter moves by
-well under 0.01 of its stderr) the problem's own grid is used from then on. At a load, and for
-a problem of one panel or order < 4, the problem's grid is used.
+grid's own error from above (on the paper's system at h̄0 = −5 nm, 11 panels of order 8:
+half the panels, difference 4.5e-7, the fitting grid's error against a twice finer one 8.8e-9;
+5 panels 1.4e-6 and 1.5e-8; 4 panels 2.5e-5 and 1.2e-6). A check above the tolerance moves to
+the next finer candidate, and past half the panels to the problem's own grid. At a load, and
+for a problem of one panel or order < 4, the problem's grid is used.
+
+The tolerance follows the data's noise (issue 41 item 3, part 3; :func:`noise_tolerance`).
+A model error ε_i at the points moves a fitted parameter θ_k of a weighted fit by at most
+σ_k ‖ε/σ‖₂ (Cauchy–Schwarz on (JᵀJ)⁻¹Jᵀ: σ_k is its stderr), so a relative error δ at every
+point moves every parameter by at most δ·√(Σ_i |k_i|² max(w_re,i, w_im,i)²) of its stderr
+(w = 1/σ). Where the data carry their stderr the tolerance is the δ that makes this bound
+``BIAS_STDERR`` (0.1 of a stderr), floored at ``FIT_GRID_RTOL`` (1e-6, the tolerance without
+stderr: results no less accurate than before) and capped at ``FIT_GRID_RTOL_MAX`` (1e-4); on 20
+points with 1 % noise 2.2e-4 → 1e-4, with 0.1 % 2.2e-5. Relative weights (no stderr): the fixed
+``FIT_GRID_RTOL``. The candidates start ⌊log10(tolerance / 1e-6)⌋ panels below half the
+problem's (at least 2): with 1e-6 half the panels, as before; on the paper's 11 panels 4 at 1 %
+noise, 5 at 0.1 %. First-order steps in E_inf (below) take ``TAYLOR_SHARE`` of the tolerance.
 
 The fit (issue 41 item 3, part 2). At a position the model carries its analytic Jacobian
 (``model_jacobian``, which :func:`viscoforce.fitting.outcome.fit_once` hands to MINPACK's
@@ -19,7 +31,8 @@ The fit (issue 41 item 3, part 2). At a position the model carries its analytic 
 fixed c from the state's modes, dh/dE and p″ along it
 (:meth:`~viscoforce.experiments.linear_response.ModulusStates.sensitivities`), so that a fit
 solves one static state per accepted step instead of one more per difference step; steps
-within the Taylor bound of a decomposed state (≤ 1e-9 relative, estimated) solve none. The
+within the Taylor bound of a decomposed state (≤ ``TAYLOR_SHARE`` × the tolerance relative,
+estimated: 1e-8 without stderr) solve none. The
 guess finds the levels on the fitting grid's states directly (:func:`_levels`).
 """
 
@@ -31,6 +44,7 @@ from collections.abc import Mapping
 
 import numpy as np
 
+from viscoforce.exceptions import ParameterError
 from viscoforce.experiments._modal import StateCache
 from viscoforce.fitting._params import reported_names
 from viscoforce.fitting.base import (
@@ -62,8 +76,16 @@ from viscoforce.fitting.spectrum_models import (
 from viscoforce.problem import ContactProblem
 from viscoforce.radial_grid import RadialGrid, gauss_legendre_unit, lagrange_matrix
 
-#: Largest relative k* error the fitting grid may add, as estimated (module docstring).
+#: Largest relative k* error the fitting grid may add, as estimated, where the data carry no
+#: stderr; the floor of the noise's tolerance (module docstring).
 FIT_GRID_RTOL = 1e-6
+#: The largest tolerance the data's noise may give (the check's two orders stay in the
+#: quadrature's spectral range).
+FIT_GRID_RTOL_MAX = 1e-4
+#: The bound on how far the model error may move a parameter, in units of its stderr.
+BIAS_STDERR = 0.1
+#: The share of the tolerance a first-order step in E_inf may add (1e-8 at 1e-6).
+TAYLOR_SHARE = 1e-2
 #: A fit's E_inf farther than this factor from every checked one is checked again.
 CHECK_SPAN = 4.0
 #: Compliances of the check, in units of 2/E_inf: relaxed, towards glassy, one complex.
@@ -76,16 +98,46 @@ def _coarser(problem: ContactProblem, panels: int, order: int) -> ContactProblem
                           RadialGrid(grid.outer_radius, panels, order))
 
 
-def _grids(problem: ContactProblem) -> tuple[ContactProblem, ContactProblem, np.ndarray] | None:
-    """The fitting grid's problem, its check's (kernels kept) and the map between their nodes.
+def noise_tolerance(data) -> float:
+    """The relative k* error the fitting grid may add on ``data`` (module docstring).
 
-    The map interpolates panel by panel from the fitting grid's nodes onto the check grid's
-    (the check's Newton start). None if the problem's grid is too coarse to halve.
+    ``data``: a :class:`~viscoforce.fitting.data.FitData` of a spectrum. With the data's own
+    stderr (``weighting == "stderr"``): ``BIAS_STDERR`` / √(Σ_i |k_i|² max(w_re,i, w_im,i)²),
+    within [``FIT_GRID_RTOL``, ``FIT_GRID_RTOL_MAX``]; else ``FIT_GRID_RTOL``.
+    """
+    weights = getattr(data, "weights", None)
+    if weights is None or not getattr(data, "sigma_known", False):
+        return FIT_GRID_RTOL
+    w = np.asarray(weights)
+    largest = np.maximum(np.abs(w.real), np.abs(w.imag)) if np.iscomplexobj(w) else np.abs(w)
+    norm = float(np.sqrt(np.sum((np.abs(np.asarray(data.y)) * largest) ** 2)))
+    if not (math.isfinite(norm) and norm > 0.0):
+        return FIT_GRID_RTOL
+    return min(max(BIAS_STDERR / norm, FIT_GRID_RTOL), FIT_GRID_RTOL_MAX)
+
+
+def _ladder(problem: ContactProblem, tolerance: float) -> list[int]:
+    """The fitting grid's candidate panel counts for ``tolerance``, coarsest first.
+
+    Up to half the problem's panels, from ⌊log10(tolerance / ``FIT_GRID_RTOL``)⌋ below it (at
+    least 2); empty where the problem's grid is too coarse to coarsen (one panel, order < 4).
     """
     grid = problem.grid
     if grid.n_panels < 2 or grid.order < 4:
-        return None
-    panels = (grid.n_panels + 1) // 2
+        return []
+    half = (grid.n_panels + 1) // 2
+    below = int(math.floor(math.log10(max(tolerance / FIT_GRID_RTOL, 1.0)) + 1e-9))
+    return list(range(max(2, half - below), half + 1))
+
+
+def _grids(problem: ContactProblem, panels: int) -> tuple[ContactProblem, ContactProblem,
+                                                           np.ndarray]:
+    """The fitting grid's problem of ``panels``, its check's (kernels kept), the map between them.
+
+    The map interpolates panel by panel from the fitting grid's nodes onto the check grid's
+    (the check's Newton start).
+    """
+    grid = problem.grid
 
     def build() -> tuple[ContactProblem, ContactProblem, np.ndarray]:
         fit, check = _coarser(problem, panels, grid.order), _coarser(problem, panels,
@@ -94,24 +146,50 @@ def _grids(problem: ContactProblem) -> tuple[ContactProblem, ContactProblem, np.
                                 gauss_legendre_unit(grid.order - 2)[0])
         return fit, check, np.kron(np.eye(panels), local)
 
-    return _COARSE.get((problem.sphere, problem.surface_force, grid), build)
+    return _COARSE.get((problem.sphere, problem.surface_force, grid, panels), build)
 
 
 class FitGrid:
     """The problem a fit of the exact model at ``position`` evaluates on (module docstring).
 
-    ``error`` holds the estimated relative k* errors of the fitting grid checked so far by
-    E_inf; ``problem`` is the fitting grid's problem, or the given one once a check failed.
+    ``tolerance``: the relative k* error the fitting grid may add (:func:`noise_tolerance`;
+    default ``FIT_GRID_RTOL``). ``error`` holds the estimated relative k* errors of the current
+    fitting grid checked so far by E_inf; ``problem`` is the fitting grid's problem, or the
+    given one once every candidate failed its check. ``taylor_rtol`` is the share of the
+    tolerance a first-order step in E_inf may add.
     """
 
-    def __init__(self, problem: ContactProblem, position: float):
+    def __init__(self, problem: ContactProblem, position: float,
+                 tolerance: float = FIT_GRID_RTOL):
         self.given, self.position = problem, position
-        grids = _grids(problem)
-        self.problem, self._check, self._onto_check = (
-            grids if grids is not None else (problem, None, None))
-        self.error: dict[float, float] = {}
         self._states = None
         self._lock = threading.Lock()
+        self.set_tolerance(tolerance)
+
+    def set_tolerance(self, tolerance: float) -> None:
+        """Choose the candidates anew for a new ``tolerance`` (relative, > 0; checks forgotten).
+
+        The same tolerance again keeps the grid and its checks (a refit of the same data).
+        """
+        if not (math.isfinite(tolerance) and tolerance > 0.0):
+            raise ParameterError(f"tolerance must be a finite relative error > 0, got "
+                                 f"{tolerance!r}")
+        if float(tolerance) == getattr(self, "tolerance", None):
+            return
+        with self._lock:
+            self.tolerance, self.taylor_rtol = float(tolerance), TAYLOR_SHARE * float(tolerance)
+            self._ladder = _ladder(self.given, self.tolerance)
+            self._next()
+
+    def _next(self) -> None:
+        """Move to the next candidate (or the problem's own grid), its checks none yet."""
+        self.error: dict[float, float] = {}
+        if self._ladder:
+            self.panels = self._ladder.pop(0)
+            self.problem, self._check, self._onto_check = _grids(self.given, self.panels)
+        else:
+            self.panels = self.given.grid.n_panels
+            self.problem, self._check, self._onto_check = self.given, None, None
 
     def unchecked(self):
         """The states of the current ``problem``, without a check (the guess's level search)."""
@@ -126,12 +204,13 @@ class FitGrid:
         """The states (:class:`~viscoforce.experiments.linear_response.ModulusStates`) of E_inf.
 
         The fitting grid is checked first at ``e_inf`` [Pa] if no check was near it: the check
-        grid's Newton solve starts from the fitting grid's gaps interpolated onto its nodes.
+        grid's Newton solve starts from the fitting grid's gaps interpolated onto its nodes; a
+        failed check moves to the next candidate and checks it there.
         """
         from viscoforce.experiments.linear_response import modulus_states
 
         with self._lock:
-            if self.problem is not self.given and not any(
+            while self.problem is not self.given and not any(
                     abs(math.log(e / e_inf)) <= math.log(CHECK_SPAN) for e in self.error):
                 c = _CHECK_C * (2.0 / e_inf)
                 fitting = modulus_states(self.problem, self.position)
@@ -141,9 +220,10 @@ class FitGrid:
                     self._onto_check @ fitting.static(e_inf).gap,
                     0.5 * float(fitting.static(e_inf).gap.min())))
                 rough = check.stiffness(e_inf, c)
-                self.error[e_inf] = float(np.max(np.abs(fine - rough) / np.abs(fine)))
-                if self.error[e_inf] > FIT_GRID_RTOL:
-                    self.problem = self.given
+                error = float(np.max(np.abs(fine - rough) / np.abs(fine)))
+                self.error[e_inf] = error
+                if error > self.tolerance:
+                    self._next()
         return self.unchecked()
 
 
@@ -164,15 +244,19 @@ def _exact_model(spec: ModelSpec) -> FitModel:
         if modes > 1 and "tau" in full:  # the level search passes one-mode names
             full = _expand_one_mode(full, modes)
         material = material_from(full, modes)
-        states = None if grid is None else grid.states(material.relaxed_modulus)
-        return exact_stiffness(problem, position, mean_force, material, omega, states=states)
+        if grid is None:
+            return exact_stiffness(problem, position, mean_force, material, omega)
+        return exact_stiffness(problem, position, mean_force, material, omega,
+                               states=grid.states(material.relaxed_modulus),
+                               taylor_rtol=grid.taylor_rtol)
 
     def jacobian(omega: np.ndarray, v: Mapping[str, float]) -> np.ndarray:
         # the fit evaluated ``function`` here first (its material checked): the closed form
         # of C* and its derivatives from the values directly
         e_inf = float(v["E_inf"])
         dc, c = compliance_derivatives(v, modes, omega, names)
-        _, dk_dc, dk_de = grid.states(e_inf).sensitivities(e_inf, 2.0 * c)  # type: ignore[union-attr]
+        _, dk_dc, dk_de = grid.states(e_inf).sensitivities(  # type: ignore[union-attr]
+            e_inf, 2.0 * c, taylor_rtol=grid.taylor_rtol)  # type: ignore[union-attr]
         out = (2.0 * dk_dc)[:, None] * dc
         out[:, names.index("E_inf")] += dk_de
         return out
@@ -187,6 +271,10 @@ def _exact_model(spec: ModelSpec) -> FitModel:
     model = FitModel(spec, function, layout, "omega", guesser, omega_window)
     if grid is not None:  # at a load the position moves with E_inf: differences, as before
         model.model_jacobian = jacobian  # type: ignore[attr-defined]
+        # the fit's data set the fitting grid's tolerance (their stderr, if any) before the
+        # guess: what fitting.outcome.fit_once calls a model's ``prepare`` with
+        model.prepare = lambda data: grid.set_tolerance(  # type: ignore[attr-defined]
+            noise_tolerance(data))
     return model
 
 
@@ -265,7 +353,9 @@ ENTRY = register(ModelEntry(
     summary="the exact small-amplitude response (any position, contact included)",
     build=_exact_model, inputs=(POSITION, MEAN_FORCE, PROBLEM), parameters=material_names,
     max_modes=MAX_MODES,
-    validity="the exact small-amplitude model: its error is the fitting grid's (<= 1e-6 "
-             "relative, checked; else the problem's grid, ~1e-9 on the default grid; plus <= "
-             "1e-9 where a step is taken to first order in E_inf) and the finite-amplitude bias "
-             "of the measurement"))
+    validity="the exact small-amplitude model: its error is the fitting grid's, checked "
+             "against a tolerance that moves no parameter by more than 0.1 of its stderr "
+             "(0.1/sqrt(sum |k|^2/sigma^2) relative, within 1e-6 to 1e-4; 1e-6 where the data "
+             "carry no stderr; else the problem's grid, ~1e-9 on the default grid), plus 1e-2 "
+             "of that tolerance where a step is taken to first order in E_inf, and the "
+             "finite-amplitude bias of the measurement"))
