@@ -65,8 +65,10 @@ def _creep_model(spec: ModelSpec) -> FitModel:
     if extra:
         raise ParameterError(f"model 'creep' takes {', '.join(extra)} with a tip only (the "
                              "Lee-Radok form); give tip= (--tip)")
-    # the search of each fit by variable projection (amplitudes linear; issue 41 item 2)
-    return exponential_model(_exponential_model(spec, "z_inf", "dz"), "z_inf", "dz")
+    # several modes: the search of each fit by variable projection (amplitudes linear; issue
+    # 41 item 2); one mode converges from its guess in a few evaluations without it
+    base = _exponential_model(spec, "z_inf", "dz")
+    return exponential_model(base, "z_inf", "dz") if spec.modes > 1 else base
 
 
 CREEP_HISTORY = Input("creep_history", check_history, "",
