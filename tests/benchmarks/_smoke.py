@@ -40,6 +40,26 @@ IN_PROCESS = frozenset({"bench_dynamics", "bench_spectrum", "bench_step", "speed
                         "ting_real", "adhesion_pulloff"})
 
 
+#: Suites whose smoke run takes more than about 3 s on a quiet 2-core machine (measured
+#: 2026-12-06: bench_stream 18 s, bench_load, bench_spectrum, bench_ting_nonuniform 8 s,
+#: bench_fit 7 s, bench_static 5 s, the others 3-5 s): their smoke runs and the checks on
+#: them are slow tests (``-m slow``; CI skips them to keep the suite near its 3 minutes, they
+#: stay runnable: ``python -m pytest -m slow tests/benchmarks``). The cheaper suites' smoke runs
+#: stay in CI.
+HEAVY_SMOKE = frozenset({"bench_stream", "bench_load", "bench_spectrum", "bench_ting_nonuniform",
+                         "bench_fit", "bench_static", "bench_regression", "bench_startup",
+                         "bench_overhead", "bench_dynamics", "bench_hertz_speed", "bench_step"})
+
+
+def suite_of(item: pytest.Item) -> str | None:
+    """The suite a test of tests/benchmarks/ checks: its ``name`` parameter or its name's."""
+    callspec = getattr(item, "callspec", None)
+    if callspec is not None and callspec.params.get("name") in SUITES:
+        return str(callspec.params["name"])
+    return next((s for s in sorted(SUITES, key=len, reverse=True)
+                 if item.name.startswith(f"test_{s}_")), None)
+
+
 @dataclass(frozen=True)
 class QuickRun:
     """A finished smoke run: its suite, output folder, exit status and printed text."""

@@ -7,7 +7,15 @@ from collections.abc import Callable
 
 import pytest
 
-from tests.benchmarks._smoke import QuickRun, quick_runs
+from tests.benchmarks._smoke import HEAVY_SMOKE, QuickRun, quick_runs, suite_of
+
+
+@pytest.hookimpl(tryfirst=True)
+def pytest_collection_modifyitems(config, items):
+    """The heavy suites' smoke runs and the checks on them are slow tests (``HEAVY_SMOKE``)."""
+    for item in items:
+        if suite_of(item) in HEAVY_SMOKE:
+            item.add_marker(pytest.mark.slow)
 
 
 @pytest.fixture(scope="session")
