@@ -432,3 +432,48 @@ def test_a_fit_scans_three_times_and_starts_at_the_least_squares(monkeypatch):
     # the direction check's costs are the start's mirrored, with its coarse subsample's: 2 a fit
     assert len(mirrored) == 4
     assert ds.attrs["nfev"] <= 11  # from the least-squares minimum: MINPACK's own evaluations
+
+
+def _sort_cases() -> list[np.ndarray]:
+    """Orders a fit meets: ascending, nearly so, ties, NaN, ±0, descending, tiny."""
+    rng = np.random.default_rng(41)
+    ascending = np.cumsum(rng.uniform(1e-10, 2e-9, 4000))
+    nearly = ascending + rng.normal(0.0, 1e-9, ascending.size)  # noisy: local swaps, no ties
+    tied = np.round(nearly, 8)
+    with_nan = nearly.copy()
+    with_nan[[5, 700]] = np.nan
+    signed_zero = np.array([1.0, -0.0, 0.0, -1.0, 0.0, -0.0, 2.0])
+    return [ascending, nearly, tied, with_nan, signed_zero, ascending[::-1].copy(),
+            np.array([]), np.array([3.0]), np.array([2.0, 1.0]), rng.normal(size=999)]
+
+
+@pytest.mark.parametrize("index", range(10))
+def test_fast_orders_are_numpys_default_sort(index):
+    from viscoforce.fitting.outcome import ascending_order, residual_lag1, sorted_values
+
+    t = _sort_cases()[index]
+    order = ascending_order(t)
+    expected = np.argsort(t)
+    # None: t ascends strictly, numpy's order is the identity
+    assert np.array_equal(np.arange(t.size) if order is None else order, expected)
+    got, want = sorted_values(t), np.sort(t)
+    assert got.dtype == want.dtype and got.shape == want.shape
+    assert np.array_equal(got.view(np.int64), want.view(np.int64))  # bit for bit (±0, NaN)
+    assert not np.shares_memory(got, t)
+    if t.size >= 3 and np.isfinite(t).all():
+        r = np.random.default_rng(index).normal(size=t.size)
+        s = r[expected] - r[expected].mean()
+        assert residual_lag1(r, t) == float(s[:-1] @ s[1:]) / float(s @ s)
+
+
+def test_check_spans_reads_the_finite_values_only():
+    from viscoforce.fitting.curves import check_spans
+
+    z = np.linspace(0.0, 1e-6, 50)
+    f = np.linspace(0.0, 1e-9, 50)
+    check_spans("the approach", z, f)  # spans enough
+    check_spans("the approach", np.concatenate((z, [np.nan, np.inf])), f)  # finite span
+    with pytest.raises(ParameterError, match=r"spans 1e-15 m of tip position \(from 0 m to "
+                                             r"1e-15 m\)"):
+        check_spans("the approach", np.array([0.0, np.nan, 1e-15, -np.inf]), f)
+    check_spans("the approach", np.full(4, np.nan), f)  # no finite value: left to the fit

@@ -94,10 +94,14 @@ def check_spans(what: str, position: np.ndarray | None, force: np.ndarray) -> No
         if values is None:
             continue
         v = np.asarray(values, dtype=float)
-        v = v[np.isfinite(v)]
         if v.size == 0:
             continue
-        low, high = float(np.min(v)), float(np.max(v))
+        low, high = float(v.min()), float(v.max())  # NaN or inf among them: not finite
+        if not (math.isfinite(low) and math.isfinite(high)):  # the finite values' span
+            v = v[np.isfinite(v)]
+            if v.size == 0:
+                continue
+            low, high = float(np.min(v)), float(np.max(v))
         largest = max(abs(low), abs(high))
         span = high - low
         if name == "force" and span == 0.0:  # the baseline window spans the magnitude

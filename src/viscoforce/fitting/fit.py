@@ -61,7 +61,7 @@ from viscoforce.fitting.model_error import (
 )
 from viscoforce.fitting.models import MODELS, check_fixed, make_model
 from viscoforce.fitting.moduli import add_derived_moduli, derived_attrs, derived_variables
-from viscoforce.fitting.outcome import Outcome, fit_once, summary_stderr
+from viscoforce.fitting.outcome import Outcome, fit_once, sorted_values, summary_stderr
 from viscoforce.fitting.registry import entries
 from viscoforce.fitting.report import attach
 from viscoforce.fitting.selection import (
@@ -216,10 +216,10 @@ def result_dataset(outcome: Outcome, data: FitData, *,
         k = outcome.evaluate(omega)
         curves = {"omega": omega, "fit_stiffness": np.abs(k), "fit_phase": np.degrees(np.angle(k))}
     elif model.independent == "z":
-        z = np.sort(data.x)
+        z = sorted_values(data.x)
         curves = {"tip_position": z, "fit_approach_force": outcome.evaluate(z)}
     else:
-        t = np.sort(data.x)
+        t = sorted_values(data.x)
         name = "fit_tip_position" if model.spec.name == "creep" else "fit_force"
         curves = {"time": t, name: outcome.evaluate(t)}
     extra = _statistics_variables(info, model.names, bool(profile))

@@ -28,6 +28,7 @@ from viscoforce.exceptions import (
 from viscoforce.fitting._hertz_scan import hertz_least_squares, unchecked_shape
 from viscoforce.fitting.curve_models import HERTZ_GUESS_POINTS, contact_window, hertz_grid
 from viscoforce.fitting.data import FitData
+from viscoforce.fitting.outcome import ascending_order
 from viscoforce.fitting.report import carry
 from viscoforce.fitting.verdict import CHECKED_ATTR, listed_names
 
@@ -97,12 +98,12 @@ def _lag1(residual: np.ndarray, z: np.ndarray) -> float:
     """:func:`~viscoforce.fitting.outcome.residual_lag1`, its sort of z made once per approach.
 
     The checks take the lag-1 autocorrelation of several residuals over the same z: the order
-    of the last z (``numpy.argsort``, as ``residual_lag1``; none where z ascends strictly) is
+    of the last z (:func:`~viscoforce.fitting.outcome.ascending_order`, as ``residual_lag1``) is
     kept, and reused while the same z comes again.
     """
     kept_z, order = _LAST_ORDER[0]
     if not (kept_z.shape == z.shape and np.array_equal(kept_z, z)):
-        order = None if z.size < 2 or bool(np.all(z[1:] > z[:-1])) else np.argsort(z)
+        order = ascending_order(z)  # numpy.argsort's order, None where z ascends strictly
         _LAST_ORDER[0] = (z.copy(), order)  # one assignment: threads see a pair or the other
     return _lag1_sorted(residual if order is None else residual[order])
 
@@ -428,7 +429,10 @@ def depth_check(z: np.ndarray, f: np.ndarray, values: dict[str, float], e_err: f
            "baseline_slope": float(coef[2])}
     e_half = own["E"]
     jacobian = _hertz_jacobian(z, values, tip)
-    excess_factor = _e_variance_factor(jacobian[keep]) - _e_variance_factor(jacobian)
+    # the rows kept: np.compress gives jacobian[keep] (the same C-ordered copy) at a tenth of
+    # the boolean index's cost over rows of a 2-D array
+    excess_factor = (_e_variance_factor(np.compress(keep, jacobian, axis=0))
+                     - _e_variance_factor(jacobian))
     noise = _noise_variance(_hertz_residual(zk, fk, own, tip), zk, 4)
     statistical = noise * max(excess_factor, 0.0) if math.isfinite(excess_factor) else 0.0
     spread = math.sqrt(statistical + (DEPTH_CHECK_RESOLUTION * e) ** 2)

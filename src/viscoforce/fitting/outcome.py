@@ -219,9 +219,41 @@ def _outcome(model: FitModel, res: lmfit.minimizer.MinimizerResult | _engine.Lea
     return outcome
 
 
+def ascending_order(t: np.ndarray) -> np.ndarray | None:
+    """``numpy.argsort(t)``, or None where ``t`` ascends strictly (the order is the identity).
+
+    NumPy's default sort (introsort) is slow on nearly sorted samples (an approach, ≈ 0.1 ms
+    for 4000 of them: issue 41 item 4); its stable sort (a merge of runs) is fast there. Where
+    the values are distinct the two give the one permutation that sorts them; only values that
+    tie (or NaN) take the default sort, whose order of the ties this keeps.
+    """
+    if t.size < 2 or bool(np.all(t[1:] > t[:-1])):
+        return None
+    order = np.argsort(t, kind="stable")
+    ordered = t[order]
+    if bool(np.all(ordered[1:] > ordered[:-1])):  # distinct, no NaN: one sorting order
+        return order
+    return np.argsort(t)
+
+
+def sorted_values(x: np.ndarray) -> np.ndarray:
+    """``numpy.sort(x)`` (a new array), by the stable sort where the values are distinct.
+
+    As :func:`ascending_order`: the same values in the same order, without the default sort's
+    slow pass over nearly sorted samples.
+    """
+    if x.size < 2 or bool(np.all(x[1:] > x[:-1])):
+        return x.copy()
+    ordered = np.sort(x, kind="stable")
+    if bool(np.all(ordered[1:] > ordered[:-1])):
+        return ordered
+    return np.sort(x)
+
+
 def residual_lag1(residual: np.ndarray, t: np.ndarray) -> float:
     """Lag-1 autocorrelation of residuals ordered in time, Σ r_i r_{i+1} / Σ r_i² (0 if < 3)."""
-    r = residual[np.argsort(t)]
+    order = ascending_order(np.asarray(t))
+    r = residual if order is None else residual[order]
     if r.size < 3:
         return 0.0
     r = r - r.mean()
