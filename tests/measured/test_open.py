@@ -1,9 +1,10 @@
 """``viscoforce.measured.open_data`` (issue 36 item 3): one call from a file to analysable data.
 
-It gives exactly what ``viscoforce load --out`` writes (bundled examples; the real files of
-../shared/data/real when present), reads a JPK map in chunks with the same result as a whole
-read, and refuses bad options with messages naming the parameters (the command line tells the
-same with its flags).
+It gives exactly what ``viscoforce load --out`` writes (bundled examples), reads a JPK map in
+chunks with the same result as a whole read, and refuses bad options with messages naming the
+parameters (the command line tells the same with its flags). The real files of
+../shared/data/real are in test_open_real.py (split off so that the two halves run on
+different xdist workers).
 """
 
 from __future__ import annotations
@@ -16,9 +17,9 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from tests.conftest import REAL_DATA_DIR, REPO
+from tests.conftest import REPO
 from viscoforce.cli import main
-from viscoforce.exceptions import ParameterError, ViscoforceError
+from viscoforce.exceptions import ParameterError
 
 EXAMPLES = REPO / "src" / "viscoforce" / "data" / "examples"
 MAP = EXAMPLES / "real" / "modulation-map.jpk-force-map"
@@ -46,6 +47,21 @@ def _as_written(ds, tmp_path):
 
     write_netcdf(ds, tmp_path / "lib.nc")
     return _opened(tmp_path / "lib.nc")
+
+
+@pytest.fixture(scope="module")
+def map_curves():
+    """The bundled map's curves read whole by load_instrument, once for the tests that compare
+    with them unchanged (each read them again)."""
+    from viscoforce.io.instruments import load_instrument
+
+    return load_instrument(MAP)
+
+
+@pytest.fixture(scope="module")
+def map_curves_written(map_curves, tmp_path_factory):
+    """``map_curves`` through the netCDF writer, once."""
+    return _as_written(map_curves, tmp_path_factory.mktemp("map"))
 
 
 # ── reachable ────────────────────────────────────────────────────────────────────────────────────
@@ -100,16 +116,16 @@ def test_open_data_gives_what_load_writes(tmp_path, capsys, name, options, flags
     assert read_measured(path, **options).summary() == summary
 
 
-def test_the_streamed_raw_map_is_written_and_returned_lazily(tmp_path, capsys):
-    from viscoforce.io.instruments import load_instrument
+def test_the_streamed_raw_map_is_written_and_returned_lazily(tmp_path, capsys, map_curves,
+                                                            map_curves_written):
     from viscoforce.measured import open_data, read_measured
 
     written, summary = _cli_out(tmp_path, capsys, MAP, "--raw")
     out = tmp_path / "curves.nc"
     with open_data(MAP, raw=True, out=out) as lazy:
         xr.testing.assert_identical(lazy.load(), written)
-    xr.testing.assert_identical(written, _as_written(load_instrument(MAP), tmp_path))
-    xr.testing.assert_identical(open_data(MAP, raw=True), load_instrument(MAP))
+    xr.testing.assert_identical(written, map_curves_written)
+    xr.testing.assert_identical(open_data(MAP, raw=True), map_curves)
     counted = read_measured(MAP, raw=True, keep_streamed=False)
     assert counted.dataset is None and counted.streamed
     assert counted.summary() == summary
@@ -152,14 +168,14 @@ def test_drag_heights_as_load_does(tmp_path, capsys):
 
 # ── chunks of curves ─────────────────────────────────────────────────────────────────────────────
 
-def test_a_map_read_in_chunks_equals_the_whole_read(monkeypatch, tmp_path):
+def test_a_map_read_in_chunks_equals_the_whole_read(monkeypatch, tmp_path, map_curves,
+                                                   map_curves_written):
     import viscoforce.experiments.stream as stream_module
     import viscoforce.io.stream as io_stream
     from viscoforce.experiments.modulation import modulation_spectrum
-    from viscoforce.io.instruments import load_instrument
     from viscoforce.measured import open_data, read_measured
 
-    whole = load_instrument(MAP)
+    whole = map_curves
     lags = {300.0: 3.0, 10.0: 0.5}
     # the archive read whole: the curves of load_instrument lack the piezo record that the
     # default phase reference compares the sensor with
@@ -179,7 +195,7 @@ def test_a_map_read_in_chunks_equals_the_whole_read(monkeypatch, tmp_path):
     xr.testing.assert_identical(made.dataset, expected)
     out = tmp_path / "curves.nc"
     with open_data(MAP, raw=True, out=out) as lazy:  # curves written 3 at a time
-        xr.testing.assert_identical(lazy.load(), _as_written(whole, tmp_path))
+        xr.testing.assert_identical(lazy.load(), map_curves_written)
 
 
 def test_a_phase_reference_path_or_dataset(tmp_path):
@@ -280,34 +296,3 @@ def test_fit_names_data_for_a_missing_netcdf(capsys, tmp_path):
 
     with pytest.raises(UsageError, match=r"^DATA .*missing\.nc: no such file$"):
         read_data(str(tmp_path / "missing.nc"))
-
-
-# ── real files ───────────────────────────────────────────────────────────────────────────────────
-
-def _real_files():
-    if not REAL_DATA_DIR.is_dir():
-        return []
-    skip = {".md", ".txt"}
-    return sorted(p for p in REAL_DATA_DIR.rglob("*") if p.is_file()
-                  and (p.suffix not in skip or "fmt-" in p.name)
-                  and p.name not in ("LICENSE",))
-
-
-@pytest.mark.parametrize("path", _real_files() or [None],
-                         ids=lambda p: "absent" if p is None else p.name)
-def test_real_files_give_what_load_writes(tmp_path, capsys, path):
-    if path is None:
-        pytest.skip("real data folder absent (../shared/data/real)")
-    from viscoforce.measured import open_data, read_measured
-
-    out = tmp_path / "cli.nc"
-    code = main(["load", str(path), "--out", str(out), "--json"])
-    captured = capsys.readouterr()
-    if code != 0:  # a file load refuses: open_data refuses it too
-        assert code == 2
-        with pytest.raises(ViscoforceError):
-            open_data(path)
-        return
-    ds = open_data(path)
-    xr.testing.assert_identical(_opened(out), _as_written(ds, tmp_path))
-    assert read_measured(path).summary() == json.loads(captured.out)

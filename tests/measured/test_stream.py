@@ -58,6 +58,27 @@ def real_map():
     return REAL_MAP
 
 
+@pytest.fixture(scope="module")
+def real_whole(real_map):
+    """The real map's spectrum read whole, once for the tests that compare with it unchanged."""
+    return _whole(real_map)
+
+
+@pytest.fixture(scope="module")
+def small_whole(small_map):
+    """The synthetic map's spectrum read whole, once (it was read per parametrisation)."""
+    return _whole(small_map)
+
+
+@pytest.fixture(scope="module")
+def small_raw_written(small_map, tmp_path_factory):
+    """The synthetic map's curves read whole and written by write_netcdf, once: the file every
+    chunked or command-line write of the raw curves must equal."""
+    path = tmp_path_factory.mktemp("whole") / "whole.nc"
+    write_netcdf(load_instrument(small_map), path)
+    return _opened(path)
+
+
 def _whole(path, **options):
     """The archive read whole (a curves dataset from load_instrument lacks the piezo record the
     default phase reference compares the sensor with)."""
@@ -72,8 +93,8 @@ def _opened(path):
 # ── the same spectrum ────────────────────────────────────────────────────────────────────────────
 
 @pytest.mark.parametrize("chunk", [1, 5, None])
-def test_real_map_streamed_equals_whole(real_map, chunk):
-    xr.testing.assert_identical(stream_spectrum(real_map, chunk=chunk), _whole(real_map))
+def test_real_map_streamed_equals_whole(real_map, real_whole, chunk):
+    xr.testing.assert_identical(stream_spectrum(real_map, chunk=chunk), real_whole)
 
 
 def test_real_map_corrections_streamed_equal_whole(real_map):
@@ -91,8 +112,8 @@ def test_real_map_without_contact_point(real_map):
 
 
 @pytest.mark.parametrize("chunk", [2, 4, 9])
-def test_synthetic_map_streamed_equals_whole(small_map, chunk):
-    whole = _whole(small_map)
+def test_synthetic_map_streamed_equals_whole(small_map, small_whole, chunk):
+    whole = small_whole
     assert whole.sizes["curve"] == 9
     xr.testing.assert_identical(stream_spectrum(small_map, chunk=chunk), whole)
     with read_jpk(small_map) as archive:  # an open archive and a selection
@@ -113,26 +134,30 @@ def test_chunks_of_curves_concatenate_to_the_whole(small_map):
 
 
 @pytest.mark.parametrize("chunk", [1, 4])
-def test_raw_curves_written_in_chunks_equal_the_whole_file(small_map, tmp_path, chunk):
-    whole_path, stream_path = tmp_path / "whole.nc", tmp_path / "stream.nc"
-    write_netcdf(load_instrument(small_map), whole_path)
+def test_raw_curves_written_in_chunks_equal_the_whole_file(small_map, small_raw_written, tmp_path,
+                                                          chunk):
+    stream_path = tmp_path / "stream.nc"
     with read_jpk(small_map) as archive:
         summary = write_curves_netcdf(archive, stream_path, chunk=chunk,
                                       attrs={"source": "jpk", "file": str(small_map)})
     assert summary["dims"]["curve"] == 9 and summary["chunks"] == -(-9 // chunk)
-    xr.testing.assert_identical(_opened(stream_path), _opened(whole_path))
+    xr.testing.assert_identical(_opened(stream_path), small_raw_written)
 
 
 # ── the command line ─────────────────────────────────────────────────────────────────────────────
 
 @pytest.mark.parametrize("raw", [False, True])
-def test_cli_load_writes_what_the_whole_file_gives(small_map, tmp_path, capsys, raw):
+def test_cli_load_writes_what_the_whole_file_gives(small_map, small_whole, small_raw_written,
+                                                  tmp_path, capsys, raw):
     out = tmp_path / "out.nc"
     assert main(["load", str(small_map), "--out", str(out), *(["--raw"] if raw else [])]) == 0
     capsys.readouterr()
-    expected = load_instrument(small_map) if raw else _whole(small_map)
-    write_netcdf(expected, tmp_path / "expected.nc")
-    xr.testing.assert_identical(_opened(out), _opened(tmp_path / "expected.nc"))
+    if raw:
+        expected = small_raw_written
+    else:
+        write_netcdf(small_whole, tmp_path / "expected.nc")
+        expected = _opened(tmp_path / "expected.nc")
+    xr.testing.assert_identical(_opened(out), expected)
 
 
 def test_cli_load_corrections_as_before(real_map, tmp_path, capsys):
@@ -154,9 +179,8 @@ def test_cli_load_raw_refuses_moduli_before_writing(small_map, tmp_path, capsys)
     assert not out.exists()
 
 
-def test_fit_reads_the_spectrum_in_chunks(small_map):
-    xr.testing.assert_identical(read_data(str(small_map)),
-                                one_curve_squeezed(_whole(small_map)))
+def test_fit_reads_the_spectrum_in_chunks(small_map, small_whole):
+    xr.testing.assert_identical(read_data(str(small_map)), one_curve_squeezed(small_whole))
 
 
 # ── atomic output ────────────────────────────────────────────────────────────────────────────────
