@@ -20,6 +20,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from viscoforce.cli._args import UsageError
+from viscoforce.cli._fit_report import recorded
 from viscoforce.exceptions import ViscoforceError
 
 #: A record whose fit leaves a residual more than this many times the other's is settled by the
@@ -58,36 +59,6 @@ def _residual_rms(result) -> float:
     """
     redchi = float(result["redchi"]) if "redchi" in result else math.nan
     return math.sqrt(redchi) if redchi >= 0 else math.nan
-
-
-def recorded(run: Callable[..., Any], *args: Any) -> tuple[Any, list[str], list[Any]]:
-    """``run(*args)`` with the viscoforce warnings recorded, not shown: (result, texts, caught).
-
-    The fit kept is chosen after the alternatives are fitted; only its warnings are shown
-    (:func:`show`).
-    """
-    from viscoforce.exceptions import (
-        AccuracyWarning,
-        DataWarning,
-        GoodnessOfFitWarning,
-        ModelValidityWarning,
-    )
-
-    kinds = (ModelValidityWarning, AccuracyWarning, GoodnessOfFitWarning, DataWarning)
-    with warnings.catch_warnings(record=True) as caught:
-        warnings.simplefilter("always")
-        result = run(*args)
-    texts: list[str] = []
-    for w in caught:
-        if issubclass(w.category, kinds) and str(w.message) not in texts:
-            texts.append(str(w.message))
-    return result, texts, list(caught)
-
-
-def show(caught: list[Any]) -> None:
-    """Show the warnings :func:`recorded` kept back."""
-    for w in caught:
-        warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
 
 
 @dataclass

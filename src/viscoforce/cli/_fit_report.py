@@ -212,8 +212,12 @@ def _print_map(info: dict[str, Any]) -> None:
             quartiles(name, p, 12, parameter_units(name.rsplit("_", 1)[0]))
 
 
-def _fit_recording(run, *args: Any, **kwargs: Any):
-    """``run(*args, **kwargs)`` with the viscoforce warnings recorded, then shown; (result, texts)."""
+def recorded(run, *args: Any) -> tuple[Any, list[str], list[Any]]:
+    """``run(*args)`` with the viscoforce warnings recorded, not shown: (result, texts, caught).
+
+    ``texts`` are the viscoforce warnings' messages (each once), ``caught`` every warning, to be
+    shown later (:func:`show`): a single fit's chooser keeps back those of the fits it drops.
+    """
     import warnings
 
     from viscoforce.exceptions import (
@@ -226,12 +230,24 @@ def _fit_recording(run, *args: Any, **kwargs: Any):
     kinds = (ModelValidityWarning, AccuracyWarning, GoodnessOfFitWarning, DataWarning)
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
-        result = run(*args, **kwargs)
-    texts = []
+        result = run(*args)
+    texts: list[str] = []
     for w in caught:
-        if issubclass(w.category, kinds):
-            text = str(w.message)
-            if text not in texts:
-                texts.append(text)
+        if issubclass(w.category, kinds) and str(w.message) not in texts:
+            texts.append(str(w.message))
+    return result, texts, list(caught)
+
+
+def show(caught: list[Any]) -> None:
+    """Show the warnings :func:`recorded` kept back."""
+    import warnings
+
+    for w in caught:
         warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
+
+
+def _fit_recording(run, *args: Any):
+    """``run(*args)`` with the viscoforce warnings recorded, then shown; (result, texts)."""
+    result, texts, caught = recorded(run, *args)
+    show(caught)
     return result, texts

@@ -26,8 +26,6 @@ from viscoforce.cli._fit_budget import (
     budgeted,
     height_channel,
     map_alternatives,
-    recorded,
-    show,
     with_map_budget,
 )
 from viscoforce.cli._fit_inputs import (  # noqa: F401 - read_data, one_curve_squeezed: public here
@@ -50,6 +48,8 @@ from viscoforce.cli._fit_report import (
     _print_map,
     _print_single,
     _single_json,
+    recorded,
+    show,
     show_value,
 )
 from viscoforce.cli._fit_tables import _write_csv, table_rows, write_table  # noqa: F401

@@ -52,8 +52,7 @@ def narrowed_window(data: xr.Dataset, result: xr.Dataset, kind: str
         The narrower data and a sentence; None where it would leave fewer than twice as many
         points as the fit has free parameters (or the window is not found).
     """
-    n_free = int(result.attrs.get("nvarys", 0)) or len(result["param_i"]) if (
-        "param_i" in result) else 4
+    n_free = len(result["param_i"]) if "param_i" in result else 4  # the fit's parameters
     if kind == "spectrum" and "omega" in data.dims:
         omega = np.asarray(data["omega"].values, dtype=float)
         ok = omega > 0
