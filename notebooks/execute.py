@@ -60,13 +60,20 @@ def normalised_outputs(notebook) -> list[list[str]]:
     for cell in notebook["cells"]:
         if cell["cell_type"] != "code":
             continue
-        texts = []
+        # A kernel splits one stream into several outputs as its flushes fall (load-dependent):
+        # consecutive outputs of one stream are joined before they are compared.
+        parts: list[tuple[str | None, str]] = []
         for output in cell["outputs"]:
             if output["output_type"] == "stream":
-                texts.append(f"{output['name']}: {normalise(_text(output['text']))}")
+                name, text = output["name"], _text(output["text"])
+                if parts and parts[-1][0] == name:
+                    parts[-1] = (name, parts[-1][1] + text)
+                else:
+                    parts.append((name, text))
             elif "text/plain" in output.get("data", {}):
-                texts.append(normalise(_text(output["data"]["text/plain"])))
-        cells.append(texts)
+                parts.append((None, _text(output["data"]["text/plain"])))
+        cells.append([normalise(text) if name is None else f"{name}: {normalise(text)}"
+                      for name, text in parts])
     return cells
 
 

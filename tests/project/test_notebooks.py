@@ -103,6 +103,23 @@ def test_the_comparison_normalises_only_noise():
     assert ex.normalise("alpha 0.122") != ex.normalise("alpha 0.137")
 
 
+def test_a_stream_split_by_the_kernel_compares_as_one():
+    """How a kernel splits one stream into outputs depends on load; the order of streams does not."""
+    ex = _execute_module()
+
+    def notebook(*outputs):
+        return {"cells": [{"cell_type": "code", "outputs": list(outputs)}]}
+
+    def out(name, text):
+        return {"output_type": "stream", "name": name, "text": text}
+
+    joined = notebook(out("stdout", "a 1.0\nb 2.0\n"))
+    split = notebook(out("stdout", "a 1.0\n"), out("stdout", ["b 2.0\n"]))
+    assert ex.normalised_outputs(split) == ex.normalised_outputs(joined)
+    interleaved = notebook(out("stdout", "a 1.0\n"), out("stderr", "w\n"), out("stdout", "b 2.0\n"))
+    assert ex.normalised_outputs(interleaved) != ex.normalised_outputs(joined)
+
+
 @pytest.mark.parametrize("name", NOTEBOOKS)
 def test_every_tagged_cell_has_a_quick_reference(name):
     ex = _execute_module()
