@@ -190,6 +190,10 @@ FORCE_LAW_FLAGS = FlagGroup("surface force", (
          "Lennard-Jones; --z0 is then its equilibrium separation)"),
     Flag("--hamaker", _hamaker_type, None, "ENERGY",
          "Hamaker constant A of the Lennard-Jones law, in J (1e-20J or 1e-20)"),
+    Flag("--branch", str, "approach", "HISTORY",
+         "with an attractive law, which equilibrium at h0 (static --h0, spectrum): approach "
+         "(from far apart: the far branch above the jump-in) or retract (from deep contact: the "
+         "contact branch below the jump-out)"),
 ))
 
 
@@ -225,19 +229,48 @@ def _check_force_law(args: argparse.Namespace) -> None:
     if args.force_law not in ("double-layer", "lennard-jones", "both"):
         raise UsageError(f"--force-law must be double-layer, lennard-jones or both, got "
                          f"{args.force_law!r}")
+    if args.branch not in ("approach", "retract"):
+        raise UsageError(f"--branch must be approach or retract, got {args.branch!r}")
+    if args.branch != "approach" and args.force_law == "double-layer":
+        raise UsageError("--branch applies to an attractive law (--force-law lennard-jones or "
+                         "both): the double layer has one equilibrium at every h0")
+
+
+def _equilibrium(args: argparse.Namespace, problem) -> tuple:
+    """The static equilibrium at --h0: Newton's, or (attractive law) the --branch history's."""
+    from viscoforce.solvers.continuation import lennard_jones_term
+
+    if lennard_jones_term(problem.surface_force) is None:
+        from viscoforce.solvers.static import static_equilibrium
+
+        return static_equilibrium(problem, args.h0, contact_threshold=args.contact_threshold), {}
+    from viscoforce.solvers.adhesive_static import adhesive_equilibrium
+
+    ds = adhesive_equilibrium(problem, args.h0, branch=args.branch,
+                              contact_threshold=args.contact_threshold)
+    return ds, _branch_result(ds.attrs)
+
+
+def _branch_result(attrs) -> dict:
+    """The --json keys of a static state chosen by --branch (attrs of BranchEquilibrium)."""
+    extra = {"branch": attrs["branch"], "on_branch": attrs["on_branch"],
+             "force_includes_tail": True, "pull_off": attrs.get("pull_off")}
+    for name in ("jump_in", "jump_out"):
+        value = attrs.get(f"{name}_position")
+        extra[name] = None if value is None else {
+            "position": float(value), "time": None, "force": float(attrs[f"{name}_force"])}
+    return extra
 
 
 def run_static(args: argparse.Namespace) -> int:
     """Static elastic equilibrium at ``--h0``; prints the loads, deformation, contact radius."""
-    from viscoforce.solvers.static import static_equilibrium
-
     _check_force_law(args)
     if (args.h0 is None) == (args.h0_range is None):
         raise UsageError("give either --h0 H or --h0-range START:STOP")
     if args.h0_range is not None:
         return _run_static_path(args)
-    problem = problem_from_args(args, Elastic(args.E), args.h0)
-    ds = static_equilibrium(problem, args.h0, contact_threshold=args.contact_threshold)
+    problem = problem_from_args(args, Elastic(args.E), args.h0, adhesive_grid=True)
+    ds, extra = _equilibrium(args, problem)
     if args.out:
         write_netcdf(ds, args.out, engine="scipy")
     result = {
@@ -249,7 +282,7 @@ def run_static(args: argparse.Namespace) -> int:
         "contact_radius": float(ds.contact_radius),
         "newton_iterations": int(ds.attrs["newton_iterations"]),
         "grid_nodes": int(problem.grid.size),
-    }
+    } | extra
     if args.json:
         print_json(result)
         return 0
@@ -262,6 +295,9 @@ def run_static(args: argparse.Namespace) -> int:
         ("contact radius", result["contact_radius"], "length"),
     ])
     print(f"({result['newton_iterations']} Newton iterations on {result['grid_nodes']} nodes)")
+    if extra:
+        print(f"attractive law: the {args.branch} history's equilibrium, on the "
+              f"{extra['on_branch']} branch (load with the rigid tail beyond the grid)")
     print_written(args.out)
     return 0
 
@@ -376,6 +412,9 @@ def run_simulate(args: argparse.Namespace) -> int:
     drive = drive_from_args(args)
     material = material_from_args(args)
     _check_force_law(args)
+    if args.branch != "approach":
+        raise UsageError("--branch applies to static --h0 and spectrum: simulate's drive is the "
+                         "history that chooses the branch")
     problem = problem_from_args(args, material, float(drive.extent()[0]), adhesive_grid=True)
     t_end = default_end_time(problem, drive) if args.t_end is None else args.t_end
     t_eval = np.linspace(0.0, t_end, args.samples)
@@ -484,6 +523,7 @@ def add_spectrum(parser: argparse.ArgumentParser) -> None:
         Output("--plot", FIGURE, "FILE.png", "write a Bode plot"),
     ])
     _add_run_flags(parser, TIME_DOMAIN_FLAGS)
+    add_flags(parser, FORCE_LAW_FLAGS)
 
 
 def _omega(args: argparse.Namespace):
@@ -511,8 +551,11 @@ def run_spectrum(args: argparse.Namespace) -> int:
     """Force spectrum by the chosen method (``auto``: the library's choice, with its reason)."""
     from viscoforce.experiments.spectroscopy import spectrum
 
+    _check_force_law(args)
     omega = _omega(args)
-    problem = problem_from_args(args, material_from_args(args), args.h0 - args.eta)
+    problem = problem_from_args(args, material_from_args(args), args.h0 - args.eta,
+                                adhesive_grid=True)
+    adhesive = args.force_law != "double-layer"
     if args.accuracy is not None and args.method != "auto":
         raise UsageError("--accuracy needs --method auto")
     options: dict = {}
@@ -524,6 +567,8 @@ def run_spectrum(args: argparse.Namespace) -> int:
         options["periods"] = args.periods
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", ModelValidityWarning)
+        if adhesive:  # the one route: the linear response about the --branch state
+            options = {"branch": args.branch}
         ds = spectrum(problem, args.h0, args.eta, omega, method=args.method,
                       accuracy=args.accuracy, **options)
     notes = [str(w.message) for w in caught if issubclass(w.category, ModelValidityWarning)]
@@ -540,6 +585,8 @@ def run_spectrum(args: argparse.Namespace) -> int:
     result = {"omega": ds.omega.values.tolist(), "amplitude": ds.amplitude.values.tolist(),
               "stiffness": ds.stiffness.values.tolist(), "phase_deg": ds.phase.values.tolist(),
               "mean_force": ds.mean_force.values.tolist(), "method": str(ds.attrs["method"])}
+    if adhesive:
+        result |= _branch_result(ds.attrs)
     if ds.attrs.get("explanation"):
         result["explanation"] = str(ds.attrs["explanation"])
         result["estimated_error"] = float(ds.attrs["estimated_error"])

@@ -361,7 +361,7 @@ _WITH_OPTIONS = ("time-domain", "svda-ode")
 
 
 def spectrum(problem: ContactProblem, position: float, eta: float, omega: ArrayLike, *,
-             method: str = "auto", accuracy: float | None = None,
+             method: str = "auto", accuracy: float | None = None, branch: str | None = None,
              **options: object) -> xr.Dataset:
     """Force spectrum by any route; ``method="auto"`` picks the cheapest adequate one.
 
@@ -382,6 +382,12 @@ def spectrum(problem: ContactProblem, position: float, eta: float, omega: ArrayL
     accuracy : float, optional
         Required relative error of ``"auto"`` (default 1e-3); with ``"time-domain"``, the one
         :func:`sweep` chooses its periods for; not with the other routes.
+    branch : {"approach", "retract"}, optional
+        With an attractive (Lennard-Jones) law only: the quasi-static history that chooses the
+        static state at ``position`` (default "approach"); the spectrum is then the exact
+        small-amplitude response about it
+        (:func:`~viscoforce.experiments.adhesive_spectrum.adhesive_linear_response`), the one
+        route for such a law ("linear", or "auto" choosing it).
     **options
         Passed to the time-domain routes (:func:`sweep`: ``periods``, ``n_jobs``,
         ``progress``, ...; :func:`svda_sweep`); ``"auto"`` passes on those its route takes.
@@ -411,6 +417,12 @@ def spectrum(problem: ContactProblem, position: float, eta: float, omega: ArrayL
     if not isinstance(method, str) or (method != "auto" and method not in SPECTRUM_METHODS):
         raise ParameterError(
             f"method must be 'auto' or one of {sorted(SPECTRUM_METHODS)}, got {method!r}")
+    if _adhesive(problem):
+        return _adhesive_spectrum(problem, position, eta, omega, method, accuracy, branch,
+                                  options)
+    if branch is not None:
+        raise ParameterError("branch applies to an attractive (Lennard-Jones) law only: a "
+                             f"repulsive law has one equilibrium at every h0, got {branch!r}")
     if accuracy is not None and method not in ("auto", "time-domain"):
         raise ParameterError(f"accuracy applies to method 'auto' only (and 'time-domain', whose "
                              f"periods it chooses), not {method!r}")
@@ -443,4 +455,38 @@ def spectrum(problem: ContactProblem, position: float, eta: float, omega: ArrayL
         ds.attrs["estimated_error"] = choice.estimated_error + float(
             ds["lockin_error"].max()) if "lockin_error" in ds else choice.estimated_error
         ds.attrs["accuracy"] = choice.accuracy
+    return ds
+
+
+def _adhesive(problem: ContactProblem) -> bool:
+    from viscoforce.solvers.continuation import lennard_jones_term
+
+    return isinstance(problem, ContactProblem) and lennard_jones_term(
+        problem.surface_force) is not None
+
+
+def _adhesive_spectrum(problem: ContactProblem, position: float, eta: float, omega: ArrayLike,
+                       method: str, accuracy: float | None, branch: str | None,
+                       options: dict) -> xr.Dataset:
+    """:func:`spectrum` of an attractive law: the linear response about the ``branch`` state."""
+    from viscoforce.experiments.adhesive_spectrum import adhesive_linear_response
+
+    if method not in ("auto", "linear"):
+        raise ParameterError(
+            f"method {method!r} is not available with an attractive (Lennard-Jones) law: its "
+            "spectrum is the exact small-amplitude response about a static branch (method "
+            "'linear' or 'auto'); for a finite amplitude simulate the sinusoidal drive "
+            "(viscoforce.simulate) and demodulate it")
+    if options:
+        raise TypeError(f"method {method!r} takes no options, got {sorted(options)}")
+    if accuracy is not None and method != "auto":
+        raise ParameterError(f"accuracy applies to method 'auto' only, not {method!r}")
+    ds = adhesive_linear_response(problem, position, eta, omega,
+                                  branch="approach" if branch is None else branch)
+    if method == "auto":
+        ds.attrs["explanation"] = (
+            f"attractive law: the exact small-amplitude response about the "
+            f"{ds.attrs['branch']} history's static state ({ds.attrs['on_branch']} branch), the "
+            "one route for an adhesive contact")
+        ds.attrs["estimated_error"] = 0.0
     return ds

@@ -42,6 +42,7 @@ from viscoforce._validation import (
     require_finite,
     require_increasing,
     require_instance,
+    require_int,
     require_positive,
 )
 from viscoforce.exceptions import ConvergenceError, GapClosureError, ParameterError
@@ -293,7 +294,7 @@ def relaxed_adhesive_state(stepper: TimeStepper, position: float) -> State:
 def simulate_adhesive(problem: ContactProblem, drive: SeparationHistory, *, t_end: float,
                       t_eval: FloatArray, tol: float | None = None, max_step: float | None = None,
                       contact_threshold: float | None = None,
-                      method: str = DEFAULT_METHOD) -> xr.Dataset:
+                      method: str = DEFAULT_METHOD, profiles: int = 0) -> xr.Dataset:
     """The viscoelastic adhesive trajectory along ``drive`` with its jumps, pull-off and hysteresis.
 
     Parameters
@@ -316,6 +317,10 @@ def simulate_adhesive(problem: ContactProblem, drive: SeparationHistory, *, t_en
         Gap [m] defining contact; default the law's decay length.
     method : str
         An adaptive stepper of :data:`~viscoforce.solvers.steppers.METHODS`.
+    profiles : int
+        Store the profiles gap, deformation and pressure on the grid every ``profiles``-th
+        output time (0: none), as :func:`~viscoforce.solvers.simulate.simulate` does: the
+        surface shapes through the jumps (Fig. 7's kind).
 
     Returns
     -------
@@ -337,6 +342,7 @@ def simulate_adhesive(problem: ContactProblem, drive: SeparationHistory, *, t_en
         raise ParameterError(f"method must be an adaptive stepper "
                              f"{sorted(k for k, v in METHODS.items() if v.adaptive)}, got {method!r}")
     t_end = require_positive("t_end", t_end)
+    profiles = require_int("profiles", profiles, 0)
     check_adhesive_grid(problem, float(drive.extent()[0]))
     law = problem.surface_force
     ell = law.decay_length
@@ -369,6 +375,13 @@ def simulate_adhesive(problem: ContactProblem, drive: SeparationHistory, *, t_en
     radius = np.array([contact_radius(problem.grid, s.gap, hc, threshold)
                        for s, hc in zip(states, h_center, strict=True)])
     force = np.array([load_with_tail(problem, s.gap) for s in states])
+    profile = {}
+    if profiles:
+        pick = np.arange(0, len(states), profiles)
+        profile = {"profile_time": times[pick], "r": problem.grid.r,
+                   "gap": np.array([states[i].gap for i in pick]),
+                   "deformation": np.array([states[i].deformation[:-1] for i in pick]),
+                   "pressure": np.array([states[i].pressure for i in pick])}
     attrs = dict(problem.parameters())
     attrs.update({"stepper": stepper.name, "tol": tol, "t_end": t_end, "max_step": max_step,
                   "dt": 0.0, "contact_threshold": threshold, "steps": counters.steps,
@@ -379,7 +392,7 @@ def simulate_adhesive(problem: ContactProblem, drive: SeparationHistory, *, t_en
     attrs.update(summary_attrs(summary))
     return make_trajectory(times, position=position, force=force, u_center=u_center,
                            h_center=h_center, contact_radius=radius, contact_threshold=threshold,
-                           attrs=attrs)
+                           attrs=attrs, **profile)
 
 
 def simulate_adhesive_route(problem: ContactProblem, drive: SeparationHistory, *, t_end, t_eval,
@@ -391,8 +404,6 @@ def simulate_adhesive_route(problem: ContactProblem, drive: SeparationHistory, *
     """
     refused = [name for name, value in (("dt", dt), ("initial_state", initial_state),
                                          ("accuracy", accuracy)) if value is not None]
-    if profiles:
-        refused.append("profiles")
     if refused:
         raise ParameterError(
             f"{', '.join(refused)} not supported with an adhesive (Lennard-Jones) law: its march "
@@ -414,7 +425,7 @@ def simulate_adhesive_route(problem: ContactProblem, drive: SeparationHistory, *
         t_eval = np.union1d(t_eval, kinks[(kinks >= 0) & (kinks <= t_end)])
     return simulate_adhesive(problem, drive, t_end=t_end, t_eval=t_eval, tol=tol,
                              max_step=max_step, contact_threshold=contact_threshold,
-                             method=stepper)
+                             method=stepper, profiles=profiles)
 
 
 @dataclass(frozen=True)

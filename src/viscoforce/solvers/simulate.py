@@ -121,8 +121,8 @@ def simulate(problem: ContactProblem, drive: SeparationHistory, *, t_end: float 
 
     An attractive (Lennard-Jones) law goes to
     :func:`~viscoforce.solvers.adhesive_dynamics.simulate_adhesive` (adaptive steps through the
-    jumps; attrs add the jumps, pull-off and hysteresis energy; ``dt``, ``profiles``,
-    ``initial_state`` refused there).
+    jumps; attrs add the jumps, pull-off and hysteresis energy; ``dt``, ``initial_state`` and
+    ``accuracy`` refused there).
 
     Raises
     ------
