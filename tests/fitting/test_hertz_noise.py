@@ -67,12 +67,18 @@ def _code(ds, name):
 #: E on both sides, 1.4 Pa .. 30 kPa, 4.3 decades, and called it determined). The sphere's on the
 #: approach of tests/fitting/test_force_curves.py (tilted baseline, 7 pN). Cone seeds 10, 11, 12, 18 and
 #: sphere seed 2 have no contact point with E > 0 at all (before the fix the guess raised).
+#: The sphere's exact profile makes each of its fits ~0.7 s (its Hertz shape solves s tanh s at
+#: every evaluation): CI runs its seeds 0-2 (seed 2 included) with all ten cone seeds (seed 19
+#: included); its seeds 3-9 are the slow study (``-m slow``), the same assertions.
 NOISE_CASES = [("cone:20", 3e-11, range(10, 20), "flat"),
                ("sphere:5um", 7.2e-12, range(10), "tilted")]
+SLOW_NOISE_SEEDS = {"sphere:5um": range(3, 10)}
 
 
-@pytest.mark.parametrize(("tip", "noise", "seed", "kind"),
-                         [(t, s, seed, k) for t, s, seeds, k in NOISE_CASES for seed in seeds])
+@pytest.mark.parametrize(("tip", "noise", "seed", "kind"), [
+    pytest.param(t, s, seed, k,
+                 marks=[pytest.mark.slow] if seed in SLOW_NOISE_SEEDS.get(t, ()) else [])
+    for t, s, seeds, k in NOISE_CASES for seed in seeds])
 def test_noise_only_approach_is_not_determined_and_says_so(tip, noise, seed, kind):
     rng = np.random.default_rng(seed)
     if kind == "flat":

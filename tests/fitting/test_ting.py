@@ -303,8 +303,11 @@ def _exact_triangle(law, top, turn, speed):
     problem = vf.ContactProblem.create(sphere=vf.PAPER.sphere(), surface_force=law,
                                        material=material, deepest_position=turn)
     drive = vf.Triangle(top, turn, speed)
+    # 401 outputs (the adaptive steps land on them: 887 steps on the deep ramp, 1127 at 801
+    # outputs, for the same errors to 3 % of themselves: 0.147 % and 1.410 % against 0.150 % and
+    # 1.411 % of the peak, contact point −0.644 nm either way)
     run = vf.simulate(problem, drive, t_end=drive.duration,
-                      t_eval=np.linspace(0.0, drive.duration, 801), progress=False,
+                      t_eval=np.linspace(0.0, drive.duration, 401), progress=False,
                       output_kinks=False)
     t, h0, force = run.time.values, run.position.values, run.force.values
     kernel = PronyRelaxation.from_material(material)
