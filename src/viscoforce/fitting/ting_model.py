@@ -56,6 +56,7 @@ hysteresis is what measures the dissipation).
 
 from __future__ import annotations
 
+import functools
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass
@@ -257,8 +258,20 @@ def ting_kernel(material: str, values: Mapping[str, float], modes: int = 1, *,
     else:
         e = np.array([values[n] for n in moduli_names(modes)])
         taus = np.array([values[n] for n in tau_names(modes, single="")])
-    e_inf, moduli, times = relaxation_from_creep(1.0 / e[0], 1.0 / e[1:] - 1.0 / e[:-1], taus)
-    return PronyRelaxation(e_inf, tuple(moduli), tuple(times))
+    return _prony_relaxation(tuple(float(v) for v in e), tuple(float(v) for v in taus))
+
+
+@functools.lru_cache(maxsize=16)
+def _prony_relaxation(moduli: tuple[float, ...], taus: tuple[float, ...]) -> PronyRelaxation:
+    """The relaxation series of creep moduli (E0, E1, ..., E_inf) and creep times ``taus``.
+
+    Kept (16 entries): a fit's finite-difference columns in the contact point and baseline, and
+    the refits that hold the material, ask for the same series again.
+    """
+    e = np.array(moduli)
+    e_inf, rel, times = relaxation_from_creep(1.0 / e[0], 1.0 / e[1:] - 1.0 / e[:-1],
+                                              np.array(taus))
+    return PronyRelaxation(e_inf, tuple(rel), tuple(times))
 
 
 def _trace(value: Any) -> tuple[np.ndarray, np.ndarray]:
