@@ -30,13 +30,15 @@ from viscoforce.io.jpk import read_jpk
 from viscoforce.io.stream import CURVE_DIMS, iter_curves, write_curves_netcdf
 
 MAP = example_path("real/modulation-map.jpk-force-map")  # 16 curves, 14.7 MB of raw netCDF
-#: Curves per chunk in the children that need several chunks (the map is one chunk otherwise).
-CHUNK = 4
+#: Curves per chunk where several chunks are needed (the map is one chunk otherwise): one curve,
+#: 0.9 MB of raw netCDF, so that a child caught after its first chunk has read one or two curves
+#: (at 4 it read 4 to 12 of them, the same steps on more data).
+CHUNK = 1
 #: Guard against a hung child [s]; a healthy one exits in a few seconds.
 HANG_GUARD = 300
 PREVIOUS = b"the previous output, which must survive"
 
-#: ``viscoforce`` with at most CHUNK curves per chunk, so that the map is written in 4 chunks.
+#: ``viscoforce`` with at most CHUNK curves per chunk, so that the map is written in 16 chunks.
 CHUNKED = """
 import sys
 import viscoforce.io.stream as stream
@@ -94,12 +96,12 @@ def _limited(limit):
 
 @pytest.fixture(scope="module")
 def sizes(tmp_path_factory):
-    """Bytes of the raw netCDF of the first chunk alone, and of the whole map."""
+    """Bytes of the raw netCDF of the first chunk alone, and of the first two chunks."""
     folder = tmp_path_factory.mktemp("sizes")
     with read_jpk(MAP) as archive:
         write_curves_netcdf(archive, folder / "first.nc", curves=range(CHUNK))
-        write_curves_netcdf(archive, folder / "whole.nc", chunk=CHUNK)
-    return (folder / "first.nc").stat().st_size, (folder / "whole.nc").stat().st_size
+        write_curves_netcdf(archive, folder / "two.nc", curves=range(2 * CHUNK), chunk=CHUNK)
+    return (folder / "first.nc").stat().st_size, (folder / "two.nc").stat().st_size
 
 
 def _check_refused(run, folder):
@@ -127,8 +129,8 @@ def test_size_limit_within_the_first_chunk_is_a_clean_error(tmp_path, sizes):
 
 
 def test_size_limit_after_the_first_chunk_is_a_clean_error(tmp_path, sizes):
-    first, whole = sizes
-    limit = first + (whole - first) // 2  # the first chunk fits, the map does not
+    first, two = sizes
+    limit = first + (two - first) // 2  # the first chunk fits, the second does not
     (tmp_path / "good.nc").write_bytes(PREVIOUS)
     run = subprocess.run([sys.executable, "-c", CHUNKED, str(CHUNK), "load", str(MAP), "--raw",
                           "--out", "good.nc"], cwd=tmp_path, capture_output=True, text=True,
@@ -137,9 +139,10 @@ def test_size_limit_after_the_first_chunk_is_a_clean_error(tmp_path, sizes):
 
 
 def test_disk_full_mid_stream_is_an_oserror_naming_the_file(tmp_path, monkeypatch):
-    """ENOSPC after 1 MB, in this process: an OSError naming the target, nothing left (no part
-    file, no HDF5 object open), and the next write works (HDF5 saw no failed write; pytest turns
-    an error printed and ignored in a destructor into a failure)."""
+    """ENOSPC after 1 MB (in the second chunk), in this process: an OSError naming the target,
+    nothing left (no part file, no HDF5 object open), and the next write works (HDF5 saw no
+    failed write; pytest turns an error printed and ignored in a destructor into a failure).
+    Four curves are written: the four chunks after the first are the same steps."""
     target = tmp_path / "curves.nc"
     target.write_bytes(PREVIOUS)
     open_before = _open_hdf5()
@@ -155,16 +158,17 @@ def test_disk_full_mid_stream_is_an_oserror_naming_the_file(tmp_path, monkeypatc
     with read_jpk(MAP) as archive:
         monkeypatch.setattr(os, "pwrite", full_disk)
         with pytest.raises(OSError, match="No space left on device") as caught:
-            write_netcdf_stream(iter_curves(archive, chunk=CHUNK), target, append_dims=CURVE_DIMS)
+            write_netcdf_stream(iter_curves(archive, curves=range(4), chunk=CHUNK), target,
+                                append_dims=CURVE_DIMS)
         monkeypatch.undo()
         assert caught.value.errno == errno.ENOSPC and caught.value.filename == str(target)
         assert _names(tmp_path) == ["curves.nc"] and target.read_bytes() == PREVIOUS
         assert _open_hdf5() == open_before
-        summary = write_netcdf_stream(iter_curves(archive, chunk=CHUNK), target,
-                                      append_dims=CURVE_DIMS)
+        summary = write_netcdf_stream(iter_curves(archive, curves=range(4), chunk=CHUNK),
+                                      target, append_dims=CURVE_DIMS)
     assert summary["chunks"] == 4 and _names(tmp_path) == ["curves.nc"]
     with xr.open_dataset(target, engine="h5netcdf") as ds:
-        assert ds.sizes["curve"] == 16 and np.isfinite(ds["force"].values).all()
+        assert ds.sizes["curve"] == 4 and np.isfinite(ds["force"].values).all()
 
 
 # ── SIGTERM ──────────────────────────────────────────────────────────────────────────────────────

@@ -11,7 +11,7 @@ import pytest
 import xarray as xr
 
 from tests.conftest import REAL_DATA_DIR
-from tests.measured.test_open import _as_written, _opened
+from tests.measured.test_open import _as_written, _opened, open_data_and_made
 from viscoforce.cli import main
 from viscoforce.exceptions import ViscoforceError
 
@@ -31,7 +31,7 @@ def _real_files():
 def test_real_files_give_what_load_writes(tmp_path, capsys, path):
     if path is None:
         pytest.skip("real data folder absent (../shared/data/real)")
-    from viscoforce.measured import open_data, read_measured
+    from viscoforce.measured import open_data
 
     out = tmp_path / "cli.nc"
     code = main(["load", str(path), "--out", str(out), "--json"])
@@ -41,6 +41,6 @@ def test_real_files_give_what_load_writes(tmp_path, capsys, path):
         with pytest.raises(ViscoforceError):
             open_data(path)
         return
-    ds = open_data(path)
+    ds, made = open_data_and_made(path)
     xr.testing.assert_identical(_opened(out), _as_written(ds, tmp_path))
-    assert read_measured(path).summary() == json.loads(captured.out)
+    assert made.summary() == json.loads(captured.out)

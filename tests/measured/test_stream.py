@@ -253,21 +253,21 @@ def _peak(fn):
         tracemalloc.stop()
 
 
-def test_memory_is_bounded_by_a_chunk(tmp_path):
-    path = _write_map(tmp_path / "map-4x4.jpk-force-map", 4)  # 16 curves x 20 424 samples
-    with read_jpk(path) as archive:
+def test_memory_is_bounded_by_a_chunk(small_map, tmp_path):
+    """The 3 × 3 synthetic map (9 curves × 20 424 samples) in chunks of one curve."""
+    with read_jpk(small_map) as archive:
         # one-off allocations (first imports, caches) first, so they count in no peak below
         # (without this the test failed when run alone: raw/raw_chunk ≈ 9)
-        write_curves_netcdf(archive, tmp_path / "warm.nc", curves=range(2), chunk=2)
-        modulation_spectrum(archive, curves=range(2))
-        one_chunk = _peak(lambda: modulation_spectrum(archive, curves=range(2)))
-        streamed = _peak(lambda: stream_spectrum(archive, chunk=2))
+        write_curves_netcdf(archive, tmp_path / "warm.nc", curves=range(1), chunk=1)
+        modulation_spectrum(archive, curves=range(1))
+        one_chunk = _peak(lambda: modulation_spectrum(archive, curves=range(1)))
+        streamed = _peak(lambda: stream_spectrum(archive, chunk=1))
         whole = _peak(lambda: modulation_spectrum(archive))
-        raw_chunk = _peak(lambda: jpk_to_curves(archive, curves=range(2)))
-        raw = _peak(lambda: write_curves_netcdf(archive, tmp_path / "raw.nc", chunk=2))
-    # 8 chunks: the streamed peak stays near one chunk's, the whole read grows with the map
-    # (measured: streamed/one 0.99, whole/streamed 7.0, raw/raw_chunk 1.5; 6x6 in chunks of 4,
-    # at twice the cost: 1.01, 8.5, 1.5)
+        raw_chunk = _peak(lambda: jpk_to_curves(archive, curves=range(1)))
+        raw = _peak(lambda: write_curves_netcdf(archive, tmp_path / "raw.nc", chunk=1))
+    # 9 chunks: the streamed peak stays near one chunk's, the whole read grows with the map
+    # (measured: streamed/one 1.07, whole/streamed 6.0, raw/raw_chunk 1.55; the 4 × 4 map in
+    # chunks of 2, which this test read before at 1.7 times the cost: 0.99–1.05, 5.2–7.0, 1.5)
     assert streamed < 1.5 * one_chunk
     assert whole > 3 * streamed
     assert raw < 2.5 * raw_chunk

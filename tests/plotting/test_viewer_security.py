@@ -24,9 +24,7 @@ import hashlib
 import http.client
 import json
 import re
-import signal
-import subprocess
-import sys
+import threading
 
 import numpy as np
 import pytest
@@ -51,6 +49,8 @@ PARAM = "<svg onload=window.__pwned='param'>"
 UNITS = "<img src=x onerror=window.__pwned='units'>"
 #: The model attribute (the page's title).
 MODEL = "</title><script>window.__pwned='model'</script><b>"
+#: Seconds the in-process server may take to start or stop: a guard against a hang only.
+HANG_GUARD = 300
 CRAFTED = (QUALITY_GOOD, QUALITY_BAD, QUALITY_COMMENT, DIM_Y, DIM_X, PARAM, UNITS, MODEL)
 
 
@@ -281,18 +281,35 @@ def _get(port: int, host: str | None) -> tuple[int, dict[str, str], str]:
         connection.close()
 
 
-def test_serve_answers_only_its_own_host_and_sends_the_policy(crafted_report):
-    """DNS rebinding: a page of another site reaching 127.0.0.1 under its own host name."""
-    folder = crafted_report.parent
-    proc = subprocess.Popen(
-        [sys.executable, "-m", "viscoforce", "view", str(folder / "fits.nc"), "--data",
-         str(folder / "spectra.nc"), "--serve"],
-        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+def test_serve_answers_only_its_own_host_and_sends_the_policy(crafted_report, monkeypatch,
+                                                             capsys):
+    """DNS rebinding: a page of another site reaching 127.0.0.1 under its own host name.
+
+    The server of ``view --serve`` (``serve_html``) runs in a thread of this process on the page
+    ``view --out`` wrote from the same files (``run_view`` makes one page for both); the command
+    in a child process and its Ctrl-C are tests/plotting/test_viewer.py's.
+    """
+    import http.server
+
+    from viscoforce.cli.view import serve_html
+
+    started = threading.Event()
+    servers = []
+
+    class Recorded(http.server.ThreadingHTTPServer):
+        def __init__(self, *args, **kwargs):
+            super().__init__(*args, **kwargs)  # bound and listening
+            servers.append(self)
+            started.set()
+
+    monkeypatch.setattr(http.server, "ThreadingHTTPServer", Recorded)
+    returned = []
+    thread = threading.Thread(target=lambda: returned.append(
+        serve_html(crafted_report.read_text(encoding="utf-8"))), daemon=True)
+    thread.start()
     try:
-        line = proc.stdout.readline()
-        match = re.search(r"http://127\.0\.0\.1:(\d+)/", line)
-        assert match, f"no URL in {line!r}; stderr: {proc.stderr.read() if proc.poll() else ''}"
-        port = int(match.group(1))
+        assert started.wait(HANG_GUARD), "the server did not start"
+        port = servers[0].server_address[1]
         for host in (f"evil.example:{port}", "evil.example", f"127.0.0.1.evil.example:{port}",
                      f"127.0.0.1:{port + 1}", None):
             status, headers, body = _get(port, host)
@@ -308,10 +325,10 @@ def test_serve_answers_only_its_own_host_and_sends_the_policy(crafted_report):
             meta = re.search(r'<meta http-equiv="Content-Security-Policy" content="([^"]*)">',
                              body).group(1)
             assert headers["Content-Security-Policy"] == f"{meta}; frame-ancestors 'none'"
-        proc.send_signal(signal.SIGINT)
-        _, err = proc.communicate()
     finally:
-        if proc.poll() is None:
-            proc.kill()
-            proc.communicate()
-    assert proc.returncode == 0, err
+        if servers:
+            servers[0].shutdown()  # serve_forever returns; serve_html closes the socket
+        thread.join(HANG_GUARD)
+    assert returned == [0] and servers[0].socket.fileno() == -1
+    url = f"http://127.0.0.1:{port}/"
+    assert capsys.readouterr().out == f"serving the viewer at {url} (Ctrl-C stops)\n"

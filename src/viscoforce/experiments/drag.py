@@ -57,7 +57,6 @@ from typing import Any
 import numpy as np
 import xarray as xr
 from numpy.typing import ArrayLike, NDArray
-from scipy import stats
 from scipy.optimize import least_squares
 
 from viscoforce._validation import as_float_1d, require_positive
@@ -161,8 +160,11 @@ class DragFit:
         if not (isinstance(level, int | float) and 0.0 < level < 1.0):
             raise ParameterError(f"level must be a probability in (0, 1), got {level!r}")
         p = 0.5 * (1.0 + float(level))
-        law = stats.t(self.dof) if self.distribution == "student-t" else stats.norm
-        return float(law.ppf(p))
+        from scipy import stats  # ~1 s to import: `viscoforce load` never needs it
+
+        if self.distribution == "student-t":
+            return float(stats.t.ppf(p, self.dof))  # not a frozen law: 0.05 against 0.8 ms
+        return float(stats.norm.ppf(p))
 
     def interval(self, level: float = 0.6826894921370859) -> tuple[float, float]:
         """Interval of b(0) [N·s/m] covering ``level``: ln b(0) ± q·stderr/b(0).
