@@ -223,6 +223,30 @@ def write_text(path: str | os.PathLike[str], text: str) -> None:
 
 # ── netCDF ───────────────────────────────────────────────────────────────────────────────────────
 
+@contextlib.contextmanager
+def dask_unasked() -> Iterator[None]:
+    """Keep xarray's ``to_netcdf`` from importing dask.distributed to ask for a scheduler.
+
+    xarray looks up the dask scheduler on every write (for its lock) and imports
+    dask.distributed to see whether it is a ``Client``: ~0.2-0.6 s for a command that never
+    uses it. Where ``distributed`` is not imported yet no Client exists, so the answer is known:
+    inside the block ``import distributed`` raises ImportError (``sys.modules["distributed"] =
+    None``), which xarray takes as "not distributed". Where it is imported (a map on a
+    cluster), nothing changes.
+    """
+    import sys
+
+    if "distributed" in sys.modules:
+        yield
+        return
+    sys.modules["distributed"] = None  # type: ignore[assignment]
+    try:
+        yield
+    finally:
+        if "distributed" in sys.modules and sys.modules["distributed"] is None:
+            del sys.modules["distributed"]
+
+
 def write_netcdf(ds: Any, path: str | os.PathLike[str], *, engine: str = "h5netcdf") -> None:
     """``ds.to_netcdf`` to ``path`` atomically; small datasets are built in memory first.
 
@@ -244,9 +268,11 @@ def write_netcdf(ds: Any, path: str | os.PathLike[str], *, engine: str = "h5netc
     if engine not in ("h5netcdf", "scipy"):
         raise ParameterError(f"engine must be 'h5netcdf' or 'scipy', got {engine!r}")
     if int(getattr(ds, "nbytes", 0)) <= NETCDF_IN_MEMORY:
-        write_bytes(path, ds.to_netcdf(engine=engine))
+        with dask_unasked():
+            data = ds.to_netcdf(engine=engine)
+        write_bytes(path, data)
         return
-    with atomic_output(path) as tmp:
+    with atomic_output(path) as tmp, dask_unasked():
         if engine == "scipy":  # pure Python I/O: a failed write is an OSError there
             ds.to_netcdf(tmp, engine=engine)
             return
@@ -327,7 +353,7 @@ def write_netcdf_stream(chunks: Iterable[Any], path: str | os.PathLike[str], *,
 
     dims = tuple(append_dims)
     iterator = iter(chunks)
-    with atomic_output(path) as tmp, _hdf5_output(tmp, path) as (out, hdf5):
+    with atomic_output(path) as tmp, _hdf5_output(tmp, path) as (out, hdf5), dask_unasked():
         first = next(iterator, None)
         if first is None:
             raise ParameterError("write_netcdf_stream needs at least one chunk")
