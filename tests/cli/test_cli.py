@@ -4,8 +4,6 @@ public), exit statuses, output-path checks and lazy imports."""
 from __future__ import annotations
 
 import json
-import subprocess
-import sys
 
 import pytest
 import xarray as xr
@@ -66,11 +64,10 @@ def test_user_errors_exit_2_with_one_message(capsys, argv, message):
     assert message in err and "Traceback" not in err
 
 
-def test_python_dash_m_entry_point():
-    proc = subprocess.run([sys.executable, "-m", "viscoforce", "static", "--h0", "2nm", "--E",
-                           "1e9", "--json"], capture_output=True, text=True)
-    assert proc.returncode == 0, proc.stderr
-    assert json.loads(proc.stdout)["u_center"] == pytest.approx(-0.46e-9, abs=0.005e-9)
+def test_static_json_reports_the_center_displacement(capsys):
+    """(Was a ``python -m viscoforce`` run: the separate process is tests/cli/test_help_examples.py's.)"""
+    out = run_json(capsys, ["static", "--h0", "2nm", "--E", "1e9", "--json"])
+    assert out["u_center"] == pytest.approx(-0.46e-9, abs=0.005e-9)
 
 
 def test_simulate_triangle_json_contract(capsys):
@@ -227,13 +224,6 @@ def test_usage_errors_exit_2(capsys, argv, message):
     assert main(argv) == 2
     err = capsys.readouterr().err
     assert message in err and "Traceback" not in err
-
-
-def test_python_dash_m_help_lists_the_commands():
-    proc = subprocess.run([sys.executable, "-m", "viscoforce", "--help"], capture_output=True,
-                          text=True)
-    assert proc.returncode == 0, proc.stderr
-    assert "static" in proc.stdout and "spectrum" in proc.stdout
 
 
 def test_library_errors_exit_2_and_bugs_exit_1(capsys, monkeypatch):
@@ -401,17 +391,6 @@ def test_spectrum_auto_is_the_library_choice(capsys):
     problem = model.problem_from_args(args, model.material_from_args(args), args.h0 - args.eta)
     choice = choose_spectrum(problem, args.h0, args.eta, [100.0])
     assert (out["method"], out["explanation"]) == (choice.method, choice.explanation)
-
-
-def test_cli_modules_import_no_heavy_optional_libraries():
-    heavy = ("matplotlib", "lmfit", "scipy.interpolate", "scipy.signal", "scipy.integrate",
-             "scipy.optimize", "tqdm", "viscoforce.plotting", "viscoforce.lockin",
-             "viscoforce.experiments.spectroscopy")
-    code = ("import sys, viscoforce.cli, viscoforce.cli.model; "
-            f"print([m for m in {heavy!r} if m in sys.modules])")
-    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
-                          check=True)
-    assert proc.stdout.strip() == "[]"
 
 
 def test_static_far_outside_the_half_space_model_exits_2(capsys):

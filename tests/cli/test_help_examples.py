@@ -3,7 +3,8 @@
 The examples (:data:`viscoforce.cli._examples.EXAMPLES`) read the files shipped inside viscoforce
 as ``example:NAME`` (:mod:`viscoforce.cli.examples`), so they need no repository around them: each
 runs here in a fresh, empty ``tmp_path`` (``main()`` in-process, the current folder changed), and
-one runs as a separate ``python -m viscoforce`` process there. ``demo``'s second example is run,
+one (``fit``'s first, verbatim but for ``python -m``) runs as a separate ``python -m viscoforce``
+process there, and not again in-process. ``demo``'s second example is run,
 from an empty folder too, by ``tests/cli/test_demo.py`` (which checks its numbers); the first,
 the same run without ``--json``, is marked slow.
 """
@@ -23,7 +24,8 @@ from viscoforce.cli.examples import PREFIX
 from viscoforce.data import example_names
 
 #: (command, index) of examples another test runs verbatim from an empty folder.
-RUN_ELSEWHERE = {("demo", 1): "tests/cli/test_demo.py"}
+RUN_ELSEWHERE = {("demo", 1): "tests/cli/test_demo.py",
+                 ("fit", 0): "test_the_example_route_works_in_a_separate_process, below"}
 #: (command, index) of examples too slow for every run (another example covers the same path).
 SLOW = {("demo", 0): "the demo, as demo-1 without --json (test_demo.py runs that one)"}
 
@@ -68,10 +70,11 @@ def test_every_command_has_examples_and_they_read_only_shipped_files():
 
 def test_the_example_route_works_in_a_separate_process(tmp_path):
     """``python -m viscoforce`` in an empty folder, not the test's interpreter state."""
-    run = subprocess.run(
-        [sys.executable, "-m", "viscoforce", "fit", "example:sls_spectrum.csv", "--model",
-         "exact", "--h0=-5nm", "--json"],
-        cwd=tmp_path, capture_output=True, text=True, timeout=300, check=False)
+    argv = _parts(EXAMPLES["fit"][0])
+    assert argv == [["viscoforce", "fit", "example:sls_spectrum.csv", "--model", "exact",
+                     "--h0=-5nm", "--json"]]   # the example, run here as it is shown
+    run = subprocess.run([sys.executable, "-m", *argv[0]], cwd=tmp_path, capture_output=True,
+                         text=True, timeout=300, check=False)
     assert run.returncode == 0, run.stderr
     result = json.loads(run.stdout)
     assert result["model"] == "exact"

@@ -10,12 +10,21 @@ numbers to 3 significant digits, paths and wall times masked (``notebooks/execut
 ``normalised_outputs``). A cell whose output depends on the mode is tagged
 ``quick-mode-differs`` and compared with ``notebooks/quick_outputs.json`` (a quick run's outputs,
 written by ``execute.py`` beside the full run); a cell tagged ``timings`` is not compared.
+
+The notebooks share one kernel (the ``run_notebook`` fixture), started once for this module: a
+kernel's start and the imports of the first cell are a third of the time of a quick run. Before
+each notebook the kernel is put back to a fresh kernel's state as far as a notebook can see it
+(:data:`RESET`): its namespace emptied (``%reset -f``: a name or import a notebook does not make
+itself raises NameError, as in a fresh kernel), the working directory, ``sys.path``, the
+notebooks' own modules, matplotlib's figures and rcParams, the warning filters and numpy's error
+state restored. What stays is the import cache of the libraries.
 """
 
 from __future__ import annotations
 
 import importlib.util
 import json
+import os
 from pathlib import Path
 
 import pytest
@@ -45,17 +54,77 @@ def test_notebook_is_committed_executed_without_volatile_metadata(name):
     assert (NOTEBOOKS_DIR / name).stat().st_size < 2_000_000, f"{name} is over 2 MB"
 
 
-@pytest.mark.parametrize("name", NOTEBOOKS)
-def test_notebook_runs(name, monkeypatch):
+#: Run in the shared kernel before each notebook (module docstring): the first run records the
+#: fresh kernel's state, later runs restore it.
+RESET = r"""
+%reset -f
+def _viscoforce_test_reset():
+    import os, sys, warnings
+    import matplotlib
+    import numpy
+    state = sys.__dict__.setdefault("_viscoforce_fresh_state", {})   # %reset keeps it
+    if not state:
+        state.update(cwd=os.getcwd(), path=list(sys.path), filters=list(warnings.filters),
+                     err=numpy.geterr(), modules=set(sys.modules), rc=dict(matplotlib.rcParams))
+    os.chdir(state["cwd"])
+    sys.path[:] = state["path"]
+    warnings.filters[:] = state["filters"]
+    warnings._filters_mutated()
+    numpy.seterr(**state["err"])
+    folder = os.path.realpath(state["cwd"])
+    for name, module in list(sys.modules.items()):
+        where = getattr(module, "__file__", None) or ""
+        if name not in state["modules"] and os.path.realpath(where).startswith(folder + os.sep):
+            del sys.modules[name]   # paper_figures.py: imported afresh by its notebook
+    if "matplotlib.pyplot" in sys.modules:
+        sys.modules["matplotlib.pyplot"].close("all")
+    with warnings.catch_warnings():   # deprecated keys are in the copy too
+        warnings.simplefilter("ignore")
+        matplotlib.rcParams.update(state["rc"])
+_viscoforce_test_reset()
+del _viscoforce_test_reset
+"""
+
+
+@pytest.fixture(scope="module")
+def run_notebook():
+    """``run_notebook(name)``: the notebook executed in quick mode in the module's one kernel."""
     nbformat = pytest.importorskip("nbformat")
     nbclient = pytest.importorskip("nbclient")
     pytest.importorskip("ipykernel")
-    monkeypatch.setenv("VISCOFORCE_NB_QUICK", "1")   # inherited by the kernel process
-    notebook = nbformat.read(NOTEBOOKS_DIR / name, as_version=4)
-    client = nbclient.NotebookClient(notebook, timeout=None, startup_timeout=3600,
-                                     kernel_name="python3",
-                                     resources={"metadata": {"path": str(NOTEBOOKS_DIR)}})
-    client.execute()   # raises CellExecutionError, naming the cell, if any cell fails
+    from jupyter_client.manager import KernelManager
+
+    km = KernelManager(kernel_name="python3")
+    # VISCOFORCE_NB_QUICK=1: each notebook chooses its small parameters
+    km.start_kernel(cwd=str(NOTEBOOKS_DIR), env={**os.environ, "VISCOFORCE_NB_QUICK": "1"})
+
+    def run(name):
+        notebook = nbformat.read(NOTEBOOKS_DIR / name, as_version=4)
+        notebook.cells.insert(0, nbformat.v4.new_code_cell(RESET))   # taken out again below
+        client = nbclient.NotebookClient(notebook, km=km, timeout=None, startup_timeout=3600,
+                                         kernel_name="python3",
+                                         resources={"metadata": {"path": str(NOTEBOOKS_DIR)}})
+        try:
+            client.execute()   # raises CellExecutionError, naming the cell, if any cell fails
+        except Exception:
+            km.restart_kernel(now=True)   # the next notebook starts from a fresh kernel
+            raise
+        finally:
+            if client.kc is not None:   # the kernel is ours: nbclient leaves its client open
+                client.kc.stop_channels()
+        reset = notebook.cells.pop(0)
+        assert reset.source == RESET and not reset.outputs, reset.outputs
+        return notebook
+
+    try:
+        yield run
+    finally:
+        km.shutdown_kernel(now=True)
+
+
+@pytest.mark.parametrize("name", NOTEBOOKS)
+def test_notebook_runs(name, run_notebook):
+    notebook = run_notebook(name)
     warned = [i for i, cell in enumerate(notebook.cells) if cell.cell_type == "code"
               for output in cell.outputs
               if output.output_type == "stream" and output.name == "stderr"

@@ -9,11 +9,17 @@ What is extracted, and the skip rule:
   and the README's test command (``pip install ".[test]" && ... python -m pytest -q``) is such a
   line — CI runs it verbatim (``.ci/run``, checked below), running it here would recurse. Every
   other line is one command (no ``&&``, pipes or redirections: a README line a user copies must
-  work on its own), run with the current venv's ``viscoforce`` entry point (``python`` is the
-  current interpreter) from an empty ``tmp_path``, and must exit 0.
-- **Python blocks**: every ```` ```python ```` block runs as a file in a fresh interpreter from an
-  empty ``tmp_path``; it must exit 0 and print no ``nan`` (a NaN where the README promises a value
-  or a stderr is a bug, not an example).
+  work on its own), run with the installed ``viscoforce`` entry point (``python`` is the current
+  interpreter) from an empty folder of its own, and must exit 0.
+- **Python blocks**: every ```` ```python ```` block runs as a file from an empty folder of its
+  own; it must exit 0 and print no ``nan`` (a NaN where the README promises a value or a stderr
+  is a bug, not an example).
+
+All of them run in ONE separate interpreter (the ``readme_runs`` fixture, :data:`DRIVER`), not
+the test's: the Python blocks first (the first one is the first thing that interpreter runs),
+then each command as the console script runs it (``viscoforce``'s ``console_scripts`` entry
+point, found through the installed package's metadata, called with ``sys.argv`` set), each in a
+new empty folder. One interpreter start instead of one per command.
 
 Also: the README starts with the two set-up commands, the second exactly what ``.ci/run`` runs;
 no user-facing page points to files users do not have; every relative link resolves.
@@ -21,6 +27,7 @@ no user-facing page points to files users do not have; every relative link resol
 
 from __future__ import annotations
 
+import json
 import os
 import re
 import shlex
@@ -68,10 +75,83 @@ def _env() -> dict[str, str]:
     return {**os.environ, "MPLBACKEND": "Agg", "OPENBLAS_NUM_THREADS": "1", "OMP_NUM_THREADS": "1"}
 
 
-def _entry_point(name: str) -> str:
-    """The current venv's console script ``name`` (the one ``pip install .`` made)."""
-    path = Path(sys.executable).parent / name
-    return str(path) if path.exists() else name
+#: (variable, attribute) the first Python block (the quickstart) leaves, reported by the driver.
+QUICKSTART_VALUES = [("fit", "tau"), ("static", "force")]
+
+#: Run in a fresh interpreter: ``python -c DRIVER ROOT SPEC``; SPEC holds the blocks and the
+#: commands (argv lists). Prints one JSON object: per block and per command, the exit status,
+#: stdout, stderr and the files left in its folder (and, per block, QUICKSTART_VALUES).
+DRIVER = r"""
+import contextlib, io, json, os, runpy, subprocess, sys, traceback
+from importlib.metadata import entry_points
+
+root, spec = sys.argv[1], json.loads(sys.argv[2])
+
+
+def in_folder(name, work):
+    folder = os.path.join(root, name)
+    os.mkdir(folder)
+    os.chdir(folder)
+    out, err = io.StringIO(), io.StringIO()
+    extra = {}
+    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+        try:
+            code = work(extra)
+        except SystemExit as exc:
+            code = exc.code if isinstance(exc.code, int) else (0 if exc.code is None else 1)
+        except BaseException:
+            traceback.print_exc()
+            code = 1
+    files = {p: os.path.getsize(p) for p in sorted(os.listdir(folder))}
+    return {"code": code or 0, "stdout": out.getvalue(), "stderr": err.getvalue(),
+            "files": files, **extra}
+
+
+def block(source):
+    def work(extra):
+        with open("readme_block.py", "w", encoding="utf-8") as handle:
+            handle.write(source)
+        namespace = runpy.run_path("readme_block.py", run_name="__main__")
+        os.remove("readme_block.py")
+        extra["values"] = {f"{var}.{attr}": float(getattr(namespace[var], attr))
+                           for var, attr in spec["values"] if var in namespace}
+        return 0
+    return work
+
+
+def command(argv):
+    def work(extra):
+        if argv[0] != "viscoforce":
+            proc = subprocess.run([sys.executable if argv[0] == "python" else argv[0], *argv[1:]],
+                                  capture_output=True, text=True)
+            sys.stdout.write(proc.stdout)
+            sys.stderr.write(proc.stderr)
+            return proc.returncode
+        (script,) = entry_points(group="console_scripts", name="viscoforce")
+        sys.argv = list(argv)
+        return script.load()()   # what the installed console script runs
+    return work
+
+
+result = {"blocks": [in_folder(f"block{i}", block(b)) for i, b in enumerate(spec["blocks"])],
+          "commands": [in_folder(f"command{i}", command(c))
+                       for i, c in enumerate(spec["commands"])]}
+os.chdir(root)
+sys.stdout.write("RESULT " + json.dumps(result) + "\n")
+"""
+
+
+@pytest.fixture(scope="module")
+def readme_runs(tmp_path_factory):
+    """What :data:`DRIVER` reports for the README's blocks and commands (module docstring)."""
+    root = tmp_path_factory.mktemp("readme")
+    spec = {"blocks": python_blocks(), "commands": [shlex.split(c) for c in shell_commands()],
+            "values": QUICKSTART_VALUES}
+    proc = subprocess.run([sys.executable, "-c", DRIVER, str(root), json.dumps(spec)], cwd=root,
+                          env=_env(), capture_output=True, text=True, timeout=900, check=False)
+    line = next((x for x in proc.stdout.splitlines() if x.startswith("RESULT ")), None)
+    assert proc.returncode == 0 and line, proc.stdout[-2000:] + proc.stderr[-3000:]
+    return json.loads(line.removeprefix("RESULT "))
 
 
 def test_the_readme_starts_with_the_two_set_up_commands():
@@ -91,29 +171,26 @@ def test_the_extraction_finds_the_tour():
     assert python_blocks() and "import viscoforce" in python_blocks()[0]
 
 
-@pytest.mark.parametrize("command", shell_commands())
-def test_readme_command_runs_from_an_empty_folder(command, tmp_path):
+@pytest.mark.parametrize("index, command", list(enumerate(shell_commands())),
+                         ids=shell_commands())
+def test_readme_command_runs_from_an_empty_folder(index, command, readme_runs):
     argv = shlex.split(command)
     assert not {"&&", "||", "|", ";", ">", "<"} & set(argv), f"one command per line: {command}"
-    if argv[0] == "viscoforce":
-        argv[0] = _entry_point("viscoforce")
-    elif argv[0] == "python":
-        argv[0] = sys.executable
-    proc = subprocess.run(argv, cwd=tmp_path, env=_env(), capture_output=True, text=True,
-                          timeout=300, check=False)
-    assert proc.returncode == 0, f"{command}\n{proc.stdout[-2000:]}\n{proc.stderr[-2000:]}"
-    assert not re.search(r"\bnan\b", proc.stdout, re.I), proc.stdout[-2000:]
+    run = readme_runs["commands"][index]
+    assert run["code"] == 0, f"{command}\n{run['stdout'][-2000:]}\n{run['stderr'][-2000:]}"
+    assert not re.search(r"\bnan\b", run["stdout"], re.I), run["stdout"][-2000:]
 
 
 @pytest.mark.parametrize("index", range(len(python_blocks())))
-def test_readme_python_block_runs_from_an_empty_folder(index, tmp_path):
-    script = tmp_path / "readme_block.py"
-    script.write_text(python_blocks()[index], encoding="utf-8")
-    proc = subprocess.run([sys.executable, script.name], cwd=tmp_path, env=_env(),
-                          capture_output=True, text=True, timeout=300, check=False)
-    assert proc.returncode == 0, proc.stdout[-2000:] + proc.stderr[-3000:]
-    assert proc.stdout.strip(), "the block prints what it computes"
-    assert not re.search(r"\bnan\b", proc.stdout, re.I), proc.stdout[-2000:]
+def test_readme_python_block_runs_from_an_empty_folder(index, readme_runs):
+    run = readme_runs["blocks"][index]
+    assert run["code"] == 0, run["stdout"][-2000:] + run["stderr"][-3000:]
+    assert run["stdout"].strip(), "the block prints what it computes"
+    assert not re.search(r"\bnan\b", run["stdout"], re.I), run["stdout"][-2000:]
+    if index == 0:   # the quickstart (was also exec'd in tests/project/test_api.py)
+        assert abs(run["values"]["fit.tau"] - 1e-3) < 1e-9
+        assert run["values"]["static.force"] == pytest.approx(1.08e-6, abs=5e-9)
+        assert run["files"].get("bode.png", 0) > 0 and run["files"].get("loop.png", 0) > 0
 
 
 @pytest.mark.parametrize("page", PAGES, ids=lambda p: p.name)
