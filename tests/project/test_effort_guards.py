@@ -101,3 +101,24 @@ def test_a_huge_uff_file_is_refused_before_reading(tmp_path, monkeypatch):
     monkeypatch.setattr(bruker, "MAX_UFF_BYTES", 1024)
     with pytest.raises(EffortError, match="UFF text file .*2048.* beyond the limit"):
         bruker._read_text(path)
+
+
+@pytest.mark.parametrize("method", ["time-domain", "contact", "auto"])
+def test_a_huge_frequency_list_is_refused_before_any_route(method):
+    """Every route refuses more than MAX_SAMPLES frequencies up front (the time domain ran into a
+    23.9 GiB allocation in its lock-in bound, the contact route computed them); the time-domain
+    sweep also refuses up front when one period of samples per frequency is beyond the limit."""
+    import viscoforce as vf
+    from viscoforce._limits import MAX_SAMPLES
+    from viscoforce.exceptions import EffortError
+
+    problem = vf.ContactProblem.create(sphere=vf.Sphere(10e-6), surface_force=vf.paper_pressure_law(),
+                                       material=vf.StandardLinearSolid(1e10, 1e9, 1e-3),
+                                       deepest_position=-6e-9)
+    omega = np.broadcast_to(100.0, (MAX_SAMPLES + 1,))
+    with pytest.raises(EffortError, match="frequencies of spectrum"):
+        vf.spectrum(problem, -5e-9, 1e-11, omega, method=method)
+    if method == "time-domain":
+        few = np.geomspace(10.0, 1e5, MAX_SAMPLES // 64 + 1)
+        with pytest.raises(EffortError, match="output samples of the time-domain sweep"):
+            vf.spectrum(problem, -5e-9, 1e-11, few, method=method)

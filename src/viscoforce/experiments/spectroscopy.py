@@ -30,6 +30,7 @@ import numpy as np
 import xarray as xr
 from numpy.typing import ArrayLike, NDArray
 
+from viscoforce._limits import MAX_SAMPLES, check_effort
 from viscoforce._validation import (
     require_finite,
     require_int,
@@ -80,6 +81,10 @@ LOCKIN_SHARE = 0.1
 MAX_PERIODS = 64
 
 
+#: Frequencies per block of :func:`lockin_error` (each a row of ~300 θ values).
+_LOCKIN_BLOCK = 2048
+
+
 def lockin_error(problem: ContactProblem, omega: ArrayLike, settle: float,
                  periods: ArrayLike) -> NDArray[np.float64]:
     """Bound on the relative error of k*(ω) that the start-up transient leaves in :func:`sweep`.
@@ -117,11 +122,16 @@ def lockin_error(problem: ContactProblem, omega: ArrayLike, settle: float,
     tau = max(taus)
     decades = 6.0 + max(0.0, math.log10(float(np.max(w)) * tau))
     theta = tau * 10.0 ** -np.linspace(0.0, decades, int(40 * decades) + 1)
-    x = w[..., np.newaxis] * theta
-    start = (_settling_periods(settle, w) * 2.0 * math.pi / w)[..., np.newaxis]
-    leak = transient_leakage(w[..., np.newaxis], theta, start, n[..., np.newaxis])
     ratio = material.instantaneous_modulus / material.relaxed_modulus - 1.0
-    return ratio * np.max(x / (1.0 + x * x) * leak, axis=-1)
+    out = np.empty(w.shape)
+    flat_w, flat_n, flat_out = w.reshape(-1), n.reshape(-1), out.reshape(-1)
+    for i in range(0, flat_w.size, _LOCKIN_BLOCK):  # bounded memory: a block × θ at a time
+        wb, nb = flat_w[i:i + _LOCKIN_BLOCK, None], flat_n[i:i + _LOCKIN_BLOCK, None]
+        x = wb * theta
+        start = _settling_periods(settle, wb) * 2.0 * math.pi / wb
+        leak = transient_leakage(wb, theta, start, nb)
+        flat_out[i:i + _LOCKIN_BLOCK] = ratio * np.max(x / (1.0 + x * x) * leak, axis=-1)
+    return out
 
 
 def _choose_periods(problem: ContactProblem, omega: NDArray[np.float64], settle: float,
@@ -297,6 +307,11 @@ def sweep(problem: ContactProblem, position: float, eta: float, omega: ArrayLike
     samples = require_int("samples_per_period", samples_per_period, 8)
     n_jobs = require_int("n_jobs", n_jobs, 1)
     stepper_class = _stepper_class(stepper)
+    check_effort("output samples of the time-domain sweep (at least one period of "
+                 f"samples_per_period = {samples} per frequency, {omega.size} frequencies)",
+                 omega.size * samples, MAX_SAMPLES,
+                 hint="fewer frequencies or samples_per_period; the small-amplitude spectrum "
+                      "needs no time stepping (method 'linear')")
     taus = problem.material.prony().taus
     if settle is None:
         settle = DEFAULT_SETTLE_TAUS * (max(taus) if taus else 0.0)
@@ -417,6 +432,9 @@ def spectrum(problem: ContactProblem, position: float, eta: float, omega: ArrayL
     if not isinstance(method, str) or (method != "auto" and method not in SPECTRUM_METHODS):
         raise ParameterError(
             f"method must be 'auto' or one of {sorted(SPECTRUM_METHODS)}, got {method!r}")
+    n_omega = int(np.size(omega))
+    check_effort(f"frequencies of spectrum ({n_omega} requested)", n_omega, MAX_SAMPLES,
+                 hint="request fewer frequencies")
     if _adhesive(problem):
         return _adhesive_spectrum(problem, position, eta, omega, method, accuracy, branch,
                                   options)
