@@ -307,11 +307,13 @@ def sweep(problem: ContactProblem, position: float, eta: float, omega: ArrayLike
     samples = require_int("samples_per_period", samples_per_period, 8)
     n_jobs = require_int("n_jobs", n_jobs, 1)
     stepper_class = _stepper_class(stepper)
-    check_effort("output samples of the time-domain sweep (at least one period of "
-                 f"samples_per_period = {samples} per frequency, {omega.size} frequencies)",
-                 omega.size * samples, MAX_SAMPLES,
-                 hint="fewer frequencies or samples_per_period; the small-amplitude spectrum "
-                      "needs no time stepping (method 'linear')")
+    plural = "frequency" if omega.size == 1 else "frequencies"
+    if periods is None:  # before the chooser's lock-in bounds (one row of ~300 θ per frequency)
+        check_effort(f"output samples of the time-domain sweep ({omega.size} {plural} x {samples} "
+                     "samples_per_period, one period at least)",
+                     omega.size * samples, MAX_SAMPLES,
+                     hint="fewer frequencies or samples_per_period; the small-amplitude spectrum "
+                          "needs no time stepping (method 'linear')")
     taus = problem.material.prony().taus
     if settle is None:
         settle = DEFAULT_SETTLE_TAUS * (max(taus) if taus else 0.0)
