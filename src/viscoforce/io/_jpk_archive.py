@@ -398,12 +398,28 @@ def _read_props(zf: _Members, name: str, where: _Where,
     return _parse_props(_read_member(zf, name, where, "MAX_HEADER_BYTES"), where.at(name), blocks)
 
 
+#: Parsed headers by their bytes (a map's reader meets each segment header about three times,
+#: and a file read again meets all of them again); at most this many are kept.
+_PARSED_LIMIT = 1024
+_PARSED: dict[bytes, dict[str, str]] = {}
+
+
 def _parse_props(data: bytes, where: _Where,
                  blocks: dict[str, dict[str, str]] | None = None) -> dict[str, str]:
-    """Parse header text ``data`` (member ``where``), resolving references when ``blocks``."""
+    """Parse header text ``data`` (member ``where``), resolving references when ``blocks``.
+
+    The parse of the same bytes is kept (:data:`_PARSED_LIMIT` headers); each call returns a
+    dict of its own.
+    """
+    key = bytes(data)
+    props = _PARSED.get(key)
     try:
-        props = parse_properties(data)
-        return resolve_references(props, blocks) if blocks is not None else props
+        if props is None:
+            props = parse_properties(key)
+            if len(_PARSED) >= _PARSED_LIMIT:
+                _PARSED.clear()
+            _PARSED[key] = props
+        return resolve_references(props, blocks) if blocks is not None else dict(props)
     except HeaderError as exc:
         raise where.error(str(exc)) from None
 
