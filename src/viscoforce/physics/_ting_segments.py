@@ -37,8 +37,8 @@ from viscoforce.physics._ting_kernels import (
     interval_sums,
 )
 
-__all__ = ["BOUND", "HISTORY", "MIN_MEAN_RUN", "NEGLIGIBLE", "Runs", "Stencil", "decays",
-           "grid_sums", "piecewise_sums", "sample_runs"]
+__all__ = ["BOUND", "HISTORY", "MIN_MEAN_RUN", "NEGLIGIBLE", "SPLIT_LOOP", "Runs", "Stencil",
+           "decays", "grid_sums", "piecewise_sums", "sample_runs", "split_intervals", "split_sums"]
 
 #: Fewest sample intervals per run, on average, for the piecewise-uniform path (fewer: the loop).
 MIN_MEAN_RUN = 4
@@ -135,13 +135,35 @@ HISTORY = Stencil((1.0, 0.0), (1.0, -1.0), per_length=True)
 BOUND = Stencil((0.5, 0.0, 1.0), (2.0, -1.0, -1.0), per_length=False)
 
 
+#: Bytes of :func:`decays` results kept for the next evaluations of a fit (the same rates and
+#: lags come back: the grid is the curve's, the rates change only with the exponent's lattice).
+DECAYS_CACHE_BYTES = 32 << 20
+_DECAYS: dict[tuple[bytes, bytes], FloatArray] = {}
+
+
 def decays(rates: FloatArray, lag: FloatArray) -> FloatArray:
     """e^{−x_k·lag_n} as (K, n) for ascending lags ≥ 0, 0 where x_k·lag_n > :data:`NEGLIGIBLE`.
 
     The exponentials are computed per rate only as far as they are not negligible (rates
     grouped by that length rounded up to a power of two): the fast rates of a power law's sum
-    die within a few samples.
+    die within a few samples. Results are kept (read-only, :data:`DECAYS_CACHE_BYTES` in all)
+    by the bytes of ``rates`` and ``lag``: a fit evaluates the same ones again and again.
     """
+    rates = np.ascontiguousarray(rates, dtype=float)
+    lag = np.ascontiguousarray(lag, dtype=float)
+    key = (rates.tobytes(), lag.tobytes())
+    out = _DECAYS.get(key)
+    if out is None:
+        out = _decays(rates, lag)
+        out.flags.writeable = False
+        if sum(a.nbytes for a in _DECAYS.values()) + out.nbytes > DECAYS_CACHE_BYTES:
+            _DECAYS.clear()
+        if out.nbytes <= DECAYS_CACHE_BYTES:
+            _DECAYS[key] = out
+    return out
+
+
+def _decays(rates: FloatArray, lag: FloatArray) -> FloatArray:
     out = np.zeros((rates.size, lag.size))
     need = np.searchsorted(lag, NEGLIGIBLE / rates)
     size = np.minimum(lag.size, 2 ** np.ceil(np.log2(np.maximum(need, 1))).astype(int))
@@ -161,6 +183,7 @@ def piecewise_sums(t: FloatArray, x: FloatArray, base: np.ndarray, runs: Runs, s
     out = np.zeros((x.shape[0], base.size))
     response = stencil.exact(kernel.primitive)
     rates = soe.rates
+    shortest = float(np.min(runs.steps))  # the shortest lag soe serves (History.shortest)
     constant, state, at = np.zeros(x.shape[0]), np.zeros((x.shape[0], rates.size)), None
     last = runs.steps.size - 1
     for r, step in enumerate(runs.steps):
@@ -169,8 +192,17 @@ def piecewise_sums(t: FloatArray, x: FloatArray, base: np.ndarray, runs: Runs, s
         if at is not None:  # the earlier runs, through the exponentials still awake
             lag = t[base[a + 1:b + 1]] - at
             out[:, a + 1:b + 1] += constant[:, None] + state @ decays(rates, lag)
-        local = interval_sums(t[lo:hi + 1], x[:, lo:hi], base[a:b + 1] - lo, float(step),
-                              response)
+        xs, local_base = x[:, lo:hi], base[a:b + 1] - lo
+        pieces = split_intervals(local_base, hi - lo)
+        pieces = pieces[np.any(xs[:, pieces] != 0, axis=0)]
+        if pieces.size > SPLIT_LOOP:  # through the exponentials beyond the shortest step
+            whole = xs.copy()
+            whole[:, pieces] = 0.0
+            local = interval_sums(t[lo:hi + 1], whole, local_base, float(step), response)
+            local += split_sums(t[lo:hi + 1], xs, local_base, pieces, stencil, response, soe,
+                                shortest)
+        else:
+            local = interval_sums(t[lo:hi + 1], xs, local_base, float(step), response)
         out[:, a + 1:b + 1] += local[:, 1:]
         if r == last:
             break
@@ -188,6 +220,77 @@ def piecewise_sums(t: FloatArray, x: FloatArray, base: np.ndarray, runs: Runs, s
         state = state + (whole @ decay) * ak[0] + xs[:, piece] @ (pk * decay[piece])
         constant = constant + whole.sum(axis=1) * a0[0] + xs[:, piece] @ p0
         at = t[hi]
+    return out
+
+
+#: A run with more split intervals than this takes them through the exponentials
+#: (:func:`split_sums`); fewer: one by one, exactly (:func:`interval_sums`).
+SPLIT_LOOP = 8
+#: Samples per block of :func:`split_sums`' exponential part (bounds its memory).
+_SPLIT_BLOCK = 2048
+
+
+def split_intervals(base: np.ndarray, intervals: int) -> np.ndarray:
+    """The node intervals (of ``intervals``) that are not whole sample intervals of ``base``."""
+    split = np.ones(intervals, dtype=bool)
+    split[base[:-1][np.diff(base) == 1]] = False
+    return np.flatnonzero(split)
+
+
+def split_sums(t: FloatArray, x: FloatArray, base: np.ndarray, pieces: np.ndarray,
+               stencil: Stencil, response: Callable[[float, FloatArray], FloatArray],
+               soe: Exponentials, shortest: float) -> FloatArray:
+    """Σ over the split node intervals ``pieces`` of x_i·r(h_i, t_n − t_i+1) at t_n = t[base].
+
+    A run's kinks and contact crossings split sample intervals into pieces the FFT does not
+    take (:func:`interval_sums` adds them one by one, O(pieces × samples) evaluations of the
+    primitive). Here each piece is exact at the samples closer to its end than ``shortest``
+    (at most a step), and through the sum of exponentials beyond, where it is valid (the
+    module docstring: as the earlier runs): a0(h) + Σ_k a_k(h) e^{−x_k u} summed as one state
+    per exponential carried from piece to piece, O((pieces + samples)·K).
+    """
+    rows, nb = x.shape[0], base.size
+    out = np.zeros((rows, nb))
+    tb, ends = t[base], t[pieces + 1]
+    width = t[pieces + 1] - t[pieces]
+    weight = x[:, pieces]  # (rows, P)
+    first = np.searchsorted(base, pieces + 1)  # the first sample at or after each piece's end
+    far = np.maximum(np.searchsorted(tb, ends + shortest), first)  # lags ≥ shortest from here
+    near = far - first
+    if near.any():  # exact: the few samples within `shortest` of a piece's end
+        p = np.repeat(np.arange(pieces.size), near)
+        at = np.repeat(first - np.cumsum(near) + near, near) + np.arange(p.size)
+        values = weight[:, p] * response(width[p], tb[at] - ends[p])
+        for r in range(rows):
+            np.add.at(out[r], at, values[r])
+    a0, ak = stencil.far(width, soe)  # r(h, u) = a0(h) + Σ_k a_k(h) e^{−x_k u}
+    level = np.zeros((rows, nb + 1))
+    for r in range(rows):
+        np.add.at(level[r], far, weight[r] * a0)
+    out += np.cumsum(level, axis=1)[:, :nb]
+    rates = soe.rates
+    groups, starts = np.unique(far, return_index=True)  # far is non-decreasing
+    stops = np.append(starts[1:], pieces.size)
+    keep = groups < nb  # pieces whose lags all stay below `shortest` have no far part
+    groups, starts, stops = groups[keep], starts[keep], stops[keep]
+    if not groups.size:
+        return out
+    state = np.zeros((groups.size, rows, rates.size))  # at each group's first sample time
+    carried = np.zeros((rows, rates.size))
+    previous = None
+    for g, (n, a, b) in enumerate(zip(groups, starts, stops, strict=True)):
+        at = tb[n]
+        if previous is not None:
+            carried = carried * np.exp(-rates * (at - previous))
+        carried = carried + (weight[:, a:b] * 1.0) @ (ak[a:b] * np.exp(-np.outer(at - ends[a:b],
+                                                                            rates)))
+        state[g], previous = carried, at
+    segment = np.searchsorted(groups, np.arange(groups[0], nb), side="right") - 1
+    for lo in range(0, segment.size, _SPLIT_BLOCK):
+        seg = segment[lo:lo + _SPLIT_BLOCK]
+        cols = groups[0] + lo + np.arange(seg.size)
+        decay = np.exp(-np.outer(rates, tb[cols] - tb[groups[seg]]))  # (K, block)
+        out[:, cols] += np.einsum("brk,kb->rb", state[seg], decay)
     return out
 
 
