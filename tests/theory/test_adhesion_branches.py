@@ -168,3 +168,19 @@ def test_cli_static_and_spectrum_with_a_branch(capsys):
     spec = json.loads(capsys.readouterr().out)
     assert spec["on_branch"] == "contact" and spec["method"] == "linear"
     assert {"jump_in", "jump_out", "pull_off"} <= set(spec)
+
+
+def test_cli_both_laws_size_the_grid_for_the_slower_double_layer(capsys):
+    """--force-law both: the double layer (1 nm) decays more slowly than z0 (0.3 nm); the compact
+    grid reaches 12 of its decay lengths, so static --h0 and spectrum run (they were refused:
+    "outer_radius too small") and the double layer's repulsion dominates at 0.5 nm."""
+    from viscoforce.cli import main
+
+    law = ["--force-law", "both", "--hamaker", "1e-20J", "--z0", "0.3nm", "--R", "1um"]
+    assert main(["static", *law, "--E", "1e9", "--h0=0.5nm", "--json"]) == 0
+    static = json.loads(capsys.readouterr().out)
+    assert static["force"] > 0 and static["on_branch"] in ("far", "contact", "unique")
+    assert main(["spectrum", *law, "--h0=0.5nm", "--eta", "0.002nm", "--omega", "100Hz",
+                 "--json"]) == 0
+    spectrum = json.loads(capsys.readouterr().out)
+    assert spectrum["mean_force"][0] == pytest.approx(static["force"], rel=1e-6)

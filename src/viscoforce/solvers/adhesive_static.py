@@ -39,7 +39,7 @@ from viscoforce.solvers.static import STATIC_XTOL, equilibrium_dataset
 BRANCHES = ("approach", "retract")
 #: The approach starts this many decay lengths (plus 2 per unit of Tabor's parameter) out.
 _FAR_GAP = 12.0
-#: The path ends this many decay lengths below min(h0, 0), past every fold.
+#: The path ends this many z0 below min(h0, 0), past every fold.
 _PAST = 1.0
 #: The Newton polish may move the interpolated gaps by at most this many decay lengths.
 _POLISH_LIMIT = 0.1
@@ -138,7 +138,7 @@ def branch_equilibrium(problem: ContactProblem, position: float, *, branch: str 
     ell = problem.surface_force.decay_length
     mu = lj.tabor_parameter(problem.sphere.radius, modulus)
     far = max(position + ell, (_FAR_GAP + 2.0 * mu) * lj.z0)
-    path = equilibrium_path(problem, far, min(position, 0.0) - _PAST * ell, modulus=modulus)
+    path = equilibrium_path(problem, far, min(position, 0.0) - _PAST * lj.z0, modulus=modulus)
     h = path.position - position
     crossings = [i for i in range(h.size - 1)
                  if h[i] * h[i + 1] <= 0 and h[i] != h[i + 1] and path.stable[i]

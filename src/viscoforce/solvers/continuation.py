@@ -202,7 +202,9 @@ def adhesion_grid(sphere: Particle, law: SurfaceForceLaw, modulus: float, deepes
     lj = lennard_jones_term(law)
     z0 = law.decay_length if lj is None else lj.z0
     mu = 1.0 if lj is None else lj.tabor_parameter(sphere.radius, modulus)
-    outer_gap = (20.0 + 2.0 * mu) * z0
+    # (20 + 2μ) z0 for the attraction's tail, and the check's 10 decay lengths (+2) of the whole
+    # law (a double layer added to the Lennard-Jones law decays more slowly than z0)
+    outer_gap = max((20.0 + 2.0 * mu) * z0, (_MIN_OUTER_GAP + 2.0) * law.decay_length)
     outer = np.sqrt(2.0 * sphere.radius * max(outer_gap - deepest_position, outer_gap))
     spacing = np.sqrt(2.0 * sphere.radius * z0) / (12.0 * resolution * max(1.0, mu) ** 1.5)
     return RadialGrid.from_spacing(float(outer), float(spacing), order)
