@@ -296,9 +296,15 @@ def test_force_time_plot_of_a_ramp():
 # ── notebooks/paper_figures.py ──────────────────────────────────────────────────────────────────
 
 
+@pytest.mark.slow
 def test_paper_figures_quick(tmp_path, capsys):
     """``python notebooks/paper_figures.py --quick``: its main() in this process (the script's
-    ``__main__`` block is ``sys.exit(main())``), without an interpreter start and imports."""
+    ``__main__`` block is ``sys.exit(main())``), without an interpreter start and imports.
+
+    Slow (3.7 s): in CI the paper_figures notebook runs the same figure functions in quick mode
+    (``tests/project/test_notebooks.py``) and compares everything they print — Fig. 1's relaxed
+    loads, Fig. 5's peak forces, Fig. 8's works, to 3 significant digits — with the committed
+    outputs; what only this test checks is the script's own command line and figures.json."""
     spec = importlib.util.spec_from_file_location("_paper_figures_script",
                                                   REPO / "notebooks" / "paper_figures.py")
     script = importlib.util.module_from_spec(spec)
