@@ -33,7 +33,7 @@ from viscoforce.experiments.linear_response import LinearizedState
 from viscoforce.problem import ContactProblem
 from viscoforce.schema import make_spectrum
 from viscoforce.solvers.adhesive_static import branch_equilibrium
-from viscoforce.solvers.continuation import lennard_jones_term
+from viscoforce.solvers.continuation import edge_gap, lennard_jones_term
 
 #: The local length scale of a Lennard-Jones law in units of z0: the wall (z0/h)⁹ at h = z0.
 LOCAL_SCALE = 1.0 / 9.0
@@ -41,8 +41,7 @@ LOCAL_SCALE = 1.0 / 9.0
 
 def tail_stiffness(problem: ContactProblem, gap: np.ndarray) -> float:
     """−dF_tail/dh̄0 [N/m] of the rigid tail 2πR·W(h_edge) beyond the grid at nodal ``gap``."""
-    r = problem.grid.r
-    edge = gap[-1] + (problem.grid.outer_radius**2 - r[-1] ** 2) / (2.0 * problem.sphere.radius)
+    edge = edge_gap(problem, gap)
     return float(2.0 * np.pi * problem.sphere.radius * problem.surface_force.pressure(edge))
 
 

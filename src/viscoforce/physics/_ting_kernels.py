@@ -491,6 +491,13 @@ def history_sums(t: FloatArray, dx: FloatArray, kernel: RelaxationKernel, soe: E
     return interval_sums(t, dx, base, step, lambda h, u: (r(u + h) - r(u)) / h)
 
 
+def split_intervals(base: np.ndarray, intervals: int) -> np.ndarray:
+    """The node intervals (of ``intervals``) that are not whole sample intervals of ``base``."""
+    split = np.ones(intervals, dtype=bool)
+    split[base[:-1][np.diff(base) == 1]] = False
+    return np.flatnonzero(split)
+
+
 def interval_sums(t: FloatArray, x: FloatArray, base: np.ndarray, step: float | None,
                   response: Callable[[float, FloatArray], FloatArray]) -> FloatArray:
     """Σ_i x_i·response(h_i, t_n − t_i+1) over the intervals i of ``t`` that end by t_n = t[base].
@@ -507,9 +514,7 @@ def interval_sums(t: FloatArray, x: FloatArray, base: np.ndarray, step: float | 
         cells = np.where(whole[None, :], x[:, base[:-1]], 0.0)
         weights = response(step, step * np.arange(nb - 1))
         out[:, 1:] = fftconvolve(cells, weights[None, :], axes=1)[:, :nb - 1]
-        split = np.ones(t.size - 1, dtype=bool)
-        split[base[:-1][whole]] = False
-        pieces = np.flatnonzero(split)
+        pieces = split_intervals(base, t.size - 1)
     for i in pieces[np.any(x[:, pieces] != 0, axis=0)]:
         first = int(np.searchsorted(base, i + 1))  # the samples after the interval
         out[:, first:] += np.outer(x[:, i], response(t[i + 1] - t[i], t[base[first:]] - t[i + 1]))

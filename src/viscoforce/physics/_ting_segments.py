@@ -35,10 +35,12 @@ from viscoforce.physics._ting_kernels import (
     RelaxationKernel,
     history_nonuniform,
     interval_sums,
+    split_intervals,
 )
 
 __all__ = ["BOUND", "HISTORY", "MIN_MEAN_RUN", "NEGLIGIBLE", "SPLIT_LOOP", "Runs", "Stencil",
-           "decays", "grid_sums", "piecewise_sums", "sample_runs", "split_intervals", "split_sums"]
+           "branch_weights", "decays", "grid_sums", "piecewise_sums", "sample_runs",
+           "split_intervals", "split_sums"]
 
 #: Fewest sample intervals per run, on average, for the piecewise-uniform path (fewer: the loop).
 MIN_MEAN_RUN = 4
@@ -173,6 +175,28 @@ def _decays(rates: FloatArray, lag: FloatArray) -> FloatArray:
     return out
 
 
+_WEIGHTS: dict[tuple[bytes, bytes], FloatArray] = {}
+
+
+def branch_weights(x: FloatArray, branch: FloatArray) -> FloatArray:
+    """e^{−x_k(t_m − t_j+1)}·(1 − e^{−x_k h_j})/(x_k h_j) over the branch's node intervals (K, n).
+
+    Kept (read-only, a few) by the bytes of the rates and the branch's times: a fit evaluates
+    the same branch with the same rates again and again (only the contact point moves j0).
+    """
+    key = (np.ascontiguousarray(x).tobytes(), np.ascontiguousarray(branch).tobytes())
+    weight = _WEIGHTS.get(key)
+    if weight is None:
+        lengths, which = np.unique(np.diff(branch), return_inverse=True)
+        xh = np.outer(x, lengths)
+        weight = decays(x, branch[-1] - branch[:0:-1])[:, ::-1] * (-np.expm1(-xh) / xh)[:, which]
+        weight.flags.writeable = False
+        if len(_WEIGHTS) >= 4:
+            _WEIGHTS.clear()
+        _WEIGHTS[key] = weight
+    return weight
+
+
 def piecewise_sums(t: FloatArray, x: FloatArray, base: np.ndarray, runs: Runs, stencil: Stencil,
                    kernel: RelaxationKernel, soe: Exponentials) -> FloatArray:
     """Σ_i x_i·r(h_i, t_n − t_i+1) over the node intervals that end by t_n = ``t[base]``.
@@ -230,13 +254,6 @@ SPLIT_LOOP = 8
 _SPLIT_BLOCK = 2048
 
 
-def split_intervals(base: np.ndarray, intervals: int) -> np.ndarray:
-    """The node intervals (of ``intervals``) that are not whole sample intervals of ``base``."""
-    split = np.ones(intervals, dtype=bool)
-    split[base[:-1][np.diff(base) == 1]] = False
-    return np.flatnonzero(split)
-
-
 def split_sums(t: FloatArray, x: FloatArray, base: np.ndarray, pieces: np.ndarray,
                stencil: Stencil, response: Callable[[float, FloatArray], FloatArray],
                soe: Exponentials, shortest: float) -> FloatArray:
@@ -282,8 +299,7 @@ def split_sums(t: FloatArray, x: FloatArray, base: np.ndarray, pieces: np.ndarra
         at = tb[n]
         if previous is not None:
             carried = carried * np.exp(-rates * (at - previous))
-        carried = carried + (weight[:, a:b] * 1.0) @ (ak[a:b] * np.exp(-np.outer(at - ends[a:b],
-                                                                            rates)))
+        carried = carried + weight[:, a:b] @ (ak[a:b] * np.exp(-np.outer(at - ends[a:b], rates)))
         state[g], previous = carried, at
     segment = np.searchsorted(groups, np.arange(groups[0], nb), side="right") - 1
     for lo in range(0, segment.size, _SPLIT_BLOCK):

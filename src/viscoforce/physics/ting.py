@@ -114,7 +114,13 @@ from viscoforce.physics._ting_kernels import (
     relaxation_from_creep,
 )
 from viscoforce.physics._ting_kernels import SECULAR_STEPS as SECULAR_STEPS
-from viscoforce.physics._ting_segments import BOUND, Runs, decays, grid_sums, sample_runs
+from viscoforce.physics._ting_segments import (
+    BOUND,
+    Runs,
+    branch_weights,
+    grid_sums,
+    sample_runs,
+)
 from viscoforce.physics.tips import Flat, Tip
 
 __all__ = [
@@ -531,7 +537,7 @@ def _unloading(t: FloatArray, delta: FloatArray, g: FloatArray, m: int, j0: int,
     # e^{−x_k(t_m − s)} dx(s) for x = δ (and g, at the end): a cumulative sum over its node
     # intervals, exact on any grid (x linear on each: Δx·e^{−x_k(t_m − end)}·(1 − e^{−x_k h})/
     # (x_k h), the last factor once per distinct interval length h); |Q| ≤ ∫|dx|
-    weight = _branch_weights(x, t[j0:m + 1])
+    weight = branch_weights(x, t[j0:m + 1])
     qa = np.zeros((x.size, m - j0 + 1))  # (K, nodes of the branch)
     np.cumsum(weight * dd[j0:m], axis=1, out=qa[:, 1:])
     tn = later[active]
@@ -580,28 +586,6 @@ def _unloading(t: FloatArray, delta: FloatArray, g: FloatArray, m: int, j0: int,
     t1[active] = t1_active
     return force, t1, lost
 
-
-
-_WEIGHTS: dict[tuple[bytes, bytes], FloatArray] = {}
-
-
-def _branch_weights(x: FloatArray, branch: FloatArray) -> FloatArray:
-    """e^{−x_k(t_m − t_j+1)}·(1 − e^{−x_k h_j})/(x_k h_j) over the branch's node intervals (K, n).
-
-    Kept (read-only, a few) by the bytes of the rates and the branch's times: a fit evaluates
-    the same branch with the same rates again and again (only the contact point moves j0).
-    """
-    key = (np.ascontiguousarray(x).tobytes(), np.ascontiguousarray(branch).tobytes())
-    weight = _WEIGHTS.get(key)
-    if weight is None:
-        lengths, which = np.unique(np.diff(branch), return_inverse=True)
-        xh = np.outer(x, lengths)
-        weight = decays(x, branch[-1] - branch[:0:-1])[:, ::-1] * (-np.expm1(-xh) / xh)[:, which]
-        weight.flags.writeable = False
-        if len(_WEIGHTS) >= 4:
-            _WEIGHTS.clear()
-        _WEIGHTS[key] = weight
-    return weight
 
 
 def _prefix(terms: FloatArray, at: np.ndarray) -> FloatArray:

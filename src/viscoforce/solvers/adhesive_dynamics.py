@@ -52,7 +52,7 @@ from viscoforce.solvers.base import State, StepOutcome, TimeStepper
 from viscoforce.solvers.continuation import _first_point, _Path, lennard_jones_term, load_with_tail
 from viscoforce.solvers.newton import solve_gap
 from viscoforce.solvers.steppers import DEFAULT_METHOD, METHODS
-from viscoforce.solvers.time_loop import _march, _step_control
+from viscoforce.solvers.time_loop import _march, _step_control, profile_variables
 
 #: A step is part of a jump when |Δh(0)| exceeds this many times the drive's |Δh0| over it.
 JUMP_RATIO = 5.0
@@ -375,13 +375,7 @@ def simulate_adhesive(problem: ContactProblem, drive: SeparationHistory, *, t_en
     radius = np.array([contact_radius(problem.grid, s.gap, hc, threshold)
                        for s, hc in zip(states, h_center, strict=True)])
     force = np.array([load_with_tail(problem, s.gap) for s in states])
-    profile = {}
-    if profiles:
-        pick = np.arange(0, len(states), profiles)
-        profile = {"profile_time": times[pick], "r": problem.grid.r,
-                   "gap": np.array([states[i].gap for i in pick]),
-                   "deformation": np.array([states[i].deformation[:-1] for i in pick]),
-                   "pressure": np.array([states[i].pressure for i in pick])}
+    profile = profile_variables(problem, times, states, profiles)
     attrs = dict(problem.parameters())
     attrs.update({"stepper": stepper.name, "tol": tol, "t_end": t_end, "max_step": max_step,
                   "dt": 0.0, "contact_threshold": threshold, "steps": counters.steps,

@@ -7,9 +7,9 @@ whichever it falls into — or none just inside the jump-in, where only the cont
 Here the branch is chosen by the history that leads to h0, quasi-statically:
 
 ``"approach"``
-    from far apart down to h0: the far branch above the jump-in, the contact branch below it;
+    far apart, then down to h0: the far branch above the jump-in, the contact branch below it;
 ``"retract"``
-    from deep contact up to h0: the contact branch below the jump-out, the far branch above it.
+    deep contact, then up to h0: the contact branch below the jump-out, the far branch above it.
 
 Both come from one approach path (:func:`~viscoforce.solvers.continuation.equilibrium_path`)
 traced past every fold; the chosen crossing of h0 is polished by Newton (the static solver's tolerance). The

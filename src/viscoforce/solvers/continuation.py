@@ -210,6 +210,17 @@ def adhesion_grid(sphere: Particle, law: SurfaceForceLaw, modulus: float, deepes
     return RadialGrid.from_spacing(float(outer), float(spacing), order)
 
 
+def edge_gap(problem: ContactProblem, gap: FloatArray) -> float:
+    """h(r_max) ≈ h_n + (r_max² − r_n²)/2R [m]: the gap at the grid's edge.
+
+    The deformation is taken constant beyond the outermost node r_n (where the rigid tail of the
+    attraction starts).
+    """
+    r = problem.grid.r
+    return float(gap[-1] + (problem.grid.outer_radius**2 - r[-1] ** 2)
+                 / (2.0 * problem.sphere.radius))
+
+
 def load_with_tail(problem: ContactProblem, gap: FloatArray) -> float:
     """Load [N] of nodal gaps ``gap`` [m]: the grid's 2π∫p r dr plus the rigid tail beyond r_max.
 
@@ -217,9 +228,8 @@ def load_with_tail(problem: ContactProblem, gap: FloatArray) -> float:
     constant beyond the outermost node r_n): exact for a rigid paraboloid (Derjaguin).
     """
     require_instance("problem", problem, ContactProblem)
-    r = problem.grid.r
     gap = np.asarray(gap, dtype=float)
-    edge = gap[-1] + (problem.grid.outer_radius**2 - r[-1] ** 2) / (2.0 * problem.sphere.radius)
+    edge = edge_gap(problem, gap)
     tail = 2.0 * np.pi * problem.sphere.radius * float(problem.surface_force.energy(edge))
     return float(problem.load(problem.surface_force.pressure(gap))) + tail
 

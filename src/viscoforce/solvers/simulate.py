@@ -42,6 +42,7 @@ from viscoforce.solvers.time_loop import (
     _march,
     _step_control,
     _StepControl,
+    profile_variables,
 )
 
 #: Default output samples when ``t_eval`` is not given.
@@ -430,12 +431,7 @@ def _trajectory_dataset(problem: ContactProblem, drive: SeparationHistory, stepp
     h_center = position - u_center
     radius = np.array([contact_radius(problem.grid, g, hc, threshold)
                        for g, hc in zip(gaps, h_center, strict=True)])
-    profile = {}
-    if profiles:
-        pick = np.arange(0, len(states), profiles)
-        profile = {"profile_time": times[pick], "r": problem.grid.r, "gap": gaps[pick],
-                   "deformation": np.array([states[i].deformation[:-1] for i in pick]),
-                   "pressure": np.array([states[i].pressure for i in pick])}
+    profile = profile_variables(problem, times, states, profiles)
     attrs = dict(problem.parameters())
     attrs.update(settings)
     attrs.update({"stepper": stepper.name, "drive": _describe(drive),

@@ -166,3 +166,19 @@ def _rescued(rescue, control: _StepControl, state: State, h: float) -> State | N
     if rescue is None or control.fixed or h > rescue.threshold:
         return None
     return rescue(state)
+
+
+def profile_variables(problem: ContactProblem, times: FloatArray, states: list[State],
+                      every: int) -> dict[str, FloatArray]:
+    """The trajectory's optional profiles: every ``every``-th state's gap, deformation, pressure.
+
+    ``{}`` for ``every`` = 0; else ``profile_time``, ``r``, ``gap``, ``deformation`` and
+    ``pressure`` as :func:`~viscoforce.schema.make_trajectory` takes them.
+    """
+    if not every:
+        return {}
+    pick = np.arange(0, len(states), every)
+    return {"profile_time": np.asarray(times)[pick], "r": problem.grid.r,
+            "gap": np.array([states[i].gap for i in pick]),
+            "deformation": np.array([states[i].deformation[:-1] for i in pick]),
+            "pressure": np.array([states[i].pressure for i in pick])}
