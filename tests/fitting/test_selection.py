@@ -223,6 +223,32 @@ def test_honest_halves_agree_and_modes_auto_stops_at_the_truth():
     assert "split_half_check" in ds.attrs
 
 
+def test_one_mode_halves_started_at_the_whole_fit_are_the_halves_own_fits():
+    """The kept one-mode fit's halves start at its values (one minimum): the fits from the
+    halves' own guesses, to the fit's tolerance, in fewer evaluations."""
+    from viscoforce.fitting.outcome import fit_once
+
+    for seed, rho in ((5, 0.0), (6, 0.5), (7, 0.8)):
+        whole = _fit(_relaxation_data([0.2], [5e-8], seed=seed, rho=rho, n=400), 1)
+        guessed = []
+
+        def cold(d, guessed=guessed, whole=whole):
+            guessed.append(fit_once(whole.model, d, settle=False))
+            return guessed[-1]
+
+        own = selection.halves_z(whole, cold)
+        calls = []
+
+        def warm(d, whole=whole, calls=calls):
+            calls.append(fit_once(whole.model, d, settle=False, starts=1, start=whole.values))
+            return calls[-1]
+
+        started = selection.halves_z(whole, warm)
+        for name in whole.model.names:
+            assert started[name] == pytest.approx(own[name], abs=1e-3), (seed, name)
+        assert sum(c.result.nfev for c in calls) < sum(c.result.nfev for c in guessed)
+
+
 REAL_HOLD = (Path(__file__).resolve().parents[3] / "shared" / "data" / "real" / "afmformats"
              / "fmt-jpk-sr_cell1-0008.jpk-force")
 

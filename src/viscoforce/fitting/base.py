@@ -142,6 +142,17 @@ class FitModel(lmfit.Model):
         return P.internal_parameters(self._fitted_layout(x, y), guess)
 
 
+    def internal_start(self, values: Mapping[str, float], data: np.ndarray,
+                       x: np.ndarray) -> P.InternalParameters:
+        """The internal parameters starting at ``values`` (SPEC names), in the data's windows.
+
+        As :meth:`internal_guess` with given values instead of the guesser's (clipped into the
+        windows that these data give).
+        """
+        x = np.asarray(x, dtype=float)
+        return P.internal_parameters(self._fitted_layout(x, np.asarray(data)), values)
+
+
 def _signed(function: Callable[..., np.ndarray], independent: str,
             names: Sequence[str]) -> Callable[..., np.ndarray]:
     """``function(x, **params)`` with an explicit signature, which lmfit reads for the names."""

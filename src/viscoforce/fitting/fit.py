@@ -418,8 +418,13 @@ def _check_halves(ds: xr.Dataset, best: Outcome) -> None:
 
     from viscoforce.exceptions import ConvergenceError, GoodnessOfFitWarning
 
+    # one mode: one minimum, so each half starts at the whole's (the same fit in a few
+    # evaluations); several: each half from its own guess, as a robustness check refits them (a
+    # half may find other modes, which is what the check is for)
+    start = best.values if best.model.spec.modes == 1 else None
     try:
-        z = halves_z(best, lambda d: fit_once(best.model, d, settle=False))
+        z = halves_z(best, lambda d: fit_once(best.model, d, settle=False,
+                                              starts=1 if start else 2, start=start))
     except (ConvergenceError, ParameterError) as exc:
         ds.attrs["split_half_check"] = f"not made: a half could not be fitted ({exc})"
         return

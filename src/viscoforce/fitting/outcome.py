@@ -261,13 +261,17 @@ def residual_lag1(residual: np.ndarray, t: np.ndarray) -> float:
     return float(r[:-1] @ r[1:]) / denom if denom > 0 else 0.0
 
 
-def fit_once(model: FitModel, data: FitData, *, starts: int = 2, settle: bool = True
-             ) -> Outcome:
+def fit_once(model: FitModel, data: FitData, *, starts: int = 2, settle: bool = True,
+             start: Mapping[str, float] | None = None) -> Outcome:
     """Least-squares fit of ``model`` from its data-driven guess (and ``starts`` − 1 more).
 
     With ``settle``, the other starts are tried only while the best fit so far is not settled
     (:func:`_settled`); a selection by criterion (``modes="auto"``, the measured-data chooser)
     passes False and tries them all, since its choice rests on differences in χ².
+    ``start`` (SPEC name → value): the first start instead of the guess, within the windows
+    these data give (a refit of part of the data from the whole's fit: the block halves of
+    :func:`~viscoforce.fitting.selection.halves_z` start where the modes are the whole's, so
+    that a half does not relabel them, and converge in a few evaluations).
 
     Raises
     ------
@@ -279,7 +283,8 @@ def fit_once(model: FitModel, data: FitData, *, starts: int = 2, settle: bool = 
     prepare = getattr(model, "prepare", None)
     if prepare is not None:  # a model whose numerical accuracy follows the data (exact: the
         prepare(data)        # fitting grid's tolerance from the data's stderr)
-    first = model.internal_guess(data.y, data.x)
+    first = (model.internal_guess(data.y, data.x) if start is None
+             else model.internal_start(start, data.y, data.x))
     n_free = sum(1 for p in first.values() if p.vary)
     if data.n_values <= n_free:
         raise ParameterError(
