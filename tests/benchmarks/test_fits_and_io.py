@@ -131,6 +131,8 @@ OVERHEAD_CASE_KEYS = {"case", "model", "modes", "points", "floor_nfev", "library
 #: The exact case's closed-form SLS floor (issue 41 item 3).
 OVERHEAD_EXACT_KEYS = {"sls_floor_cpu_s", "sls_floor_cpu_min_s", "sls_floor_nfev", "sls_ratio",
                        "exact_floor_ratio", "bar_ratio", "bar_passed"}
+#: The relaxation case's floor with the split-half refits (issue 37 item 4).
+OVERHEAD_HALVES_KEYS = {"halves_floor_cpu_s", "halves_ratio"}
 OVERHEAD_SUMMARY_KEYS = {"worst_closed_form_ratio", "worst_closed_form_all_ratio", "exact_ratio",
                          "closed_form_passed", "exact_passed", "passed", "verdict",
                          "wall_time_s", "loadavg_end", "exact_floor_ratio", "exact_ms",
@@ -147,7 +149,8 @@ def test_bench_overhead_quick_run_writes_documented_files(quick_run):
                                                     "exact"]
     for case in report["cases"]:
         assert set(case) == OVERHEAD_CASE_KEYS | (
-            OVERHEAD_EXACT_KEYS if case["model"] == "exact" else set())
+            OVERHEAD_EXACT_KEYS if case["model"] == "exact" else set()) | (
+            OVERHEAD_HALVES_KEYS if case["model"] == "relaxation" else set())
         assert case["floor_ratio"] == pytest.approx(1.0)
     assert set(report["summary"]) == OVERHEAD_SUMMARY_KEYS
     assert report["summary"]["verdict"] in ("PASS", "FAIL")
