@@ -46,6 +46,7 @@ for _name in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ[_name] = "1"  # before NumPy loads (here and in the nanite child)
 
 import json  # noqa: E402
+import math  # noqa: E402
 import statistics  # noqa: E402
 import subprocess  # noqa: E402
 import sys  # noqa: E402
@@ -165,21 +166,34 @@ def time_nanite(python: Path, cases: list[dict], rounds: int) -> dict:
 
 def time_viscoforce(loaded: dict, cases: tuple, rounds: range, rows: list[dict],
                     young: dict) -> None:
-    """Time every curve of ``cases`` once per round (appending to ``rows``)."""
+    """Time every curve of ``cases`` once per round (appending to ``rows``).
+
+    Each curve twice: the public call (tool ``viscoforce``, the target's) and, for information,
+    the fit without its checks (tool ``viscoforce_fit_only``: ``fit_data`` of ``curve_data``,
+    the fit and its result dataset; no direction, signal or depth check, no derived moduli).
+    """
     import viscoforce as vf
+    from viscoforce.fitting.curves import curve_data
+    from viscoforce.fitting.fit import fit_data
+    from viscoforce.physics.tips import tip_from
 
     for rnd in rounds:
         for name, _, tip, curves in cases:
+            law = tip_from(tip)
             for curve in curves:
                 with warnings.catch_warnings(), gc_paused():
                     warnings.simplefilter("ignore")
                     c0, t0 = time.process_time(), time.perf_counter()
                     ds = vf.fit_curve(loaded[name], "hertz", curve=curve, tip=tip)
                     t1, c1 = time.perf_counter(), time.process_time()
+                    fit_data(curve_data(loaded[name], "hertz", curve=curve), "hertz", tip=law)
+                    c2 = time.process_time()
                 young[f"{name}:{curve}"] = float(ds["E_young"])
                 if rnd >= 0:
                     rows.append({"tool": "viscoforce", "case": name, "curve": curve,
                                  "round": rnd, "cpu_s": c1 - c0, "wall_s": t1 - t0})
+                    rows.append({"tool": "viscoforce_fit_only", "case": name, "curve": curve,
+                                 "round": rnd, "cpu_s": c2 - c1, "wall_s": math.nan})
 
 
 def _medians(rows: list[dict], tool: str, case: str | None = None) -> dict:
@@ -258,6 +272,14 @@ def main(argv: list[str] | None = None) -> int:
               f"({1e3 * ours['wall_median_s']:.2f} ms wall), nanite "
               f"{1e3 * theirs['cpu_median_s']:.2f} ms CPU ({1e3 * theirs['wall_median_s']:.2f} "
               f"ms wall): ratio {ratio:.2f} CPU, {wall_ratio:.2f} wall")
+    fit_only = _medians(rows, "viscoforce_fit_only")
+    fit_only_ratio = (fit_only["cpu_median_s"] / theirs["cpu_median_s"]
+                      if fit_only["cpu_median_s"] is not None else None)
+    if fit_only_ratio is not None and ratio is not None:
+        print(f"information: the fit without its checks (fit_data of curve_data) "
+              f"{1e3 * fit_only['cpu_median_s']:.2f} ms CPU per curve, {fit_only_ratio:.2f} "
+              f"nanite's; the checks (direction, signal, depth) and derived moduli "
+              f"{1e3 * (ours['cpu_median_s'] - fit_only['cpu_median_s']):.2f} ms")
     print(f"viscoforce / nanite per curve (CPU, medians) <= {TARGET_RATIO:g}: {pf(passed)}")
     report = {**report_head(SCHEMA, args.quick, machine),
               "target": {"ratio_max": TARGET_RATIO,
@@ -268,6 +290,7 @@ def main(argv: list[str] | None = None) -> int:
                            "nanite_model": "hertz_para", "nanite_radius_m": NANITE_RADIUS},
               "nanite_source": source,
               "results": {"viscoforce": ours, "nanite": theirs, "per_case": per_case,
+                          "viscoforce_fit_only": fit_only, "fit_only_ratio_cpu": fit_only_ratio,
                           "E_young": {"viscoforce": young, "nanite": nanite_young}},
               "skipped": skipped,
               "summary": {"passed": passed, "ratio_cpu": ratio, "ratio_wall": wall_ratio,
