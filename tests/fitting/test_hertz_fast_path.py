@@ -22,9 +22,13 @@ check refits by variable projection instead of a second fit. Three layers:
    law (``_shape``) equals ``force_shape`` bit for bit; the direction check's costs mirrored
    from the start's equal those computed afresh; the 1-D search from the refinement grid's
    points finds scipy's bounded minimum; one curve read by slicing equals ``select_curve``'s;
-   ``validate_curves(curve=)`` checks that curve's samples; a Hertz fit scans three times
-   (start, direction, depth: the checks' sum of squares reuses the start's scan) and its
-   Levenberg–Marquardt starts at the least-squares minimum.
+   ``validate_curves(curve=)`` checks that curve's samples; a Hertz fit scans twice (start,
+   depth: the checks' sum of squares reuses the start's scan), screens the direction once, and
+   its Levenberg–Marquardt starts at the least-squares minimum.
+5. **The direction screen** (``_hertz_scan.hertz_screen``): its SSE is never below the grid's
+   best on any curve here, and the direction check's Δχ² with it is the grid's within 0.25
+   noise variances (the threshold is 25; within 10 of it the grid decides), the same verdict on
+   the real curves, the synthetic ones and their flipped copies.
 
 Synthetic approaches are made with the tips' own ``force_shape`` (the paths are compared with
 each other here; the physics is tested in test_force_curves.py and test_hertz_noise.py).
@@ -32,6 +36,7 @@ each other here; the physics is tested in test_force_curves.py and test_hertz_no
 
 from __future__ import annotations
 
+import math
 import warnings
 from pathlib import Path
 
@@ -39,7 +44,7 @@ import numpy as np
 import pytest
 
 from viscoforce.exceptions import ParameterError, SchemaError
-from viscoforce.fitting import _hertz_scan
+from viscoforce.fitting import _hertz_scan, hertz_checks
 from viscoforce.fitting._hertz_scan import (
     _brent,
     _Costs,
@@ -410,7 +415,7 @@ def test_validate_curves_checks_one_curves_samples():
     assert validate_curves(two, curve=0) is two
 
 
-def test_a_fit_scans_three_times_and_starts_at_the_least_squares(monkeypatch):
+def test_a_fit_scans_twice_screens_once_and_starts_at_the_least_squares(monkeypatch):
     calls = []
     afresh = _hertz_scan._scan_afresh
 
@@ -419,6 +424,14 @@ def test_a_fit_scans_three_times_and_starts_at_the_least_squares(monkeypatch):
         return afresh(tip, z, *args, **kwargs)
 
     monkeypatch.setattr(_hertz_scan, "_scan_afresh", counted)
+    screened = []
+    screen = hertz_checks.hertz_screen
+
+    def counted_screen(tip, z, *args, **kwargs):
+        screened.append(float(np.mean(z)))
+        return screen(tip, z, *args, **kwargs)
+
+    monkeypatch.setattr(hertz_checks, "hertz_screen", counted_screen)
     mirrored = []
     mirror = _Costs.mirrored
     monkeypatch.setattr(_Costs, "mirrored", lambda self: mirrored.append(1) or mirror(self))
@@ -426,9 +439,10 @@ def test_a_fit_scans_three_times_and_starts_at_the_least_squares(monkeypatch):
     curves = _synthetic_curves(*case)
     for _ in range(2):  # the second fit of the same curve scans afresh too
         calls.clear()
+        screened.clear()
         ds = _fit(curves, 0, case[0])
-        assert len(calls) == 3  # start, direction (-z), depth; hertz_sse reuses the start's
-        assert calls[1] < 0 < calls[0]
+        assert len(calls) == 2  # start, depth; hertz_sse reuses the start's
+        assert len(screened) == 1 and screened[0] < 0 < calls[0]  # direction (-z), screened
     # the direction check's costs are the start's mirrored, with its coarse subsample's: 2 a fit
     assert len(mirrored) == 4
     assert ds.attrs["nfev"] <= 11  # from the least-squares minimum: MINPACK's own evaluations
@@ -477,3 +491,52 @@ def test_check_spans_reads_the_finite_values_only():
                                              r"1e-15 m\)"):
         check_spans("the approach", np.array([0.0, np.nan, 1e-15, -np.inf]), f)
     check_spans("the approach", np.full(4, np.nan), f)  # no finite value: left to the fit
+
+
+# ── 5. the direction screen ─────────────────────────────────────────────────────────────────────
+
+def _direction_both_ways(z, f, tip, monkeypatch):
+    """(screened, grid) results of approach_direction on one approach, against one fit's SSE."""
+    from viscoforce.fitting.hertz_checks import approach_direction
+
+    sse = hertz_least_squares(tip, z, f, contact_window(tip, z), points=HERTZ_GUESS_POINTS)
+    sse = sse[1] if sse is not None else float(np.sum((f - f.mean()) ** 2))
+    screened = approach_direction(z, f, sse, tip)
+    with monkeypatch.context() as m:
+        m.setattr(hertz_checks, "SCREEN_MARGIN", math.inf)  # the grid always decides
+        grid = approach_direction(z, f, sse, tip)
+    return screened, grid
+
+
+def _screen_cases(real_curves):
+    cases = []
+    for (name, curve, tip_name), _ in REAL_REFERENCE:
+        data = curve_data(real_curves[name], "hertz", curve=curve)
+        cases.append((data.x, data.y, tip_name))
+    for (tip_name, noise, n, seed), _ in SYNTHETIC_REFERENCE:
+        data = curve_data(_synthetic_curves(tip_name, noise, n, seed), "hertz")
+        cases.append((data.x, data.y, tip_name))
+    return cases + [(-z, f, t) for z, f, t in cases]  # and each flipped
+
+
+def test_direction_screen_never_undercuts_the_grid_and_keeps_the_verdict(real_curves,
+                                                                          monkeypatch):
+    from viscoforce.fitting.hertz_checks import FLIP_DELTA_CHI2
+
+    flipped = 0
+    for z, f, tip_name in _screen_cases(real_curves):
+        tip = tip_from(tip_name)
+        window = contact_window(tip, -z)
+        quick = _hertz_scan.hertz_screen(tip, -z, f, window, points=HERTZ_GUESS_POINTS)
+        full = hertz_scan(tip, -z, f, window, points=HERTZ_GUESS_POINTS)
+        assert (quick is None) == (full is None)
+        if full is not None:
+            assert quick[1] >= full[1] * (1 - 1e-12)
+        (d_screen, m_screen), (d_grid, m_grid) = _direction_both_ways(z, f, tip, monkeypatch)
+        assert d_screen == pytest.approx(d_grid, abs=0.25)
+        assert (d_screen > FLIP_DELTA_CHI2) == (d_grid > FLIP_DELTA_CHI2)
+        assert (m_screen is None) == (m_grid is None)
+        if m_grid is not None:
+            assert (m_screen["rise"] > 0) == (m_grid["rise"] > 0)
+        flipped += d_grid > FLIP_DELTA_CHI2
+    assert flipped >= 10  # the flipped copies are seen as such (the grid decided those)

@@ -414,6 +414,60 @@ def hertz_least_squares(tip: Any, z: np.ndarray, f: np.ndarray, window: tuple[fl
     return c, sse, coef
 
 
+#: Quantile candidates of the subsample pass that :func:`hertz_screen` re-reads on every sample.
+SCREEN_KEEP = 3
+
+
+def hertz_screen(tip: Any, z: np.ndarray, f: np.ndarray, window: tuple[float, float], *,
+                 points: int) -> tuple[float, float, np.ndarray] | None:
+    """A quick upper bound on the Hertz grid's best SSE: the subsample pass's best, re-read.
+
+    The quantile grid of :func:`hertz_scan` on every ``stride``-th sample (its coarse pass), then
+    its :data:`SCREEN_KEEP` best candidates with E > 0 on every sample; no local pass, no
+    refinement. The SSE is that of a candidate of the grid, so it is never below the grid's
+    best (:func:`hertz_scan`); the direction check
+    (:func:`viscoforce.fitting.hertz_checks.approach_direction`, which decides at 25 noise
+    variances) screens with it and asks the grid where it comes near. Approaches of at most
+    2 × :data:`COARSE_SAMPLES` samples (no
+    subsample pass) and those where the pass finds no candidate with E > 0 get
+    :func:`hertz_scan`'s answer.
+
+    Returns
+    -------
+    tuple or None
+        As :func:`hertz_scan`: the contact point [m], the SSE [N²] and (E [Pa], baseline [N],
+        slope [N/m]); None where no candidate gives E > 0.
+    """
+    z = np.asarray(z, dtype=float)
+    f = np.asarray(f, dtype=float)
+    if z.size <= 2 * COARSE_SAMPLES:
+        return hertz_scan(tip, z, f, window, points=points)
+    costs = _recall_mirror(tip, z, f) or _Costs(tip, z, f)
+    zs = costs.zs
+    inner = zs[int(np.searchsorted(zs, window[0], side="left")):
+               int(np.searchsorted(zs, window[1], side="right"))]
+    if inner.size < 4:
+        raise ParameterError("the approach has fewer than 4 points where contact may lie")
+    grid = _quantiles(inner, _levels(points))
+    sse, e = costs.subsample(-(-z.size // COARSE_SAMPLES))(grid, ascending=True)
+    eligible = np.flatnonzero(e > 0)
+    best = None
+    if eligible.size:
+        picks = np.sort(grid[eligible[np.argsort(sse[eligible], kind="stable")[:SCREEN_KEEP]]])
+        sse, e = costs(picks, ascending=True)
+        i = _best(sse, e)
+        if i is not None:
+            c = float(picks[i])
+            value, coef = costs.solve(c, float(e[i]))
+            best = (c, value, coef)
+    # kept as the scans are (a later scan of these samples, or of their mirror, is another key)
+    _memo.append(((tuple(map(float, window)), int(points), "screen"), tip, z.copy(), f.copy(),
+                  (None,), costs))
+    if best is None:
+        return hertz_scan(tip, z, f, window, points=points)
+    return best
+
+
 def _scan(tip: Any, z: np.ndarray, f: np.ndarray, window: tuple[float, float], points: int,
           coarse: bool) -> tuple[tuple[float, float, float], _Costs, float, list] | None:
     """The grid's best (contact point, closed-form SSE, E), its costs, refinement spacing and grid.
