@@ -9,8 +9,10 @@ same scan and a 1-D search. Part 2: the fit starts at that least-squares minimum
 projection: MINPACK stops after 6 evaluations instead of 20-45), the checks' sum of squares
 reuses the start's scan and the direction check its costs mirrored (three scans per curve),
 the tips' law runs unchecked inside (checked once), one curve is sliced from the map instead of
-selected, and the scan's blocks live in scratch arrays. The target is viscoforce's time per
-curve <= nanite's, measured in one run.
+selected, and the scan's blocks live in scratch arrays. Part 3: the direction check screens
+the mirrored model (``_hertz_scan.hertz_screen``: the subsample pass's best three candidates on
+every sample) and asks the whole grid only near its threshold (two scans and a screen per
+curve). The target is viscoforce's time per curve <= nanite's, measured in one run.
 
 What it measures, per case of :data:`CASES` (``--quick``: :data:`QUICK_CASES`):
 

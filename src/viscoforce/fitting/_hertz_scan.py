@@ -33,6 +33,9 @@ were 87 % of a Hertz fit):
   (:func:`unchecked_shape`), blocks in per-thread scratch arrays (:func:`_scratch`), the
   start's scan kept for the checks' sum of squares and mirrored into the direction check's
   costs (:data:`_MEMO_SIZE`, :meth:`_Costs.mirrored`).
+* **The direction check screened** (part 3): :func:`hertz_screen`, the grid's subsample pass
+  and its best three candidates on every sample, an SSE never below the grid's best; the check
+  asks the whole grid only near its threshold.
 
 The kept candidate's SSE is summed from its residuals, its baseline and slope are the straight
 line through F − E·shape; they equal the per-candidate ``numpy.linalg.lstsq``
