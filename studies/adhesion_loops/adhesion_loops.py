@@ -46,6 +46,8 @@ from viscoforce.solvers.continuation import adhesion_grid, equilibrium_path  # n
 
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parents[1]
+#: The JSON report's schema (name/version).
+SCHEMA = "viscoforce.adhesion_loops/1"
 R, Z0, HAMAKER, TAU, RATIO = 1e-6, 0.3e-9, 1e-20, 1e-3, 10.0
 LAW = LennardJones(HAMAKER, Z0)
 E_INF = 2.0 * np.sqrt(R * LAW.work_of_adhesion**2 / (2.0**3 * Z0**3))  # μ = 2
@@ -119,7 +121,7 @@ def main(argv=None) -> int:
                                     float(attrs["effective_work_of_adhesion"]),
                                 "hysteresis_energy": float(attrs["hysteresis_energy"])})
     result = {
-        "schema": 1, "created": datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds"),
+        "schema": SCHEMA, "created": datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds"),
         "quick": bool(args.quick),
         "settings": {"R": R, "z0": Z0, "hamaker": HAMAKER, "work_of_adhesion":
                      LAW.work_of_adhesion, "E_inf": E_INF, "E0": RATIO * E_INF, "tau": TAU,
