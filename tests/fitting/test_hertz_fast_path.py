@@ -415,23 +415,21 @@ def test_validate_curves_checks_one_curves_samples():
     assert validate_curves(two, curve=0) is two
 
 
-def test_a_fit_scans_twice_screens_once_and_starts_at_the_least_squares(monkeypatch):
-    calls = []
-    afresh = _hertz_scan._scan_afresh
+def _counting(monkeypatch, module, name):
+    """Replace ``module.name`` by a wrapper that records the mean of its z; the records."""
+    seen, original = [], getattr(module, name)
 
     def counted(tip, z, *args, **kwargs):
-        calls.append(float(np.mean(z)))
-        return afresh(tip, z, *args, **kwargs)
+        seen.append(float(np.mean(z)))
+        return original(tip, z, *args, **kwargs)
 
-    monkeypatch.setattr(_hertz_scan, "_scan_afresh", counted)
-    screened = []
-    screen = hertz_checks.hertz_screen
+    monkeypatch.setattr(module, name, counted)
+    return seen
 
-    def counted_screen(tip, z, *args, **kwargs):
-        screened.append(float(np.mean(z)))
-        return screen(tip, z, *args, **kwargs)
 
-    monkeypatch.setattr(hertz_checks, "hertz_screen", counted_screen)
+def test_a_fit_scans_twice_screens_once_and_starts_at_the_least_squares(monkeypatch):
+    calls = _counting(monkeypatch, _hertz_scan, "_scan_afresh")
+    screened = _counting(monkeypatch, hertz_checks, "hertz_screen")
     mirrored = []
     mirror = _Costs.mirrored
     monkeypatch.setattr(_Costs, "mirrored", lambda self: mirrored.append(1) or mirror(self))
