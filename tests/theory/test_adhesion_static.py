@@ -162,9 +162,14 @@ def test_pull_off_soft_limit_is_jkr_slow():
 
 @pytest.mark.slow
 def test_pull_off_curve_slow():
-    """μ = 0.1 … 10 against Maugis–Dugdale: the deviation, stated per μ, stays within 8 %."""
+    """μ = 0.1 … 5 against Maugis–Dugdale: the deviation, stated per μ, stays within 8 %.
+
+    The range of studies/adhesion_pulloff. μ = 10 is left out: on the grid it needs (2400
+    nodes) the path takes an hour or more (docs/adhesion.md, Limits; a run of this test with it
+    was still at μ = 10 after 27 minutes).
+    """
     rows = []
-    for mu in (0.1, 0.3, 1.0, 2.0, 3.0, 5.0, 10.0):
+    for mu in (0.1, 0.3, 1.0, 2.0, 3.0, 5.0):
         path, _ = approach(mu, resolution=1.0, stop=2 * Z0 if mu >= 3 else 0.0)
         ratio = path.pull_off / (np.pi * R * W)
         md = maugis_dugdale_pull_off(1.16 * mu)
