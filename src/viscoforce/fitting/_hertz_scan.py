@@ -431,9 +431,8 @@ def hertz_screen(tip: Any, z: np.ndarray, f: np.ndarray, window: tuple[float, fl
     best (:func:`hertz_scan`); the direction check
     (:func:`viscoforce.fitting.hertz_checks.approach_direction`, which decides at 25 noise
     variances) screens with it and asks the grid where it comes near. Approaches of at most
-    2 × :data:`COARSE_SAMPLES` samples (no
-    subsample pass) and those where the pass finds no candidate with E > 0 get
-    :func:`hertz_scan`'s answer.
+    2 × :data:`COARSE_SAMPLES` samples (no subsample pass) and those where the pass finds no
+    candidate with E > 0 get :func:`hertz_scan`'s answer.
 
     Returns
     -------

@@ -141,7 +141,6 @@ class FitModel(lmfit.Model):
         guess = self._guesser(y, x)  # first: its errors name the data's problem
         return P.internal_parameters(self._fitted_layout(x, y), guess)
 
-
     def internal_start(self, values: Mapping[str, float], data: np.ndarray,
                        x: np.ndarray) -> P.InternalParameters:
         """The internal parameters starting at ``values`` (SPEC names), in the data's windows.

@@ -269,9 +269,9 @@ def fit_once(model: FitModel, data: FitData, *, starts: int = 2, settle: bool = 
     (:func:`_settled`); a selection by criterion (``modes="auto"``, the measured-data chooser)
     passes False and tries them all, since its choice rests on differences in χ².
     ``start`` (SPEC name → value): the first start instead of the guess, within the windows
-    these data give (a refit of part of the data from the whole's fit: the block halves of
-    :func:`~viscoforce.fitting.selection.halves_z` start where the modes are the whole's, so
-    that a half does not relabel them, and converge in a few evaluations).
+    these data give (a refit of part of the data from the whole's fit: the block halves of a
+    one-mode curve fit's split-half check, ``fitting.fit._check_halves``, whose one minimum
+    lies near the whole's and is reached in a few evaluations).
 
     Raises
     ------
