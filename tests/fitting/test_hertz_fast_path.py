@@ -45,8 +45,8 @@ import pytest
 
 from viscoforce.exceptions import ParameterError, SchemaError
 from viscoforce.fitting import _hertz_scan, hertz_checks
+from viscoforce.fitting._brent import brent as _brent
 from viscoforce.fitting._hertz_scan import (
-    _brent,
     _Costs,
     hertz_least_squares,
     hertz_scan,

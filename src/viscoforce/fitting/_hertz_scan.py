@@ -25,8 +25,9 @@ were 87 % of a Hertz fit):
   exhaustive scan decides.
 * **The least squares** (:func:`hertz_least_squares`: the hertz model's start, the depth
   check's refit): the scan, then the minimum of the closed-form SSE over the contact point
-  (variable projection; Brent's bounded search, :func:`_brent`, started from the refinement
-  grid's best point and its two neighbours, whose costs the scan knows): the four-parameter
+  (variable projection; Brent's bounded search, :func:`~viscoforce.fitting._brent.brent`,
+  started from the refinement grid's best point and its two neighbours, whose costs the scan
+  knows): the four-parameter
   least squares without a second fit.
 * **Per fit, once** (issue 41 item 4, part 2): the samples sorted once per approach (a
   candidate's samples are then a slice), the tip's law without its input checks
@@ -46,7 +47,6 @@ tests/fitting/test_hertz_fast_path.py compares both modes with that loop.
 from __future__ import annotations
 
 import functools
-import math
 import threading
 from collections import deque
 from collections.abc import Callable
@@ -55,6 +55,7 @@ from typing import Any
 import numpy as np
 
 from viscoforce.exceptions import ParameterError
+from viscoforce.fitting._brent import brent
 
 #: Most samples the coarse pass of :func:`hertz_scan` reads (every ``stride``-th sample).
 COARSE_SAMPLES = 512
@@ -329,6 +330,22 @@ def _quantiles(values: np.ndarray, q: np.ndarray) -> np.ndarray:
     return np.where(t >= 0.5, b - diff * (1 - t), a + diff * t)
 
 
+def _window_grid(costs: _Costs, window: tuple[float, float], points: int) -> np.ndarray:
+    """The quantile candidates (``points`` levels) of the samples in the contact ``window``.
+
+    Raises
+    ------
+    ParameterError
+        Fewer than 4 samples in the window.
+    """
+    zs = costs.zs
+    inner = zs[int(np.searchsorted(zs, window[0], side="left")):
+               int(np.searchsorted(zs, window[1], side="right"))]
+    if inner.size < 4:
+        raise ParameterError("the approach has fewer than 4 points where contact may lie")
+    return _quantiles(inner, _levels(points))
+
+
 def hertz_scan(tip: Any, z: np.ndarray, f: np.ndarray, window: tuple[float, float], *,
                points: int, coarse: bool = True) -> tuple[float, float, np.ndarray] | None:
     """The best (contact point, SSE, (E, baseline, slope)) of the Hertz grid of contact points.
@@ -372,8 +389,9 @@ def hertz_least_squares(tip: Any, z: np.ndarray, f: np.ndarray, window: tuple[fl
     Variable projection: (E, baseline, slope) are linear given the contact point c, so the least
     squares of all four is the minimum over c of the closed-form SSE(c) (:class:`_Costs`), found
     by a bounded Brent search between the scan's best point's neighbours on its refinement grid
-    (:func:`_brent`, from those three points; within the contact ``window``; a minimum with
-    E > 0; bracketed again where it lands on the bracket's end). What the fitting engine's
+    (:func:`~viscoforce.fitting._brent.brent`, from those three points; within the contact
+    ``window``; a minimum with E > 0; bracketed again where it lands on the bracket's end).
+    What the fitting engine's
     Levenberg–Marquardt reaches from the scan's start at an interior minimum, to its tolerance
     (the depth check's refit, :func:`viscoforce.fitting.hertz_checks.depth_check`).
 
@@ -404,7 +422,7 @@ def hertz_least_squares(tip: Any, z: np.ndarray, f: np.ndarray, window: tuple[fl
             break
         # the refinement grid's points on either side, their costs known: Brent's first points
         known = [(x, fx) for x, fx in fine if lo <= x <= hi and abs(x - c) > 0.5 * spacing]
-        x_opt, f_opt = _brent(cost, lo, hi, c, sse, known, _BRENT_XATOL * spacing)
+        x_opt, f_opt = brent(cost, lo, hi, c, sse, known, _BRENT_XATOL * spacing)
         fine = []
         if not f_opt < sse:
             break
@@ -445,12 +463,7 @@ def hertz_screen(tip: Any, z: np.ndarray, f: np.ndarray, window: tuple[float, fl
     if z.size <= 2 * COARSE_SAMPLES:
         return hertz_scan(tip, z, f, window, points=points)
     costs = _recall_mirror(tip, z, f) or _Costs(tip, z, f)
-    zs = costs.zs
-    inner = zs[int(np.searchsorted(zs, window[0], side="left")):
-               int(np.searchsorted(zs, window[1], side="right"))]
-    if inner.size < 4:
-        raise ParameterError("the approach has fewer than 4 points where contact may lie")
-    grid = _quantiles(inner, _levels(points))
+    grid = _window_grid(costs, window, points)
     sse, e = costs.subsample(-(-z.size // COARSE_SAMPLES))(grid, ascending=True)
     eligible = np.flatnonzero(e > 0)
     best = None
@@ -530,12 +543,7 @@ def _scan_afresh(tip: Any, z: np.ndarray, f: np.ndarray, window: tuple[float, fl
     """:func:`_scan` without its memory (``costs``: the approach's, where made already)."""
     lo, hi = window
     costs = _Costs(tip, z, f) if costs is None else costs
-    zs = costs.zs
-    inner = zs[int(np.searchsorted(zs, lo, side="left")):int(np.searchsorted(zs, hi,
-                                                                              side="right"))]
-    if inner.size < 4:
-        raise ParameterError("the approach has fewer than 4 points where contact may lie")
-    grid = _quantiles(inner, _levels(points))
+    grid = _window_grid(costs, window, points)
     best = None
     if coarse and z.size > 2 * COARSE_SAMPLES:
         stride = -(-z.size // COARSE_SAMPLES)
@@ -563,67 +571,3 @@ def _scan_afresh(tip: Any, z: np.ndarray, f: np.ndarray, window: tuple[float, fl
                           strict=True))
     return best, costs, 2.0 * step / (_REFINE_POINTS - 1), grid_costs
 
-
-#: The golden section's smaller part, (3 − √5)/2.
-_GOLDEN = 0.3819660112501051
-#: √(machine epsilon): Brent's relative tolerance in the abscissa.
-_SQRT_EPS = float(np.sqrt(np.finfo(float).eps))
-
-
-def _brent(cost: Callable[[float], float], lo: float, hi: float, x: float, fx: float,
-           known: list[tuple[float, float]], xatol: float) -> tuple[float, float]:
-    """The minimum of ``cost`` on [lo, hi] by Brent's method, from ``x`` (cost ``fx``).
-
-    Brent's bounded search (golden sections and parabolas, the tolerance of
-    ``scipy.optimize.minimize_scalar(method="bounded")``: √eps·|x| + ``xatol``/3), started from
-    the best point and, as its two previous points, the ``known`` (point, cost) pairs (the
-    refinement grid's neighbours), so that its first step is a parabola through three points
-    already evaluated.
-    """
-    a, b = lo, hi
-    pts = sorted(known, key=lambda p: p[1])[:2]
-    w, fw = pts[0] if pts else (x, fx)
-    v, fv = pts[1] if len(pts) > 1 else (w, fw)
-    d = e = (b - a) if pts else 0.0  # known points: the first steps may be parabolas
-    for _ in range(500):
-        middle = 0.5 * (a + b)
-        tol1 = _SQRT_EPS * abs(x) + xatol / 3.0
-        tol2 = 2.0 * tol1
-        if abs(x - middle) <= tol2 - 0.5 * (b - a):
-            break
-        golden = True
-        if abs(e) > tol1:
-            r = (x - w) * (fx - fv)
-            q = (x - v) * (fx - fw)
-            p = (x - v) * q - (x - w) * r
-            q = 2.0 * (q - r)
-            if q > 0.0:
-                p = -p
-            q = abs(q)
-            r, e = e, d
-            if abs(p) < abs(0.5 * q * r) and q * (a - x) < p < q * (b - x):
-                d = p / q
-                if (x + d) - a < tol2 or b - (x + d) < tol2:
-                    d = tol1 if x < middle else -tol1
-                golden = False
-        if golden:
-            e = (a - x) if x >= middle else (b - x)
-            d = _GOLDEN * e
-        u = x + (d if abs(d) >= tol1 else math.copysign(tol1, d))
-        fu = cost(u)
-        if fu <= fx:
-            if u >= x:
-                a = x
-            else:
-                b = x
-            v, fv, w, fw, x, fx = w, fw, x, fx, u, fu
-        else:
-            if u < x:
-                a = u
-            else:
-                b = u
-            if fu <= fw or w == x:
-                v, fv, w, fw = w, fw, u, fu
-            elif fu <= fv or v == x or v == w:
-                v, fv = u, fu
-    return x, fx
